@@ -1,0 +1,41 @@
+# spicethermal: `make demo` runs the main job, `make test` runs the tests.
+PY      ?= python3
+VENV    := .venv
+BIN     := $(VENV)/bin
+STAMP   := $(VENV)/.installed
+
+.PHONY: setup demo test lint bench firmware clean
+
+setup: $(STAMP) ngspice
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e '.[dev]'
+	touch $(STAMP)
+
+ngspice:
+	@if ! command -v ngspice >/dev/null 2>&1 || ! ldconfig -p | grep -q libngspice.so.0; then \
+	  echo "installing ngspice and libngspice0 (apt)"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq ngspice libngspice0; \
+	fi
+
+firmware:
+	$(MAKE) -C firmware host
+
+demo: setup firmware
+	$(BIN)/spicethermal demo --out out/demo
+
+test: setup firmware
+	$(MAKE) -C firmware test
+	$(BIN)/python -m pytest -q
+
+lint: setup
+	$(BIN)/ruff check spicethermal tests bench
+
+bench: setup firmware
+	$(BIN)/python -m pytest -q -m benchmark -p no:randomly bench
+
+clean:
+	rm -rf out build dist
