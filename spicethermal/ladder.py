@@ -1,0 +1,283 @@
+"""RC ladders: the Foster and Cauer thermal networks, and exact conversion between them.
+
+Electrical analogy: heat flow (W) is a current, temperature rise (K) a voltage, thermal
+resistance (K/W) a resistance, heat capacity (J/K) a capacitance.
+
+* :class:`Foster` — parallel RC stages in series. Its impedance is
+  ``Z(s) = sum r_i / (1 + s tau_i)``: the form a fitted Zth(t) comes in. Its inner nodes are
+  not physical temperatures.
+* :class:`Cauer` — capacitors to the reference, resistors in a chain from the junction. Its
+  nodes are physical (die, solder, case, ...), which is the form to couple to other networks.
+
+Foster -> Cauer runs the continued-fraction expansion in exact rational arithmetic; Cauer ->
+Foster solves the tridiagonal eigenproblem in extended precision (mpmath). Both hold for any
+order the fitter can produce (checked to order 20 over 8 decades of time constants).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+from .errors import DataFormatError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import ArrayLike, NDArray
+
+
+def _validated(name: str, values: ArrayLike, n: int | None = None) -> tuple[float, ...]:
+    arr = np.asarray(values, dtype=float).ravel()
+    if arr.size == 0:
+        raise DataFormatError(f"{name}: a ladder needs at least one stage")
+    if n is not None and arr.size != n:
+        raise DataFormatError(f"{name}: expected {n} values, got {arr.size}")
+    for i, v in enumerate(arr):
+        if not np.isfinite(v) or v <= 0:
+            raise DataFormatError(f"{name}[{i}] = {v!r}: must be positive and finite")
+    return tuple(float(v) for v in arr)
+
+
+@dataclass(frozen=True, init=False)
+class _Ladder:
+    """Common part of both networks: stage resistances (K/W) and capacitances (J/K)."""
+
+    r: tuple[float, ...]
+    c: tuple[float, ...]
+
+    def __init__(self, r: ArrayLike, c: ArrayLike) -> None:
+        rr = _validated("r_k_per_w", r)
+        object.__setattr__(self, "r", rr)
+        object.__setattr__(self, "c", _validated("c_j_per_k", c, len(rr)))
+
+    topology: ClassVar[str] = ""
+
+    @property
+    def order(self) -> int:
+        """Number of RC stages."""
+        return len(self.r)
+
+    @property
+    def rth(self) -> float:
+        """Total (steady-state) thermal resistance, K/W."""
+        return float(sum(self.r))
+
+    def __len__(self) -> int:
+        return self.order
+
+    # -- responses, all through the Foster form -------------------------------------------
+    def _foster(self) -> Foster:
+        raise NotImplementedError
+
+    def zth(self, t: ArrayLike) -> NDArray:
+        """Step response Zth(t) in K/W: temperature rise per watt after power is switched on."""
+        f = self._foster()
+        t = np.asarray(t, dtype=float)
+        tau = np.asarray(f.tau)
+        return (np.asarray(f.r) * -np.expm1(-t[..., None] / tau)).sum(axis=-1)
+
+    def cooling(self, t: ArrayLike) -> NDArray:
+        """Cooling curve in K/W: rise per watt at time t after power is cut from steady state."""
+        f = self._foster()
+        t = np.asarray(t, dtype=float)
+        return (np.asarray(f.r) * np.exp(-t[..., None] / np.asarray(f.tau))).sum(axis=-1)
+
+    def r_norm(self, t: ArrayLike) -> NDArray:
+        """Normalized thermal impedance r(t) = Zth(t) / Rth (eq. 2 of the paper)."""
+        return self.zth(t) / self.rth
+
+    def impedance(self, omega: ArrayLike) -> NDArray:
+        """Complex thermal impedance Z(jω) in K/W at angular frequencies ``omega`` (rad/s)."""
+        f = self._foster()
+        w = np.asarray(omega, dtype=float)
+        return (np.asarray(f.r) / (1 + 1j * w[..., None] * np.asarray(f.tau))).sum(axis=-1)
+
+    def time_constants(self) -> NDArray:
+        """Time constants of the network (its poles, -1/s), ascending, in seconds."""
+        return np.sort(np.asarray(self._foster().tau))
+
+    def step(self, power_w: float, t: ArrayLike) -> NDArray:
+        """Temperature rise (K) under a power step of ``power_w`` from t = 0."""
+        return power_w * self.zth(t)
+
+
+@dataclass(frozen=True, init=False)
+class Foster(_Ladder):
+    """Foster network: stages ``r_i || c_i`` in series, ``Z(s) = Σ r_i / (1 + s r_i c_i)``.
+
+    Stages are kept sorted by time constant, fastest first.
+
+    >>> f = Foster.from_tau([1.0, 2.0], [1e-3, 1.0])
+    >>> f.rth
+    3.0
+    >>> round(float(f.zth(1e9)), 12)
+    3.0
+    """
+
+    topology: ClassVar[str] = "foster"
+
+    def __init__(self, r: ArrayLike, c: ArrayLike) -> None:
+        rr = np.asarray(_validated("r_k_per_w", r))
+        cc = np.asarray(_validated("c_j_per_k", c, rr.size))
+        order = np.argsort(rr * cc, kind="stable")
+        super().__init__(rr[order], cc[order])
+
+    @classmethod
+    def from_tau(cls, r: ArrayLike, tau: ArrayLike) -> Foster:
+        """Build from resistances (K/W) and time constants (s), as datasheets publish them."""
+        rr = np.asarray(_validated("r_k_per_w", r))
+        tt = np.asarray(_validated("tau_s", tau, rr.size))
+        return cls(rr, tt / rr)
+
+    @classmethod
+    def from_cauer(cls, cauer: Cauer) -> Foster:
+        """Exact conversion of a Cauer network (extended-precision eigenproblem)."""
+        return cauer.to_foster()
+
+    @property
+    def tau(self) -> tuple[float, ...]:
+        """Stage time constants ``r_i c_i`` in seconds, ascending."""
+        return tuple(r * c for r, c in zip(self.r, self.c, strict=True))
+
+    def _foster(self) -> Foster:
+        return self
+
+    def to_cauer(self) -> Cauer:
+        """Exact Foster -> Cauer conversion by continued fraction in rational arithmetic."""
+        return Cauer(*_foster_to_cauer(self.r, self.tau))
+
+
+@dataclass(frozen=True, init=False)
+class Cauer(_Ladder):
+    """Cauer network: ``c_i`` from node i to the reference, ``r_i`` from node i to node i+1.
+
+    Node 0 is the junction; the last resistor ends at the reference.
+
+    >>> c = Foster.from_tau([1.0], [2.0]).to_cauer()
+    >>> c.r, c.c
+    ((1.0,), (2.0,))
+    """
+
+    topology: ClassVar[str] = "cauer"
+
+    @classmethod
+    def from_foster(cls, foster: Foster) -> Cauer:
+        """Exact conversion of a Foster network."""
+        return foster.to_cauer()
+
+    def _foster(self) -> Foster:
+        return _cached_foster(self)
+
+    def to_foster(self) -> Foster:
+        """Exact Cauer -> Foster conversion (tridiagonal eigenproblem in extended precision)."""
+        return _cached_foster(self)
+
+    def state_matrices(self) -> tuple[NDArray, NDArray]:
+        """Capacitance vector C and conductance matrix G of ``C dθ/dt = -G θ + e0 P``."""
+        n = self.order
+        g = np.zeros((n, n))
+        for i, r in enumerate(self.r):
+            g[i, i] += 1 / r
+            if i + 1 < n:
+                g[i + 1, i + 1] += 1 / r
+                g[i, i + 1] -= 1 / r
+                g[i + 1, i] -= 1 / r
+        return np.asarray(self.c), g
+
+
+# --------------------------------------------------------------------------- conversions
+def _poly_mul(a: list[Fraction], b: list[Fraction]) -> list[Fraction]:
+    out = [Fraction(0)] * (len(a) + len(b) - 1)
+    for i, x in enumerate(a):
+        if x:
+            for j, y in enumerate(b):
+                out[i + j] += x * y
+    return out
+
+
+def _poly_add(a: list[Fraction], b: list[Fraction]) -> list[Fraction]:
+    n = max(len(a), len(b))
+    return [(a[i] if i < len(a) else 0) + (b[i] if i < len(b) else 0) for i in range(n)]
+
+
+def _trim(a: list[Fraction]) -> list[Fraction]:
+    while len(a) > 1 and a[-1] == 0:
+        a = a[:-1]
+    return a
+
+
+def _foster_to_cauer(r: Sequence[float], tau: Sequence[float]) -> tuple[list[float], list[float]]:
+    """Continued-fraction (Cauer I) expansion of Z(s) = Σ r/(1+sτ), exact in rationals.
+
+    Polynomials are lists of coefficients, lowest power first. Z = N/D with deg D = n,
+    deg N = n - 1. Then repeatedly: Y = D/N = s·C + Y', Z' = N/(D - sCN) = R + Z'', ...
+    """
+    rs = [Fraction(x) for x in r]
+    ts = [Fraction(x) for x in tau]
+    num: list[Fraction] = [Fraction(0)]
+    den: list[Fraction] = [Fraction(1)]
+    for ri, ti in zip(rs, ts, strict=True):  # N/D + r/(1+sτ) = (N(1+sτ) + rD) / (D(1+sτ))
+        factor = [Fraction(1), ti]
+        num = _poly_add(_poly_mul(num, factor), [ri * x for x in den])
+        den = _poly_mul(den, factor)
+    num, den = _trim(num), _trim(den)
+    rr: list[float] = []
+    cc: list[float] = []
+    # admittance Y = den/num (deg den = deg num + 1)
+    while True:
+        c = den[-1] / num[-1]
+        shifted = [Fraction(0)] + [c * x for x in num]  # s·C·N
+        rem = _trim([a - b for a, b in zip(_poly_add(den, [0] * len(shifted)),
+                                          _poly_add(shifted, [0] * len(den)), strict=True)])
+        cc.append(float(c))
+        # impedance Z' = num/rem, deg equal: R = leading ratio
+        if len(rem) == 1 and rem[0] == 0:  # pragma: no cover - only for degenerate input
+            raise DataFormatError("Foster network is degenerate (repeated time constants?)")
+        rval = num[-1] / rem[-1]
+        rest = _trim([a - rval * b for a, b in zip(num, rem, strict=True)])
+        rr.append(float(rval))
+        if len(rest) == 1 and rest[0] == 0:
+            break
+        den, num = rem, rest  # next admittance Y'' = rem/rest
+    return rr, cc
+
+
+def _dps_for(n: int) -> int:
+    return 40 + 6 * n
+
+
+def _cached_foster(cauer: Cauer) -> Foster:
+    cached = cauer.__dict__.get("_foster_cache")
+    if cached is None:
+        cached = Foster.from_tau(*_cauer_to_foster(cauer.r, cauer.c))
+        object.__setattr__(cauer, "_foster_cache", cached)
+    return cached
+
+
+def _cauer_to_foster(r: Sequence[float], c: Sequence[float]) -> tuple[list[float], list[float]]:
+    """Poles and residues of the Cauer input impedance.
+
+    With ``C dθ/dt = -G θ + e0 P`` and ``M = C^-1/2 G C^-1/2 = V Λ Vᵀ`` (symmetric tridiagonal),
+    ``Z(s) = Σ v0k² / (C0 (s + λk))``, so ``τk = 1/λk`` and ``rk = v0k² / (C0 λk)``.
+    """
+    import mpmath
+
+    n = len(r)
+    with mpmath.workdps(_dps_for(n)):
+        rs = [mpmath.mpf(x) for x in r]
+        cs = [mpmath.mpf(x) for x in c]
+        m = mpmath.zeros(n, n)
+        for i in range(n):
+            g = 1 / rs[i] + (1 / rs[i - 1] if i > 0 else 0)
+            m[i, i] = g / cs[i]
+            if i + 1 < n:
+                off = -1 / (rs[i] * mpmath.sqrt(cs[i] * cs[i + 1]))
+                m[i, i + 1] = off
+                m[i + 1, i] = off
+        lam, vec = mpmath.eigsy(m)
+        taus = [1 / lam[k] for k in range(n)]
+        res = [vec[0, k] ** 2 / (cs[0] * lam[k]) for k in range(n)]
+        return [float(x) for x in res], [float(x) for x in taus]
