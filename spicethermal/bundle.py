@@ -280,7 +280,7 @@ def check_times(t_s: NDArray, file: str, rows: ArrayLike | None = None,
     neg = np.flatnonzero(t_s < 0)
     if neg.size:
         i = neg[0]
-        raise DataFormatError(f"{where(file, int(rr[i]), column)}negative time {t_s[i]!r}")
+        raise DataFormatError(f"{where(file, int(rr[i]), column)}negative time {float(t_s[i])!r}")
     d = np.diff(t_s)
     dup = np.flatnonzero(d == 0)
     back = np.flatnonzero(d < 0)
@@ -289,9 +289,10 @@ def check_times(t_s: NDArray, file: str, rows: ArrayLike | None = None,
         i = first + 1
         if d[first] == 0:
             raise DataFormatError(f"{where(file, int(rr[i]), column)}duplicate time "
-                                  f"{t_s[i]!r} (also on row {int(rr[i - 1])})")
+                                  f"{float(t_s[i])!r} (also on row {int(rr[i - 1])})")
         raise DataFormatError(f"{where(file, int(rr[i]), column)}time goes backwards: "
-                              f"{t_s[i]!r} after {t_s[i - 1]!r} (times must increase)")
+                              f"{float(t_s[i])!r} after {float(t_s[i - 1])!r} (times must "
+                              f"increase)")
 
 
 def check_temperatures(values: NDArray, file: str, rows: ArrayLike | None, column: str) -> None:
@@ -300,8 +301,8 @@ def check_temperatures(values: NDArray, file: str, rows: ArrayLike | None, colum
     bad = np.flatnonzero(values < ABSOLUTE_ZERO_C)
     if bad.size:
         i = bad[0]
-        raise DataFormatError(f"{where(file, int(rr[i]), column)}{values[i]!r} degC is below "
-                              f"absolute zero")
+        raise DataFormatError(f"{where(file, int(rr[i]), column)}{float(values[i])!r} degC "
+                              f"is below absolute zero")
 
 
 def _check_range(values: NDArray, file: str, rows: ArrayLike | None, column: str, *,
@@ -312,7 +313,7 @@ def _check_range(values: NDArray, file: str, rows: ArrayLike | None, column: str
     idx = np.flatnonzero(bad)
     if idx.size:
         i = idx[0]
-        raise DataFormatError(f"{where(file, int(rr[i]), column)}{values[i]!r}: {what}")
+        raise DataFormatError(f"{where(file, int(rr[i]), column)}{float(values[i])!r}: {what}")
 
 
 def _scalar(value: Any, key: str, *, positive: bool = False, temperature: bool = False,

@@ -1,0 +1,95 @@
+"""TSP calibration against exact lines and quadratics, the linearity test, the inverse."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from spicethermal.calibration import Calibration
+from spicethermal.errors import DataFormatError
+
+T = np.array([20.0, 40.0, 60.0, 80.0, 100.0, 120.0])
+
+
+def test_exact_line() -> None:
+    v = 0.712 - 2.1e-3 * T
+    cal = Calibration.fit(T, v)
+    assert cal.degree == 1
+    np.testing.assert_allclose(cal.coefficients, [0.712, -2.1e-3], rtol=1e-12)
+    assert cal.k_factor_mv_per_k == pytest.approx(-2.1, rel=1e-12)
+    assert cal.rms_mv < 1e-9 and cal.rms_k < 1e-9
+    np.testing.assert_allclose(cal.temperature(cal.voltage([-10.0, 55.5, 200.0])),
+                               [-10.0, 55.5, 200.0], rtol=1e-12)  # a line extrapolates
+    assert cal.linearity.linear_ok
+
+
+def test_exact_quadratic() -> None:
+    v = 0.70 - 2.0e-3 * T - 4.0e-6 * T**2
+    cal = Calibration.fit(T, v, degree=2)
+    np.testing.assert_allclose(cal.coefficients, [0.70, -2.0e-3, -4.0e-6], rtol=1e-9)
+    assert cal.k_factor_at(50.0) == pytest.approx(-2.0 - 2 * 4e-3 * 50.0, rel=1e-9)
+    assert cal.k_factor_mv_per_k == pytest.approx(cal.k_factor_at(70.0), rel=1e-12)
+    t = np.linspace(0.0, 140.0, 57)
+    np.testing.assert_allclose(cal.temperature(cal.voltage(t)), t, atol=1e-9)
+    # the line misses it; the test says so and "auto" picks the quadratic
+    line = Calibration.fit(T, v)
+    assert not line.linearity.linear_ok
+    assert line.linearity.curvature_k > 1.0
+    # curvature of the true quadratic relative to its chord over 20..120 degC: a(ΔT)²/8 / slope
+    assert Calibration.fit(T, v, degree="auto").degree == 2
+
+
+def test_residuals_in_mv_and_k() -> None:
+    v = 0.70 - 2.0e-3 * T
+    v_noisy = v.copy()
+    v_noisy[2] += 1e-3  # one point 1 mV high
+    cal = Calibration.fit(T, v_noisy)
+    expected_mv = (v_noisy - cal.voltage(T)) * 1e3
+    np.testing.assert_allclose(cal.residuals_mv, expected_mv, atol=1e-12)
+    # a voltage too high reads too cold on a negative slope: residual_k = residual_v / slope
+    np.testing.assert_allclose(cal.residuals_k, expected_mv * 1e-3 / cal.coefficients[1])
+    assert cal.rms_mv == pytest.approx(np.sqrt(np.mean(expected_mv**2)))
+
+
+def test_linearity_noise_versus_curvature() -> None:
+    rng = np.random.default_rng(7)
+    t = np.linspace(20, 120, 12)
+    noise = rng.normal(0, 2e-4, t.size)  # 0.2 mV ≈ 0.1 K
+    tiny_curve = 0.70 - 2e-3 * t - 1e-8 * t**2 + noise
+    assert Calibration.fit(t, tiny_curve).linearity.linear_ok
+    strong_curve = 0.70 - 2e-3 * t - 2e-6 * t**2 + noise
+    test = Calibration.fit(t, strong_curve).linearity
+    assert not test.linear_ok and test.p_value < 0.05 and test.curvature_k > test.tolerance_k
+    assert "quadratic" in str(test)
+
+
+def test_quadratic_inverse_errors_out_of_range() -> None:
+    v = 0.70 - 2.0e-3 * T + 5.0e-6 * T**2  # turns at 200 degC
+    cal = Calibration.fit(T, v, degree=2)
+    with pytest.raises(DataFormatError, match="beyond the turning point"):
+        cal.temperature(0.40)
+    with pytest.raises(DataFormatError, match="outside the calibrated range"):
+        cal.temperature(cal.voltage(170.0))
+    assert float(cal.temperature(cal.voltage(170.0), margin_k=60)) == pytest.approx(170.0)
+
+
+def test_pyrth_calibration_points() -> None:
+    temp = [23.4, 37.625, 51.85, 66.075, 80.3]
+    volt = [0.55843, 0.52536, 0.49232, 0.45927, 0.42621]
+    cal = Calibration.fit(temp, volt)
+    assert cal.k_factor_mv_per_k == pytest.approx(-2.32, abs=0.01)
+    assert cal.rms_k < 0.01 and cal.linearity.linear_ok
+
+
+@pytest.mark.parametrize(("temp", "volt", "degree", "words"), [
+    ([25, 25, 25], [0.6, 0.6, 0.6], 1, "distinct temperatures"),
+    ([25, 50], [0.6, 0.55], 2, "distinct temperatures"),
+    ([25, 50], [0.6, np.nan], 1, "point 2, column v_tsp_v"),
+    ([25, 50], [0.6], 1, "2 temperatures but 1 voltages"),
+    ([25, 50, 75], [0.6, 0.5, 0.6], 2, "not monotonic"),
+    ([25, 50], [0.6, 0.6], 1, "zero slope"),
+    ([25, 50], [0.6, 0.5], 3, "degree = 3"),
+])
+def test_bad_calibration(temp, volt, degree, words) -> None:
+    with pytest.raises(DataFormatError, match=words):
+        Calibration.fit(temp, volt, degree=degree)
