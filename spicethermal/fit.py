@@ -359,7 +359,9 @@ class _Problem:
         jac = self.w[:, None] * np.hstack([d_a, d_logtau])
         return res, jac
 
-    def refine(self, r0: NDArray, tau0: NDArray) -> _Solution:
+    def refine(self, r0: NDArray, tau0: NDArray, tol: float = 1e-10,
+               max_nfev_per_param: int = 30) -> _Solution:
+        """Levenberg-Marquardt on the log parameters from (r0, τ0)."""
         from scipy.optimize import least_squares
 
         m = tau0.size
@@ -378,8 +380,8 @@ class _Problem:
 
         k = p0.size
         with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-            sol = least_squares(fun, p0, jac=jac, method="lm", xtol=1e-14, ftol=1e-14,
-                                gtol=1e-14, max_nfev=100 * (k + 1))
+            sol = least_squares(fun, p0, jac=jac, method="lm", xtol=tol, ftol=tol, gtol=tol,
+                                max_nfev=max_nfev_per_param * (k + 1))
         r, tau = self.unpack(sol.x, m, ref)
         ok = bool(np.all(np.isfinite(r)) and np.all(np.isfinite(tau)) and np.all(tau > 0)
                   and np.all(r > 0))
@@ -646,12 +648,22 @@ def fit_foster(
         note, crit_name = trials[-1].reason, "fixed"
     else:
         if chosen is None:
-            why = "; ".join(f"order {tr.order}: {tr.reason}" for tr in trials)
-            raise FitError(f"no acceptable ladder fits these data ({why})")
+            why = "; ".join(f"order {tr.order}: {tr.reason}" for tr in trials[:3])
+            more = f"; orders {trials[3].order}-{trials[-1].order} no better" if trials[3:] else ""
+            raise FitError(f"no acceptable ladder fits these data ({why}{more})")
         note, crit_name = "", CRITERION
 
     m = chosen.tau.size
+    polished = prob.refine(chosen.r, chosen.tau, tol=1e-15, max_nfev_per_param=100)
+    if polished.converged and polished.rss <= chosen.rss:
+        chosen = _assessed(prob, polished, n - n_free(m), sf is None, window)
     u = np.sqrt(np.clip(np.diag(chosen.cov), 0.0, None))
+    loose = [i for i in range(m) if not u[m + i] < chosen.tau[i]]
+    if loose:
+        note = "; ".join(filter(None, [note, (
+            f"time constant of stage {loose[0] + 1} is not determined by the data "
+            f"(u(tau) >= tau), e.g. a stage faster than the first point; its R is")]))
+        note += " still meaningful"
     foster = Foster.from_tau(chosen.r, chosen.tau)
     resid = z - foster.zth(t)
     for arr in (t, z, resid):
@@ -669,6 +681,16 @@ def fit_foster(
     )
 
 
+def _assessed(prob: _Problem, sol: _Solution, dof: int, estimate_noise: bool,
+              window: tuple[float, float]) -> _Solution:
+    """The solution with its covariance and the guard's verdict filled in."""
+    scale = sol.rss / max(dof, 1) if estimate_noise else 1.0
+    cov = prob.covariance(sol.r, sol.tau, scale)
+    why = (_guard(sol.r, sol.tau, cov, *window) if sol.converged
+           else f"did not converge: {sol.message}")
+    return replace(sol, cov=cov, why=why)
+
+
 def _fit_order(prob: _Problem, seeds: list[NDArray], window: tuple[float, float], dof: int,
                estimate_noise: bool) -> tuple[_Solution | None, _Solution | None]:
     """Best acceptable solution of one order (else the best one) and the lowest-RSS one."""
@@ -678,13 +700,8 @@ def _fit_order(prob: _Problem, seeds: list[NDArray], window: tuple[float, float]
     for (r0, _), tau0 in ranked[:_SEEDS_PER_ORDER]:
         m = tau0.size
         sol = prob.refine(np.maximum(r0, 1e-3 * max(float(r0.sum()), scale_ref) / m), tau0)
-        if not np.isfinite(sol.rss):
-            continue
-        scale = sol.rss / max(dof, 1) if estimate_noise else 1.0
-        cov = prob.covariance(sol.r, sol.tau, scale)
-        why = (_guard(sol.r, sol.tau, cov, *window) if sol.converged
-               else f"did not converge: {sol.message}")
-        runs.append(replace(sol, cov=cov, why=why))
+        if np.isfinite(sol.rss):
+            runs.append(_assessed(prob, sol, dof, estimate_noise, window))
     if not runs:
         return None, None
     overall = min(runs, key=lambda x: x.rss)
