@@ -248,7 +248,7 @@ def format_columns(columns: Mapping[str, ArrayLike], comments: Iterable[str] = (
 # --------------------------------------------------------------------------------------------
 def _rows_for(n: int, rows: ArrayLike | None) -> NDArray:
     if rows is None:
-        return np.arange(2, n + 2)  # as written by format_columns: header on line 1
+        return np.arange(1, n + 1)  # arrays in memory: row k is the k-th value
     return np.asarray(rows, dtype=int)
 
 

@@ -259,7 +259,8 @@ class ZthCurve:
                                   f"record")
 
         early = None
-        need_fit = t_mask > 0 or table.tj_steady_c is None or extrapolate_to_s is not None
+        need_fit = (t_mask > 0 or table.tj_steady_c is None or extrapolate_to_s is not None
+                    or fit_window_s is not None)
         if need_fit:
             window = fit_window_s if fit_window_s is not None else _default_window(t, t_mask)
             t0, k, rms, n = sqrt_t_fit(t, theta, (float(window[0]), float(window[1])))

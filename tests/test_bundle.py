@@ -244,7 +244,7 @@ def test_not_a_bundle(tmp_path: Path) -> None:
 
 
 def test_in_memory_tables_are_validated() -> None:
-    dup = r"row 4, column t_s: duplicate time 0.2 \(also on row 3\)"
+    dup = r"row 3, column t_s: duplicate time 0.2 \(also on row 2\)"
     with pytest.raises(DataFormatError, match=dup):
         CoolingTable(t_s=[0.1, 0.2, 0.2], tj_c=[3, 2, 1], power_w=1.0, file="c.csv")
     with pytest.raises(DataFormatError, match="power_w: -1.0 must be > 0"):
