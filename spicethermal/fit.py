@@ -712,26 +712,36 @@ def _fit_order(prob: _Problem, seeds: list[NDArray], window: tuple[float, float]
 # ------------------------------------------------------------------- model-level hook
 def fit_model(
     curves: Any,
-    effects: Sequence[str] | Mapping[str, Any] = (),
+    effects: Sequence[str] = (),
     order: int | Literal["auto"] = "auto",
     rth_k_per_w: float | None = None,
+    hold_rth: bool = True,
     max_order: int = 10,
+    reference: str = "ambient",
     provenance: Mapping[str, Any] | None = None,
 ) -> tuple[ThermalModel, FitResult]:
     """Fit a :class:`~spicethermal.model.ThermalModel` to one or more Zth curves.
 
     This is the hook the effect diagnosis extends: today it fits the ladder to the first
     curve (anything with ``t_s``, ``zth_k_per_w`` and optionally ``rth_k_per_w``
-    attributes, such as a :class:`~spicethermal.curves.ZthCurve`) and refuses effects.
+    attributes, such as a :class:`~spicethermal.curves.ZthCurve`); effects are checked
+    against the catalogue but cannot be fitted yet (:class:`FitError`).
 
     Parameters
     ----------
     curves : ZthCurve or sequence of ZthCurve
         The curve(s) to fit; the first is used.
     effects : sequence of str
-        Names of effects to fit together with the ladder (not yet supported: FitError).
-    order, rth_k_per_w, max_order
-        As in :func:`fit_foster`; ``rth_k_per_w`` defaults to the curve's own Rth.
+        Names of effects (:mod:`spicethermal.effects`) to fit together with the ladder.
+    order, max_order
+        As in :func:`fit_foster`.
+    rth_k_per_w : float, optional
+        Rth to hold as ``ΣR = Rth``; default the curve's own ``rth_k_per_w``.
+    hold_rth : bool
+        Whether to hold ``ΣR = Rth`` at all (False when the curve's Rth is only a guess,
+        e.g. the last point of a record that may not have reached steady state).
+    reference : str
+        The model's thermal reference, ``"ambient"`` or ``"case"``.
     provenance : mapping, optional
         Extra provenance merged into the model's (the fit report goes under ``"fit"``).
 
@@ -747,25 +757,33 @@ def fit_model(
     >>> curve = SimpleNamespace(t_s=t, zth_k_per_w=Foster.from_tau([1, 2], [1e-3, 1]).zth(t),
     ...                         rth_k_per_w=3.0)
     >>> model, res = fit_model(curve)
-    >>> res.order
-    2
+    >>> res.order, model.provenance["fit"]["order"]
+    (2, 2)
     """
     from .model import ThermalModel
 
     items = list(curves) if isinstance(curves, Sequence) else [curves]
     if not items:
         raise DataFormatError("no Zth curve to fit")
-    names = list(effects)
+    names = [str(e) for e in effects]
     if names:
-        raise FitError(f"fitting effects ({', '.join(map(str, names))}) together with the "
-                       "ladder is not available yet; fit without --effect")
+        from .effects import known_names
+
+        unknown = [e for e in names if e not in known_names()]
+        if unknown:
+            raise DataFormatError(f"unknown effect {unknown[0]!r}; known effects: "
+                                  f"{', '.join(known_names())}")
+        raise FitError(f"fitting effects ({', '.join(names)}) together with the ladder is not "
+                       "available yet; fit without --effect")
     curve = items[0]
     try:
         t, z = curve.t_s, curve.zth_k_per_w
     except AttributeError:
         raise DataFormatError("a Zth curve needs t_s and zth_k_per_w") from None
-    rth = rth_k_per_w if rth_k_per_w is not None else getattr(curve, "rth_k_per_w", None)
+    rth = None
+    if hold_rth:
+        rth = rth_k_per_w if rth_k_per_w is not None else getattr(curve, "rth_k_per_w", None)
     result = fit_foster(t, z, order=order, rth_k_per_w=rth, max_order=max_order)
     prov = dict(provenance or {})
     prov["fit"] = result.to_dict()
-    return ThermalModel(result.foster, provenance=prov), result
+    return ThermalModel(result.foster, reference=reference, provenance=prov), result

@@ -213,3 +213,110 @@ def test_no_acceptable_fit_raises_instead_of_returning_nonsense():
         fit_foster(t, 3.0 * t)  # a ramp: no finite ladder, every order refused
     with pytest.raises(FitError, match="free parameters"):
         fit_foster(T[:6], Z[:6], order=4)
+
+
+# ------------------------------------------------------------------------------ figures
+def test_fig7_and_plot_functions(tmp_path):
+    from spicethermal.plots import fig7, new_figure, plot_fit, plot_ladder, plot_residuals
+
+    truth = Foster.from_tau(*LADDERS[2])
+    t = np.logspace(-4, 0.5, 46)
+    res = fit_foster(t, truth.zth(t) + np.random.default_rng(1).normal(0, 0.1, t.size))
+    path = fig7(res, tmp_path / "fig7.png")
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    fig = new_figure()
+    ax = fig.add_subplot()
+    assert plot_fit(res, ax=ax) is ax and ax.get_xscale() == "log"
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), res.zth_k_per_w)
+    ax = plot_residuals(res)
+    np.testing.assert_allclose(ax.lines[-1].get_ydata(), res.residuals)
+    for lad in (res.foster, res.foster.to_cauer()):
+        labels = [x.get_text() for x in plot_ladder(lad).texts]
+        assert sum(lb.startswith("R") for lb in labels) == lad.order
+        assert sum(lb.startswith("C") for lb in labels) == lad.order
+
+
+# ---------------------------------------------------------------------------------- CLI
+def _write_csv(path, columns, rows):
+    path.write_text(",".join(columns) + "\n" + "".join(
+        ",".join(f"{v:.10g}" for v in row) + "\n" for row in rows))
+    return path
+
+
+@pytest.fixture
+def zth_csv(tmp_path):
+    truth = Foster.from_tau(*LADDERS[2])
+    t = np.logspace(-4, math.log10(4.5), 47)
+    z = truth.zth(t) + np.random.default_rng(3).normal(0, 0.146, t.size)
+    return _write_csv(tmp_path / "zth.csv", ["t_s", "zth_k_per_w"], zip(t, z, strict=True))
+
+
+def test_cli_fit_writes_a_model(zth_csv, tmp_path, capsys):
+    from spicethermal.cli import main
+    from spicethermal.model import ThermalModel
+
+    out = tmp_path / "model.json"
+    assert main(["fit", str(zth_csv), "-o", str(out), "--rth", "146",
+                 "--plot", str(tmp_path / "f.png")]) == 0
+    printed = capsys.readouterr().out
+    assert "order 4" in printed and "± u" in printed
+    model = ThermalModel.load(out)
+    assert model.ladder.order == 4 and model.rth == pytest.approx(146.0, rel=1e-14)
+    fit = model.provenance["fit"]
+    assert fit["criterion"] == "BIC" and len(fit["stages"]) == 4
+    assert all(s["u_r_k_per_w"] > 0 and s["u_tau_s"] > 0 for s in fit["stages"])
+    assert (tmp_path / "f.png").stat().st_size > 10_000
+    assert main(["fit", str(zth_csv), "-o", str(out), "--order", "2", "-q",
+                 "--topology", "cauer"]) == 0
+    model = ThermalModel.load(out)
+    assert model.ladder.topology == "cauer" and model.ladder.order == 2
+
+
+def test_cli_fit_normalized_csv_and_bundle(tmp_path):
+    from spicethermal.bundle import Bundle, CoolingTable
+    from spicethermal.cli import main
+    from spicethermal.model import ThermalModel
+    from spicethermal.synthetic import synthetic_cooling
+
+    truth = Foster.from_tau([0.5, 1.0], [1e-3, 1e-1])
+    t = np.logspace(-4, 1, 51)
+    csv = _write_csv(tmp_path / "r.csv", ["t_s", "r"], zip(t, truth.r_norm(t), strict=True))
+    assert main(["fit", str(csv), "-o", str(tmp_path / "a.json"), "--rth", "1.5", "-q"]) == 0
+    assert ThermalModel.load(tmp_path / "a.json").ladder.order == 2
+
+    tc, tj = synthetic_cooling(truth, 10.0, np.geomspace(1e-4, 10, 200), ambient_c=25.0)
+    bundle = Bundle(reference="case", cooling=(CoolingTable(
+        t_s=tc, tj_c=tj, power_w=10.0, tj_steady_c=40.0, tref_steady_c=25.0),))
+    path = bundle.write(tmp_path / "run")
+    assert main(["fit", str(path), "-o", str(tmp_path / "b.json"), "-q"]) == 0
+    model = ThermalModel.load(tmp_path / "b.json")
+    assert model.reference == "case" and model.rth == pytest.approx(1.5, rel=1e-12)
+    np.testing.assert_allclose(model.ladder.zth(t), truth.zth(t), atol=2e-4 * truth.rth)
+
+
+@pytest.mark.parametrize("body,message", [
+    ("t_s,temp_c\n1e-4,1\n1e-3,2\n1e-2,3\n", "missing column zth_k_per_w"),
+    ("t_s,zth_k_per_w\n1e-4,1\n1e-3,nan\n1e-2,3\n", "row 3, column zth_k_per_w"),
+    ("t_s,zth_k_per_w\n1e-4,1\n1e-2,2\n1e-3,3\n", "row 4, column t_s"),
+    ("t_s,r\n1e-4,0.1\n1e-3,0.5\n1e-2,0.9\n", "--rth"),
+])
+def test_cli_fit_bad_input_exits_2_with_one_line(tmp_path, capsys, body, message):
+    from spicethermal.cli import main
+
+    src = tmp_path / "bad.csv"
+    src.write_text(body)
+    out = tmp_path / "never.json"
+    assert main(["fit", str(src), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_cli_fit_effects_are_checked(zth_csv, tmp_path, capsys):
+    from spicethermal.cli import main
+
+    out = str(tmp_path / "m.json")
+    assert main(["fit", str(zth_csv), "-o", out, "--effect", "no-such-effect"]) == 2
+    assert "known effects" in capsys.readouterr().err
+    assert main(["fit", str(zth_csv), "-o", out, "--effect", "temperature-coefficient"]) == 2
+    assert "not available yet" in capsys.readouterr().err
