@@ -166,8 +166,8 @@ def plot_ladder(ladder: Foster | Cauer, ax: Axes | None = None, title: str | Non
 
     >>> from spicethermal.ladder import Foster
     >>> ax = plot_ladder(Foster.from_tau([1.0, 2.0], [1e-3, 1e-1]))
-    >>> sorted(t.get_text() for t in ax.texts if t.get_text().startswith("R"))
-    ['R1\n1 K/W', 'R2\n2 K/W']
+    >>> sorted(" ".join(t.get_text().split()) for t in ax.texts if t.get_text()[0] == "R")
+    ['R1 1 K/W', 'R2 2 K/W']
     """
     n = ladder.order
     ax = _axes(ax, width_in=max(4.0, 1.4 * n + 1.5), height_in=2.6)
