@@ -1,0 +1,354 @@
+"""SPICE: render subcircuits and test benches from templates, and run them in ngspice.
+
+Templates live in ``templates/`` (shipped in the wheel as ``spicethermal/_templates``) and are
+rendered with ``StrictUndefined``. Simulators sit behind one small interface,
+:class:`Simulator`: ``run(netlist, vectors, dialect) -> Waveforms``. Two backends run ngspice:
+:class:`NgspiceBatch` (the ``ngspice -b`` binary, which proves a written ``.lib`` works on its
+own) and :class:`NgspiceShared` (PySpice over ``libngspice.so.0``, in process). PSPICE and
+LTspice dialects run under ngspice's compatibility modes (``set ngbehavior=ps`` / ``lt``).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from .errors import DataFormatError, SimulationError
+from .files import atomic_write_text
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+    from .model import ThermalModel
+
+DIALECTS = ("ngspice", "pspice", "ltspice")
+TOPOLOGIES = ("foster", "cauer")
+COMPAT_MODE = {"ngspice": None, "pspice": "ps", "ltspice": "lt"}
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+_RESERVED = {"end", "ends", "subckt", "control", "endc", "include", "lib", "param", "model",
+             "tran", "ac", "dc", "op", "options", "option", "global", "func", "ic", "nodeset"}
+
+
+# ------------------------------------------------------------------------------ templates
+def _template_dir() -> Path:
+    packaged = Path(__file__).parent / "_templates"
+    if packaged.is_dir():
+        return packaged
+    return Path(__file__).resolve().parent.parent / "templates"
+
+
+@lru_cache(maxsize=1)
+def environment():
+    """The jinja2 environment (StrictUndefined, no autoescape: the output is SPICE text)."""
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(_template_dir())),
+                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
+                             autoescape=False)
+    env.globals["fmt"] = fmt
+    return env
+
+
+def fmt(x: float) -> str:
+    """A number in SPICE syntax with full double precision (no engineering suffixes).
+
+    >>> fmt(1e-4), fmt(146.0)
+    ('0.0001', '146.0')
+    """
+    return repr(float(x))
+
+
+def check_name(name: str) -> str:
+    """Validate a subcircuit name: a letter, then letters, digits, ``_``; not a SPICE keyword.
+
+    >>> check_name("ACTUATOR_1")
+    'ACTUATOR_1'
+    """
+    if not isinstance(name, str) or not _NAME.fullmatch(name) or name.lower() in _RESERVED:
+        raise DataFormatError(
+            f"subcircuit name {name!r} is not allowed: use a letter followed by up to 63 "
+            "letters, digits or underscores, not a SPICE keyword")
+    return name
+
+
+def sanitize_comment(text: object, limit: int = 200) -> str:
+    """One printable line safe inside a ``*`` comment (no line breaks or control characters).
+
+    >>> sanitize_comment("ok\\n.control\\nshell rm -rf /")
+    'ok .control shell rm -rf /'
+    """
+    line = re.sub(r"[\x00-\x1f\x7f\u2028\u2029\x85]+", " ", str(text))
+    line = re.sub(r"\s+", " ", line).strip()
+    return line[:limit]
+
+
+def _provenance_lines(provenance: Mapping) -> list[str]:
+    lines = []
+    for key, value in provenance.items():
+        if isinstance(value, Mapping | list | tuple):
+            continue  # structured provenance stays in the model file
+        lines.append(sanitize_comment(f"{key}: {value}"))
+    return lines[:20]
+
+
+def _stages(model: ThermalModel) -> list[dict]:
+    lad = model.ladder
+    n = lad.order
+    node = ["TJ", *[f"N{k}" for k in range(1, n)], "TREF"]
+    out = []
+    for k, (r, c) in enumerate(zip(lad.r, lad.c, strict=True)):
+        a, b = node[k], node[k + 1]
+        ca, cb = (a, b) if lad.topology == "foster" else (a, "TREF")
+        out.append({"k": k + 1, "a": a, "b": b, "ca": ca, "cb": cb, "r": r, "c": c})
+    return out
+
+
+def internal_nodes(model: ThermalModel) -> list[str]:
+    """Names of the ladder nodes inside the subcircuit, junction first (``TJ``, ``N1``, ...)."""
+    return ["TJ", *[f"N{k}" for k in range(1, model.ladder.order)]]
+
+
+def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | None = None,
+               name: str = "THERMAL", filename: str = "model.lib") -> str:
+    """The subcircuit ``.SUBCKT NAME TJ TREF`` of ``model`` as text.
+
+    Examples
+    --------
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> text = render_lib(ThermalModel(Foster.from_tau([1.0], [1e-3])), name="DUT")
+    >>> ".SUBCKT DUT TJ TREF" in text
+    True
+    """
+    from . import __version__
+
+    if dialect not in DIALECTS:
+        raise DataFormatError(f"dialect {dialect!r}: expected one of {', '.join(DIALECTS)}")
+    if topology is not None and topology not in TOPOLOGIES:
+        raise DataFormatError(f"topology {topology!r}: expected one of {', '.join(TOPOLOGIES)}")
+    check_name(name)
+    model = model.with_topology(topology or model.ladder.topology)
+    tc = model.effect("temperature-coefficient")
+    pcs = []
+    nodes = internal_nodes(model)
+    for e in model.device_effects:
+        if e.name == "phase-change":
+            p = e.params
+            amp = p["latent_j"] / (p["width_k"] * np.sqrt(2 * np.pi))
+            pcs.append({"node": nodes[int(p["node"])], "amp": amp, "t_c": p["t_c"],
+                        "width_k": p["width_k"]})
+    ctx = {
+        "name": name, "dialect": dialect, "topology": model.ladder.topology,
+        "order": model.ladder.order, "version": __version__, "rth": model.rth,
+        "reference": model.reference, "filename": sanitize_comment(filename, 80),
+        "taus": [f"{t:.4g}" for t in model.ladder.time_constants()],
+        "provenance": _provenance_lines(model.provenance),
+        "effects": [e for e in model.device_effects],
+        "stages": _stages(model), "tc": dict(tc.params) if tc else None, "pc": pcs,
+    }
+    return environment().get_template(f"lib/{dialect}.lib.j2").render(**ctx)
+
+
+def export(model: ThermalModel, path: str | os.PathLike, dialect: str = "ngspice",
+           topology: str | None = None, name: str = "THERMAL") -> Path:
+    """Write the subcircuit file atomically and return its path."""
+    path = Path(path)
+    return atomic_write_text(path, render_lib(model, dialect, topology, name, path.name))
+
+
+@dataclass(frozen=True)
+class Pulse:
+    """A PWM current source: period, width at full power, edge time (all seconds)."""
+
+    period_s: float
+    width_s: float
+    edge_s: float
+
+    @classmethod
+    def of(cls, freq_hz: float, duty: float) -> Pulse:
+        """Edges of 1e-4 period; width chosen so the energy per period is exactly ``duty``."""
+        period = 1.0 / freq_hz
+        edge = period * 1e-4
+        return cls(period, max(duty * period - edge, 0.0), edge)
+
+
+def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tstop_s: float,
+                 tmax_s: float, tref_c: float = 0.0, pulse: Pulse | None = None,
+                 ic: Sequence[tuple[str, float]] = (), rise_s: float | None = None,
+                 reltol: float = 1e-4, trtol: float = 0.1,
+                 title: str = "spicethermal test bench",
+                 description: str = "") -> str:
+    """A transient test bench for the subcircuit in ``lib_path``: power step or PWM train.
+
+    ``ic`` sets node temperatures at t = 0 (e.g. the periodic steady state), as
+    ``(node, volts)`` with nodes such as ``X1.N1``. A step ramps up linearly over ``rise_s``
+    (default ``1e-6 · tmax_s``: ngspice cannot resolve a much sharper edge at a large maximum
+    step); compare it with the exact ramp response. The default tolerances (``reltol=1e-4``,
+    ``trtol=0.1``) keep ladder responses within 1e-4 of Rth over 8 decades of time.
+    """
+    rise_s = max(1e-9, 1e-6 * tmax_s) if rise_s is None else rise_s
+    from . import __version__
+
+    check_name(name)
+    return environment().get_template("bench/transient.cir.j2").render(
+        title=sanitize_comment(title), description=sanitize_comment(description),
+        version=__version__, lib_path=str(lib_path), name=name, tref_c=tref_c,
+        power_w=power_w, pulse=pulse, rise_s=rise_s, ic=list(ic), tstop_s=tstop_s,
+        tstep_s=tmax_s, tmax_s=tmax_s, reltol=reltol, trtol=trtol)
+
+
+# ------------------------------------------------------------------------------ simulators
+@dataclass(frozen=True)
+class Waveforms:
+    """Simulated vectors against time."""
+
+    t_s: NDArray
+    values: Mapping[str, NDArray]
+
+    def __getitem__(self, key: str) -> NDArray:
+        return self.values[key.lower()]
+
+
+class Simulator(Protocol):
+    """What every simulator backend offers."""
+
+    name: str
+
+    def run(self, netlist: str, vectors: Sequence[str], dialect: str = "ngspice",
+            cwd: str | os.PathLike | None = None) -> Waveforms:
+        """Run the transient in ``netlist`` and return ``vectors`` (e.g. ``["V(TJ)"]``)."""
+
+
+def _spiceinit(dialect: str) -> str:
+    mode = COMPAT_MODE[dialect]
+    return f"set ngbehavior={mode}\n" if mode else ""
+
+
+class NgspiceBatch:
+    """The ``ngspice`` binary in batch mode, in a scratch directory with its own ``.spiceinit``."""
+
+    name = "ngspice"
+
+    def __init__(self, executable: str = "ngspice", timeout_s: float = 600) -> None:
+        self.executable = executable
+        self.timeout_s = timeout_s
+
+    def run(self, netlist: str, vectors: Sequence[str], dialect: str = "ngspice",
+            cwd: str | os.PathLike | None = None) -> Waveforms:
+        exe = shutil.which(self.executable)
+        if exe is None:
+            raise SimulationError(f"{self.executable}: not found; install ngspice (make setup)")
+        with tempfile.TemporaryDirectory(prefix="spicethermal-") as tmp:
+            work = Path(tmp)
+            (work / ".spiceinit").write_text(_spiceinit(dialect))
+            out = work / "out.txt"
+            body = netlist.rstrip()
+            if body.lower().endswith(".end"):
+                body = body[: -len(".end")]
+            deck = (f"{body}\n.control\nset wr_singlescale\nset wr_vecnames\noption numdgt=17\n"
+                    f"run\nwrdata {out} {' '.join(vectors)}\nquit 0\n.endc\n.end\n")
+            (work / "deck.cir").write_text(deck)
+            env = dict(os.environ, HOME=str(work))  # no user ~/.spiceinit interferes
+            proc = subprocess.run([exe, "-b", "deck.cir"], cwd=work, env=env, text=True,
+                                  capture_output=True, timeout=self.timeout_s)
+            log = proc.stdout + proc.stderr
+            if proc.returncode != 0 or not out.exists() or _ABORTED.search(log):
+                msg = _first_error(log)
+                raise SimulationError(f"ngspice failed (exit {proc.returncode}): {msg}")
+            return _read_wrdata(out, vectors)
+
+
+class NgspiceShared:
+    """ngspice in process through PySpice and ``libngspice.so.0``."""
+
+    name = "pyspice"
+
+    def run(self, netlist: str, vectors: Sequence[str], dialect: str = "ngspice",
+            cwd: str | os.PathLike | None = None) -> Waveforms:
+        ng = _shared_ngspice()
+        ng.destroy()
+        mode = COMPAT_MODE[dialect]
+        ng.exec_command(f"set ngbehavior={mode}" if mode else "unset ngbehavior")
+        body = netlist.rstrip()
+        if not body.lower().endswith(".end"):
+            body += "\n.end"
+        try:
+            ng.load_circuit(body)
+            ng.run()
+        except Exception as exc:  # PySpice raises bare exceptions for ngspice errors
+            raise SimulationError(f"ngspice (shared) failed: {exc}") from None
+        plot = ng.plot(None, ng.last_plot)
+        try:
+            t = np.asarray(plot["time"]._data, dtype=float).real
+            vals = {v.lower(): np.asarray(_vector(plot, v), dtype=float).real for v in vectors}
+        except KeyError as exc:
+            raise SimulationError(f"ngspice (shared): no vector {exc}") from None
+        return Waveforms(t, vals)
+
+
+def _vector(plot, name: str):
+    m = re.fullmatch(r"v\((.+)\)", name.strip(), re.I)
+    key = m.group(1) if m else name
+    for k in (key, key.lower(), name, name.lower()):
+        if k in plot:
+            return plot[k]._data
+    raise KeyError(name)
+
+
+@lru_cache(maxsize=1)
+def _shared_ngspice():
+    import logging
+    import warnings
+
+    logging.getLogger("PySpice").setLevel(logging.ERROR)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from PySpice.Spice.NgSpice.Shared import NgSpiceShared
+
+        NgSpiceShared.LIBRARY_PATH = "libngspice.so.0"
+        try:
+            return NgSpiceShared.new_instance()
+        except OSError as exc:
+            raise SimulationError(f"libngspice.so.0 cannot be loaded ({exc}); "
+                                  "install libngspice0 (make setup)") from None
+
+
+def simulator(engine: str) -> Simulator:
+    """The backend named ``engine``: ``ngspice`` (binary) or ``pyspice`` (in process)."""
+    if engine in ("ngspice", "batch"):
+        return NgspiceBatch()
+    if engine in ("pyspice", "shared"):
+        return NgspiceShared()
+    raise DataFormatError(f"engine {engine!r}: expected ngspice or pyspice")
+
+
+_ABORTED = re.compile(r"simulation\(s\) aborted|timestep too small|singular matrix", re.I)
+
+
+def _first_error(text: str) -> str:
+    for line in text.splitlines():
+        if re.search(r"error|fatal|unknown|can't|cannot|too small|singular", line, re.I):
+            return sanitize_comment(line)
+    return sanitize_comment(text.strip().splitlines()[-1] if text.strip() else "no output")
+
+
+def _read_wrdata(path: Path, vectors: Sequence[str]) -> Waveforms:
+    lines = path.read_text().splitlines()
+    if not lines:
+        raise SimulationError("ngspice wrote no data")
+    data = np.loadtxt(lines[1:], ndmin=2) if lines[0].strip().startswith("time") else \
+        np.loadtxt(lines, ndmin=2)
+    if data.shape[1] != len(vectors) + 1:
+        raise SimulationError(f"ngspice wrote {data.shape[1]} columns, expected "
+                              f"{len(vectors) + 1}")
+    return Waveforms(data[:, 0], {v.lower(): data[:, k + 1] for k, v in enumerate(vectors)})
