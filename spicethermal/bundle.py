@@ -60,6 +60,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "c_j_per_k": ("c", "capacitance in J/K"),
 }
 
+#: Unit suffixes that mark a column as a known one in a foreign unit (``t_ms`` for ``t_s``).
+_UNITS = {"s", "ms", "us", "ns", "min", "h", "hr", "c", "degc", "k", "f", "degf", "v", "mv",
+          "uv", "hz", "khz", "mhz", "w", "mw", "kw", "uw", "k_per_w", "c_per_w", "k_per_mw",
+          "degc_per_w", "pct", "percent", "j_per_k", "mj_per_k", "ws_per_k"}
+
 _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
 
@@ -209,7 +214,8 @@ def _number(text: str, file: str, row: int, column: str) -> float:
 def _check_units(file: str, header_line: int, header: Sequence[str], expected: str) -> None:
     family = COLUMNS.get(expected, (expected, ""))[0]
     for col in header:
-        if col != expected and col not in COLUMNS and col.startswith(family + "_"):
+        if (col != expected and col not in COLUMNS and col.startswith(family + "_")
+                and col[len(family) + 1:].lower() in _UNITS):
             meaning = COLUMNS.get(expected, ("", expected))[1]
             raise DataFormatError(
                 f"{where(file, header_line, col)}wrong unit: the bundle format wants SI units "
