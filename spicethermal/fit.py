@@ -139,6 +139,9 @@ class FitResult:
         Whether ``ΣR = Rth`` was imposed.
     converged : bool
         The optimiser's convergence flag for the returned fit; ``message`` says more.
+    warnings : tuple of str
+        What the user should know about an accepted fit (a given order the data do not
+        support, an undetermined time constant, an order at ``max_order``).
     n_fit_points : int
         Points actually fitted (fewer than the data when dense data were binned).
     """
@@ -156,6 +159,7 @@ class FitResult:
     converged: bool
     message: str
     n_fit_points: int
+    warnings: tuple[str, ...] = ()
     weighting: str = field(default="absolute K/W, equal weight per point on the log-time grid")
 
     @property
@@ -203,6 +207,7 @@ class FitResult:
             "weighting": self.weighting,
             "converged": self.converged,
             "message": self.message,
+            "warnings": list(self.warnings),
         }
 
     def to_json(self, indent: int | None = 2) -> str:
@@ -227,6 +232,7 @@ class FitResult:
             lines.append(f"{self.criterion} per order: " + ", ".join(
                 f"{tr.order}: {tr.criterion_value:.1f}{'' if tr.accepted else ' (rejected)'}"
                 for tr in self.trials))
+        lines.extend(f"warning: {w}" for w in self.warnings)
         return "\n".join(lines)
 
     def _order_note(self) -> str:
@@ -641,29 +647,38 @@ def fit_foster(
             if chosen is not None and since_best >= _PATIENCE:
                 break
 
+    def polish(sol: _Solution) -> _Solution:
+        better = prob.refine(sol.r, sol.tau, tol=1e-15, max_nfev_per_param=100)
+        if better.converged and (better.rss <= sol.rss or not sol.converged):
+            return _assessed(prob, better, n - n_free(sol.tau.size), sf is None, window)
+        return sol
+
     if order != "auto":
+        if chosen is not None and not chosen.converged:
+            chosen = polish(chosen)
         if chosen is None or not chosen.converged:
             raise FitError(f"the order-{order} fit did not converge: "
                            f"{trials[-1].reason or 'no finite solution'}")
-        note, crit_name = trials[-1].reason, "fixed"
+        notes, crit_name = [chosen.why] if chosen.why else [], "fixed"
     else:
         if chosen is None:
             why = "; ".join(f"order {tr.order}: {tr.reason}" for tr in trials[:3])
             more = f"; orders {trials[3].order}-{trials[-1].order} no better" if trials[3:] else ""
             raise FitError(f"no acceptable ladder fits these data ({why}{more})")
-        note, crit_name = "", CRITERION
+        notes, crit_name = [], CRITERION
+        if chosen.tau.size == largest and trials[-1].order == largest:
+            notes.append(f"order {largest} is the largest tried (max_order or the number of "
+                         f"points) and the criterion was still improving: the data may support "
+                         f"more stages")
 
     m = chosen.tau.size
-    polished = prob.refine(chosen.r, chosen.tau, tol=1e-15, max_nfev_per_param=100)
-    if polished.converged and polished.rss <= chosen.rss:
-        chosen = _assessed(prob, polished, n - n_free(m), sf is None, window)
+    chosen = polish(chosen)
     u = np.sqrt(np.clip(np.diag(chosen.cov), 0.0, None))
     loose = [i for i in range(m) if not u[m + i] < chosen.tau[i]]
     if loose:
-        note = "; ".join(filter(None, [note, (
-            f"time constant of stage {loose[0] + 1} is not determined by the data "
-            f"(u(tau) >= tau), e.g. a stage faster than the first point; its R is")]))
-        note += " still meaningful"
+        notes.append(f"time constant of stage {loose[0] + 1} is not determined by the data "
+                     f"(u(tau) >= tau), e.g. a stage faster than the first point; its R is "
+                     f"still meaningful")
     foster = Foster.from_tau(chosen.r, chosen.tau)
     resid = z - foster.zth(t)
     for arr in (t, z, resid):
@@ -676,8 +691,12 @@ def fit_foster(
         rms_k_per_w=float(np.sqrt(np.mean(resid * resid))),
         criterion=crit_name, trials=tuple(trials), rth_fixed=held,
         converged=chosen.converged,
-        message=chosen.message + (f"; warning: {note}" if note else ""),
+        message=chosen.message, warnings=tuple(notes),
         n_fit_points=n,
+        weighting=("absolute K/W, weights 1/sigma" if sf is not None else
+                   "absolute K/W, equal weight per point on the log-time grid")
+        + (f"; {t.size} points averaged into {n} log-spaced bins "
+           f"({BINS_PER_DECADE} per decade)" if n != t.size else ""),
     )
 
 

@@ -65,6 +65,10 @@ def _eng(x: float, unit: str) -> str:
 
 
 # ------------------------------------------------------------------ Fig. 7 (a), (b)
+def _data_style(n: int) -> tuple[str, ...]:
+    return ("o",) if n <= 200 else (",",)
+
+
 def plot_fit(result: FitResult, ax: Axes | None = None, stages: bool = True) -> Axes:
     """Fig. 7(a): the data and the fitted Zth(t) on logarithmic time.
 
@@ -81,7 +85,7 @@ def plot_fit(result: FitResult, ax: Axes | None = None, stages: bool = True) -> 
     t = np.asarray(result.t_s)
     tt = np.geomspace(t[0], t[-1], 400)
     f = result.foster
-    ax.plot(t, result.zth_k_per_w, "o", ms=3.5, mfc="none", color="C0",
+    ax.plot(t, result.zth_k_per_w, *_data_style(t.size), ms=3.5, mfc="none", color="C0",
             label=f"data ({t.size} points)")
     ax.plot(tt, f.zth(tt), "-", color="C3", lw=1.6,
             label=f"Foster fit, order {f.order}, Rth = {f.rth:.4g} K/W")
@@ -104,7 +108,7 @@ def plot_residuals(result: FitResult, ax: Axes | None = None) -> Axes:
     rms = result.rms_k_per_w
     ax.axhline(0.0, color="0.3", lw=0.8)
     ax.axhspan(-rms, rms, color="C0", alpha=0.12, lw=0, label=f"±rms = {rms:.3g} K/W")
-    ax.plot(t, result.residuals, "o", ms=3, color="C0")
+    ax.plot(t, result.residuals, *_data_style(t.size), ms=3, color="C0")
     ax.set_xscale("log")
     ax.set_xlabel("t (s)")
     ax.set_ylabel("data − fit (K/W)")
