@@ -1,0 +1,467 @@
+"""The bench protocol, host side: framing, CRC, message encode/decode. Pure functions, no I/O.
+
+The one written specification is ``firmware/PROTOCOL.md``; ``firmware/protocol_vectors.json``
+holds test vectors that both the C unit tests and the Python tests check. In short:
+
+* frame body ``type u8 | seq u16 | payload | crc u16`` (little-endian), CRC-16/CCITT-FALSE
+  (poly 0x1021, init 0xFFFF, no reflection, no final xor) over type, seq and payload;
+* on the wire the body is COBS-encoded and followed by one ``0x00`` delimiter;
+* device frames are numbered; the host acknowledges them cumulatively (``Ack``) and asks for a
+  resend from a sequence number (``Nak``); ``Sync`` and ``DeviceError`` are unsequenced.
+
+>>> wire = encode_frame(0x01, 7, b"\\x01")
+>>> decode_block(wire[:-1])
+Frame(type=1, seq=7, payload=b'\\x01')
+>>> decode_message(decode_block(encode_frame(0x85, 3, bytes([5, 0, 1]))[:-1]))
+Sync(last_cmd_seq=5, busy=1, next_seq=3)
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Iterator
+from dataclasses import dataclass, fields
+from typing import ClassVar
+
+from ..errors import InstrumentError
+
+PROTOCOL_VERSION = 1
+MAX_PAYLOAD = 48
+CRC_INIT = 0xFFFF
+
+# procedures and sample kinds (st_proto.h)
+PROC_CAL, PROC_RTH, PROC_COOLING, PROC_PWM = 1, 2, 3, 4
+PROC_NAMES = {PROC_CAL: "calibrate", PROC_RTH: "rth", PROC_COOLING: "cooling", PROC_PWM: "pwm"}
+KIND_CURVE, KIND_STEADY, KIND_CAL, KIND_POWER = 0, 1, 2, 3
+CAP_IDEAL_HOLD = 0x0001
+ACK_STATUS = {0: "ok", 1: "busy", 2: "bad length", 3: "bad parameter", 4: "unknown command"}
+DONE_STATUS = {0: "ok", 2: "sample buffer overflow (the host read too slowly)"}
+ERROR_CODES = {1: "frame lost for good (no longer in the device's ring buffer)",
+               2: "sample buffer overflow", 3: "resend asked for a frame never sent"}
+
+
+class FrameError(InstrumentError):
+    """A received block that is not a valid frame (``reason``: cobs, length or crc)."""
+
+    def __init__(self, reason: str, block: bytes) -> None:
+        super().__init__(f"bad frame ({reason}): {block.hex()}")
+        self.reason = reason
+        self.block = block
+
+
+# ------------------------------------------------------------------------------- CRC, COBS
+def _crc_table() -> tuple[int, ...]:
+    table = []
+    for byte in range(256):
+        crc = byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
+        table.append(crc & 0xFFFF)
+    return tuple(table)
+
+
+_CRC_TABLE = _crc_table()
+
+
+def crc16(data: bytes, crc: int = CRC_INIT) -> int:
+    """CRC-16/CCITT-FALSE of ``data``.
+
+    >>> hex(crc16(b"123456789"))
+    '0x29b1'
+    """
+    for b in data:
+        crc = ((crc << 8) & 0xFFFF) ^ _CRC_TABLE[((crc >> 8) ^ b) & 0xFF]
+    return crc
+
+
+def cobs_encode(data: bytes) -> bytes:
+    """COBS-encode ``data`` (the result holds no zero byte; no delimiter appended).
+
+    >>> cobs_encode(b"\\x11\\x22\\x00\\x33").hex()
+    '0311220233'
+    """
+    out = bytearray([0])
+    code_at, code = 0, 1
+    for i, b in enumerate(data):
+        if b == 0:
+            out[code_at] = code
+            code_at, code = len(out), 1
+            out.append(0)
+        else:
+            out.append(b)
+            code += 1
+            if code == 0xFF:
+                out[code_at] = code
+                code = 1
+                if i + 1 == len(data):
+                    return bytes(out)  # a full block ends the data: no trailing code
+                code_at = len(out)
+                out.append(0)
+    out[code_at] = code
+    return bytes(out)
+
+
+def cobs_decode(block: bytes) -> bytes:
+    """Decode one COBS block (no delimiter); raises :class:`FrameError` when malformed.
+
+    >>> cobs_decode(bytes.fromhex("0311220233"))
+    b'\\x11"\\x003'
+    """
+    out = bytearray()
+    i, n = 0, len(block)
+    while i < n:
+        code = block[i]
+        i += 1
+        if code == 0 or i + code - 1 > n:
+            raise FrameError("cobs", bytes(block))
+        chunk = block[i:i + code - 1]
+        if 0 in chunk:
+            raise FrameError("cobs", bytes(block))
+        out += chunk
+        i += code - 1
+        if code != 0xFF and i < n:
+            out.append(0)
+    return bytes(out)
+
+
+# ------------------------------------------------------------------------------- frames
+@dataclass(frozen=True)
+class Frame:
+    """One frame: message type, sequence number and payload bytes."""
+
+    type: int
+    seq: int
+    payload: bytes
+
+
+def encode_frame(type_: int, seq: int, payload: bytes = b"") -> bytes:
+    """Wire form of a frame: COBS(type | seq | payload | crc) followed by ``0x00``.
+
+    >>> encode_frame(0x04, 1).hex()
+    '030401036d2300'
+    """
+    if len(payload) > MAX_PAYLOAD:
+        raise InstrumentError(f"payload of {len(payload)} bytes exceeds {MAX_PAYLOAD}")
+    body = struct.pack("<BH", type_, seq & 0xFFFF) + bytes(payload)
+    body += struct.pack("<H", crc16(body))
+    return cobs_encode(body) + b"\x00"
+
+
+def decode_block(block: bytes) -> Frame:
+    """Decode the bytes between two delimiters; raises :class:`FrameError` (cobs, length, crc).
+
+    >>> decode_block(bytes.fromhex("030401036d23"))
+    Frame(type=4, seq=1, payload=b'')
+    """
+    body = cobs_decode(block)
+    if not 5 <= len(body) <= 5 + MAX_PAYLOAD:
+        raise FrameError("length", bytes(block))
+    if crc16(body[:-2]) != struct.unpack_from("<H", body, len(body) - 2)[0]:
+        raise FrameError("crc", bytes(block))
+    type_, seq = struct.unpack_from("<BH", body)
+    return Frame(type_, seq, bytes(body[3:-2]))
+
+
+class FrameReader:
+    """Split a byte stream at ``0x00`` delimiters and decode each block.
+
+    >>> r = FrameReader()
+    >>> [x for _, x in r.feed(encode_frame(4, 1) + b"\\x05\\x00")][0]
+    Frame(type=4, seq=1, payload=b'')
+    """
+
+    MAX_BLOCK = 2 * (5 + MAX_PAYLOAD) + 8
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+
+    def feed(self, data: bytes) -> Iterator[tuple[bytes, Frame | FrameError]]:
+        """Yield ``(block, Frame or FrameError)`` for every complete block in ``data``."""
+        for b in data:
+            if b != 0:
+                self._buf.append(b)
+                continue
+            if not self._buf:
+                continue  # spare delimiter
+            block = bytes(self._buf)
+            self._buf.clear()
+            if len(block) > self.MAX_BLOCK:
+                yield block, FrameError("length", block)
+                continue
+            try:
+                yield block, decode_block(block)
+            except FrameError as exc:
+                yield block, exc
+
+
+# ------------------------------------------------------------------------------- messages
+@dataclass(frozen=True)
+class Message:
+    """Base of all messages: ``TYPE`` and the struct ``FORMAT`` of the fixed part."""
+
+    TYPE: ClassVar[int] = 0
+    FORMAT: ClassVar[str] = "<"
+
+    def payload(self) -> bytes:
+        return struct.pack(self.FORMAT, *(getattr(self, f.name) for f in fields(self)
+                                          if f.name in self._wire_fields()))
+
+    @classmethod
+    def _wire_fields(cls) -> tuple[str, ...]:
+        count = len(struct.unpack(cls.FORMAT, bytes(struct.calcsize(cls.FORMAT))))
+        return tuple(f.name for f in fields(cls))[:count]
+
+    @classmethod
+    def from_payload(cls, payload: bytes, seq: int) -> Message:
+        size = struct.calcsize(cls.FORMAT)
+        if len(payload) != size:
+            raise FrameError("length", payload)
+        return cls(*struct.unpack(cls.FORMAT, payload))
+
+    def frame(self, seq: int) -> bytes:
+        """Wire bytes of this message with sequence number ``seq``."""
+        return encode_frame(self.TYPE, seq, self.payload())
+
+
+# host -> device ------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Hello(Message):
+    TYPE: ClassVar[int] = 0x01
+    FORMAT: ClassVar[str] = "<B"
+    proto: int = PROTOCOL_VERSION
+
+
+@dataclass(frozen=True)
+class Ack(Message):
+    """Cumulative acknowledgement: every device frame before ``next_expected`` arrived."""
+
+    TYPE: ClassVar[int] = 0x02
+    FORMAT: ClassVar[str] = "<H"
+    next_expected: int = 0
+
+
+@dataclass(frozen=True)
+class Nak(Message):
+    """Acknowledge before ``next_expected`` and resend every frame from it on."""
+
+    TYPE: ClassVar[int] = 0x03
+    FORMAT: ClassVar[str] = "<H"
+    next_expected: int = 0
+
+
+@dataclass(frozen=True)
+class Abort(Message):
+    TYPE: ClassVar[int] = 0x04
+    FORMAT: ClassVar[str] = "<"
+
+
+@dataclass(frozen=True)
+class Calibrate(Message):
+    TYPE: ClassVar[int] = 0x10
+    FORMAT: ClassVar[str] = "<iIHH"
+    setpoint_mc: int = 25000
+    settle_ms: int = 300000
+    n: int = 16
+    interval_ms: int = 100
+
+
+@dataclass(frozen=True)
+class Rth(Message):
+    TYPE: ClassVar[int] = 0x11
+    FORMAT: ClassVar[str] = "<IIHH"
+    power_uw: int = 94000
+    settle_ms: int = 120000
+    window_us: int = 100
+    n: int = 16
+
+
+@dataclass(frozen=True)
+class Cooling(Message):
+    TYPE: ClassVar[int] = 0x12
+    FORMAT: ClassVar[str] = "<IIHHIIB"
+    power_uw: int = 94000
+    settle_ms: int = 120000
+    window_us: int = 100
+    n: int = 16
+    t_first_us: int = 100
+    t_last_ms: int = 60000
+    per_decade: int = 10
+
+
+@dataclass(frozen=True)
+class Pwm(Message):
+    TYPE: ClassVar[int] = 0x13
+    FORMAT: ClassVar[str] = "<IIIIHHH"
+    power_uw: int = 94000
+    freq_mhz: int = 1000000
+    duty_ppm: int = 500000
+    settle_ms: int = 60000
+    window_us: int = 100
+    n: int = 8
+    interval_ms: int = 100
+
+
+# device -> host ------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Info(Message):
+    TYPE: ClassVar[int] = 0x80
+    FORMAT: ClassVar[str] = "<BBBBBBH"
+    proto: int = PROTOCOL_VERSION
+    fw_major: int = 1
+    fw_minor: int = 0
+    fw_patch: int = 0
+    adc_bits: int = 10
+    ring: int = 32
+    caps: int = 0
+    name: str = ""
+
+    @property
+    def firmware(self) -> str:
+        return f"{self.fw_major}.{self.fw_minor}.{self.fw_patch}"
+
+    def payload(self) -> bytes:
+        return struct.pack(self.FORMAT, self.proto, self.fw_major, self.fw_minor, self.fw_patch,
+                           self.adc_bits, self.ring, self.caps) + self.name.encode("ascii")
+
+    @classmethod
+    def from_payload(cls, payload: bytes, seq: int) -> Info:
+        size = struct.calcsize(cls.FORMAT)
+        if len(payload) < size:
+            raise FrameError("length", payload)
+        name = payload[size:].decode("ascii", errors="replace")
+        return cls(*struct.unpack_from(cls.FORMAT, payload), name=name)
+
+
+@dataclass(frozen=True)
+class CommandAck(Message):
+    TYPE: ClassVar[int] = 0x81
+    FORMAT: ClassVar[str] = "<HBB"
+    cmd_seq: int = 0
+    cmd_type: int = 0
+    status: int = 0
+
+
+@dataclass(frozen=True)
+class Sample(Message):
+    """One reading of all channels, already converted by the firmware (fixed point)."""
+
+    TYPE: ClassVar[int] = 0x82
+    FORMAT: ClassVar[str] = "<BBII5i5H"
+    proc: int = 0
+    kind: int = 0
+    index: int = 0
+    t_us: int = 0
+    v_tsp_uv: int = 0
+    v_d_uv: int = 0
+    i_ua: int = 0
+    tamb_mc: int = 0
+    taux_mc: int = 0
+    code_tsp: int = 0
+    code_vd: int = 0
+    code_id: int = 0
+    code_tamb: int = 0
+    code_taux: int = 0
+
+    @property
+    def t_s(self) -> float:
+        return self.t_us * 1e-6
+
+    @property
+    def v_tsp_v(self) -> float:
+        """TSP: heater-diode voltage minus reference-diode voltage, V (negative when hot)."""
+        return self.v_tsp_uv * 1e-6
+
+    @property
+    def power_w(self) -> float:
+        return self.v_d_uv * 1e-6 * self.i_ua * 1e-6
+
+    @property
+    def tamb_c(self) -> float:
+        return self.tamb_mc * 1e-3
+
+    @property
+    def taux_c(self) -> float:
+        return self.taux_mc * 1e-3
+
+
+@dataclass(frozen=True)
+class Status(Message):
+    TYPE: ClassVar[int] = 0x83
+    FORMAT: ClassVar[str] = "<BBHHI"
+    proc: int = 0
+    state: int = 0
+    done: int = 0
+    total: int = 0
+    elapsed_ms: int = 0
+
+
+@dataclass(frozen=True)
+class Done(Message):
+    TYPE: ClassVar[int] = 0x84
+    FORMAT: ClassVar[str] = "<BBHI"
+    proc: int = 0
+    status: int = 0
+    n_samples: int = 0
+    first_index: int = 0
+
+
+@dataclass(frozen=True)
+class Sync(Message):
+    """Unsequenced: the device's next sequence number (in the frame's seq) and last command."""
+
+    TYPE: ClassVar[int] = 0x85
+    FORMAT: ClassVar[str] = "<HB"
+    last_cmd_seq: int = 0
+    busy: int = 0
+    next_seq: int = 0
+
+    @classmethod
+    def from_payload(cls, payload: bytes, seq: int) -> Sync:
+        if len(payload) != 3:
+            raise FrameError("length", payload)
+        last, busy = struct.unpack("<HB", payload)
+        return cls(last, busy, seq)
+
+
+@dataclass(frozen=True)
+class DeviceError(Message):
+    """Unsequenced link error (frame lost for good, resend out of range)."""
+
+    TYPE: ClassVar[int] = 0x86
+    FORMAT: ClassVar[str] = "<BH"
+    code: int = 0
+    detail: int = 0
+    next_seq: int = 0
+
+    @classmethod
+    def from_payload(cls, payload: bytes, seq: int) -> DeviceError:
+        if len(payload) != 3:
+            raise FrameError("length", payload)
+        code, detail = struct.unpack("<BH", payload)
+        return cls(code, detail, seq)
+
+    def describe(self) -> str:
+        return f"{ERROR_CODES.get(self.code, f'code {self.code}')} (seq {self.detail})"
+
+
+MESSAGES: dict[int, type[Message]] = {cls.TYPE: cls for cls in (
+    Hello, Ack, Nak, Abort, Calibrate, Rth, Cooling, Pwm,
+    Info, CommandAck, Sample, Status, Done, Sync, DeviceError)}
+UNSEQUENCED = frozenset({Sync.TYPE, DeviceError.TYPE})
+
+
+def decode_message(frame: Frame) -> Message:
+    """The message a frame carries; :class:`FrameError` for an unknown type or bad length.
+
+    >>> decode_message(Frame(0x81, 0, bytes([7, 0, 0x12, 0])))
+    CommandAck(cmd_seq=7, cmd_type=18, status=0)
+    """
+    cls = MESSAGES.get(frame.type)
+    if cls is None:
+        raise FrameError("type", bytes([frame.type]))
+    return cls.from_payload(frame.payload, frame.seq)
+
+
+def is_sequenced(frame: Frame) -> bool:
+    """True for device frames that take part in the sequence (all but Sync and DeviceError)."""
+    return frame.type not in UNSEQUENCED
