@@ -47,14 +47,14 @@ MASK_FACTOR = 2.0
 #: Default √t fit window: from the end of the masked span to this many times it (√t doubles).
 FIT_WINDOW_FACTOR = 4.0
 #: The √t fit needs at least this many samples (the window grows until it has them).
-MIN_FIT_POINTS = 5
+MIN_FIT_POINTS = 10
 
 
 @dataclass(frozen=True)
 class EarlyTimeFix:
     """The early-time correction applied to a cooling curve (JESD51-14 √t extrapolation).
 
-    ``masked_s = (t_first, t_end)``: samples with ``t < t_end`` were replaced by the fitted
+    ``masked_s = (0, t_end)``: samples with ``t < t_end`` were replaced by the fitted
     ``T(t) = t0_c - slope_k_per_sqrt_s · √t``, which was fitted over ``fit_window_s``.
     """
 
@@ -94,7 +94,8 @@ def detect_transient(t_s: ArrayLike, tj_c: ArrayLike,
     from the median absolute sample-to-sample difference) shows the curve rising, which only
     the electrical transient does. The transient lasts at least until the highest point
     after the last such sample; the masked span is :data:`MASK_FACTOR` times that time, to
-    clear the transient's tail. Spikes before it are masked with it.
+    clear the transient's tail. Spikes before it are masked with it. A transient that only
+    makes the reading too hot (a curve still falling) is not detected: give its length.
 
     >>> t = np.geomspace(1e-6, 1, 61)
     >>> round(detect_transient(t, 30 - np.sqrt(t) - np.exp(-t / 1e-5)), 6)  # peaks at 63 us
@@ -266,7 +267,7 @@ class ZthCurve:
             t0, k, rms, n = sqrt_t_fit(t, theta, (float(window[0]), float(window[1])))
             masked = t < t_mask
             theta[masked] = t0 - k * np.sqrt(t[masked])
-            early = EarlyTimeFix((float(t[0]), t_mask), int(masked.sum()),
+            early = EarlyTimeFix((0.0, t_mask), int(masked.sum()),
                                  (float(window[0]), float(window[1])), n, t0, k, rms, detected)
             if extrapolate_to_s is not None and extrapolate_to_s < t[0]:
                 extra = log_grid(float(extrapolate_to_s), float(t[0]))
@@ -340,12 +341,22 @@ class ZthCurve:
     def __len__(self) -> int:
         return self.t_s.size
 
-    def at(self, t_s: ArrayLike, *, extrapolate: bool = False) -> NDArray:
+    def at(self, t_s: ArrayLike, *, extrapolate: bool = False,
+           average_decades: float = 0.0) -> NDArray:
         """Zth (K/W) at ``t_s`` by linear interpolation in log time.
+
+        With ``average_decades`` > 0, a time with at least 3 samples within that width (in
+        decades, centred on it) gets the value at its centre of a straight line fitted to
+        them in log time instead: a local average for dense noisy records that stays
+        unbiased when the samples are unevenly spread.
 
         Outside the record this raises, unless ``extrapolate``: then times before the first
         sample follow the √t law through it, ``Zth(t0) √(t/t0)`` (as the paper's early-time
         extrapolation); times after the last sample still raise.
+
+        >>> z = ZthCurve.from_points([1e-3, 1e-2, 1e-1], [0.2, 0.4, 0.8])
+        >>> [round(float(x), 6) for x in z.at([10 ** -2.5, 1e-5], extrapolate=True)]
+        [0.3, 0.02]
         """
         t = np.asarray(t_s, dtype=float)
         if np.any(~np.isfinite(t)) or np.any(t <= 0):
@@ -361,7 +372,20 @@ class ZthCurve:
                                   f"before the record starts ({lo:.3g} s)")
         lt = np.log(np.clip(t, lo, hi))
         z = np.interp(lt, np.log(self.t_s), self.zth_k_per_w)
+        if average_decades > 0:
+            z = self._local_line(np.atleast_1d(lt), np.atleast_1d(z).copy(),
+                                 0.5 * average_decades * math.log(10.0)).reshape(z.shape)
         return np.where(early, self.zth_k_per_w[0] * np.sqrt(t / lo), z)
+
+    def _local_line(self, lt: NDArray, z: NDArray, half: float) -> NDArray:
+        """Replace z[j] by a straight-line fit in log time over lt[j] ± half (>= 3 samples)."""
+        ls = np.log(self.t_s)
+        left = np.searchsorted(ls, lt - half)
+        right = np.searchsorted(ls, lt + half, side="right")
+        for j in np.flatnonzero(right - left >= 3):
+            x = ls[left[j]:right[j]] - lt[j]
+            z[j] = np.polynomial.polynomial.polyfit(x, self.zth_k_per_w[left[j]:right[j]], 1)[0]
+        return z
 
     def r_at(self, t_s: ArrayLike, *, extrapolate: bool = False) -> NDArray:
         """r(t) at ``t_s`` (see :meth:`at`)."""
@@ -395,16 +419,8 @@ class ZthCurve:
                                   f"{t_min:.3g}..{t_max:.3g} s leaves the record "
                                   f"{lo:.3g}..{hi:.3g} s")
         grid = log_grid(float(t_min), t_max, points_per_decade)
-        z = self.at(grid)
-        if method == "bin":
-            lt, lg = np.log(self.t_s), np.log(grid)
-            half = 0.5 * math.log(10.0) / points_per_decade
-            left = np.searchsorted(lt, lg - half)
-            right = np.searchsorted(lt, lg + half)
-            for j in np.flatnonzero(right - left >= 3):
-                x = lt[left[j]:right[j]] - lg[j]
-                y = self.zth_k_per_w[left[j]:right[j]]
-                z[j] = np.polynomial.polynomial.polyfit(x, y, 1)[0]
+        width = 1.0 / points_per_decade if method == "bin" else 0.0
+        z = self.at(grid, average_decades=width)
         return replace(self, t_s=grid, zth_k_per_w=z, meta={**self.meta, "resampled": method})
 
     def to_table(self, normalized: bool = False, file: str | None = None) -> ZthTable:

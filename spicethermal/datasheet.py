@@ -240,7 +240,9 @@ def table1(source: ZthCurve | Bundle, datasheet: Datasheet | None = None, *,
     if normalize not in ("measured", "datasheet"):
         raise DataFormatError(f"normalize = {normalize!r}: 'measured' or 'datasheet'")
     rth = zc.rth_k_per_w if normalize == "measured" else ds.rth_k_per_w
-    measured = zc.at(ds.t_s, extrapolate=True) / rth
+    # dense noisy records: a local straight line in log time over 0.1 decade (as resample_log
+    # "bin" at 10 per decade); sparse ones: interpolation in log time
+    measured = zc.at(ds.t_s, extrapolate=True, average_decades=0.1) / rth
     # read before the first sample, or inside the masked span (√t-extrapolated values)
     first = zc.early.masked_s[1] if zc.early and zc.early.masked_points else zc.t_s[0]
     extrapolated = ds.t_s < max(first, zc.t_s[0]) * (1 - 1e-9)

@@ -52,7 +52,8 @@ def synthetic_cooling(foster: Foster | Cauer, power_w: float, t_s: ArrayLike,
     * an electrical transient that masks the first ``transient_s``: the reading is pulled
       low by ``transient_k · exp(-5 t / transient_s)`` (default ``transient_k`` = a quarter
       of the total rise), so it first rises (unphysical for a cooling curve) and is back
-      within e⁻⁵ ≈ 0.7 % of that offset at ``t = transient_s``.
+      within e⁻⁵ ≈ 0.7 % of that offset at ``t = transient_s`` (a negative ``transient_k``
+      makes the reading too hot instead).
 
     Parameters
     ----------

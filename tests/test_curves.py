@@ -66,7 +66,7 @@ def test_sqrt_extrapolation_recovers_masked_points() -> None:
     z = ZthCurve.from_cooling(t, tj, p, tref_steady_c=25.0, mask_s=1e-4,
                               fit_window_s=(1e-4, 4e-4))
     e = z.early
-    assert e.masked_s == (1e-6, 1e-4) and e.fit_window_s == (1e-4, 4e-4) and not e.detected
+    assert e.masked_s == (0.0, 1e-4) and e.fit_window_s == (1e-4, 4e-4) and not e.detected
     assert e.masked_points == int((t < 1e-4).sum()) and e.fit_points == int(
         ((t >= 1e-4) & (t <= 4e-4)).sum())
     assert abs(e.t0_c - t_cut) < 1e-3 * p * f.rth
