@@ -812,10 +812,14 @@ class Bundle:
         tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
         old: Path | None = None
         try:
-            for name, tbl in self._named_tables():
-                (tmp / name).write_text(format_columns(tbl.columns()), encoding="utf-8")
-            (tmp / MANIFEST).write_text(json.dumps(self.manifest(), indent=2) + "\n",
-                                        encoding="utf-8")
+            os.chmod(tmp, 0o755)  # mkdtemp makes it private; a bundle is an ordinary directory
+            files = [(name, format_columns(tbl.columns())) for name, tbl in self._named_tables()]
+            files.append((MANIFEST, json.dumps(self.manifest(), indent=2) + "\n"))
+            for name, text in files:
+                with open(tmp / name, "w", encoding="utf-8", newline="\n") as handle:
+                    handle.write(text)
+                    handle.flush()
+                    os.fsync(handle.fileno())
             if path.exists():
                 old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old",
                                             dir=path.parent))
