@@ -253,8 +253,8 @@ def _json_float(x: float) -> float | None:
 def _as_data(t_s: ArrayLike, zth: ArrayLike, sigma: ArrayLike | None,
              rth: float | None) -> tuple[NDArray, NDArray, NDArray | None]:
     try:
-        t = np.asarray(t_s, dtype=float).ravel()
-        z = np.asarray(zth, dtype=float).ravel()
+        t = np.array(t_s, dtype=float).ravel()  # copies: the result freezes its own arrays
+        z = np.array(zth, dtype=float).ravel()
     except (TypeError, ValueError) as exc:
         raise DataFormatError(f"t_s/zth_k_per_w: not numeric ({exc})") from None
     if t.size != z.size:
@@ -417,11 +417,12 @@ class _Problem:
         if not (np.all(np.isfinite(jn)) and np.all(col > 0) and math.isfinite(scale)):
             return np.full((2 * m, 2 * m), np.inf)
         try:
-            cov_n = np.linalg.pinv((jn / col).T @ (jn / col), rcond=1e-15, hermitian=True)
+            with np.errstate(all="ignore"):
+                cov_n = np.linalg.pinv((jn / col).T @ (jn / col), rcond=1e-15, hermitian=True)
+                cov = scale * null @ (cov_n / np.outer(col, col)) @ null.T
         except np.linalg.LinAlgError:  # pragma: no cover - degenerate Jacobian
             return np.full((2 * m, 2 * m), np.inf)
-        cov_n = cov_n / np.outer(col, col)
-        return scale * null @ cov_n @ null.T
+        return cov if np.all(np.isfinite(cov)) else np.full((2 * m, 2 * m), np.inf)
 
 
 @dataclass(frozen=True)

@@ -159,6 +159,8 @@ def test_result_is_immutable_prints_and_serialises():
         res.foster = truth
     with pytest.raises(ValueError):
         res.residuals[0] = 1.0
+    t[0] = t[0]  # the caller's arrays stay writable: the result holds copies
+    assert res.t_s is not t and res.t_s[0] == t[0]
     text = str(res)
     assert "stage" in text and "± u" in text and "BIC" in text
     assert len([ln for ln in text.splitlines() if ln.strip().startswith(("1 ", "2 ", "3 "))]) == 3
