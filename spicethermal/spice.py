@@ -118,6 +118,26 @@ def internal_nodes(model: ThermalModel) -> list[str]:
     return ["TJ", *[f"N{k}" for k in range(1, model.ladder.order)]]
 
 
+def initial_conditions(model: ThermalModel, theta_k: Sequence[float], tref_c: float = 0.0,
+                       instance: str = "X1") -> list[tuple[str, float]]:
+    """``.ic`` entries that put the subcircuit's nodes at rises ``theta_k`` over ``tref_c``.
+
+    ``theta_k`` are node rises in the order of :func:`internal_nodes` (the nodal state of
+    :class:`~spicethermal.model.ThermalModel`); the junction is the pin ``TJ`` itself.
+
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> initial_conditions(ThermalModel(Foster.from_tau([1, 1], [1, 2])), [2.0, 1.0], 25.0)
+    [('TJ', 27.0), ('X1.N1', 26.0)]
+    """
+    nodes = internal_nodes(model)
+    if len(theta_k) != len(nodes):
+        raise DataFormatError(f"initial state has {len(theta_k)} values, the ladder "
+                              f"{len(nodes)} nodes")
+    names = ["TJ", *[f"{instance}.{n}" for n in nodes[1:]]]
+    return [(n, float(tref_c + v)) for n, v in zip(names, theta_k, strict=True)]
+
+
 def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | None = None,
                name: str = "THERMAL", filename: str = "model.lib") -> str:
     """The subcircuit ``.SUBCKT NAME TJ TREF`` of ``model`` as text.
@@ -185,25 +205,29 @@ class Pulse:
 def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tstop_s: float,
                  tmax_s: float, tref_c: float = 0.0, pulse: Pulse | None = None,
                  ic: Sequence[tuple[str, float]] = (), rise_s: float | None = None,
+                 pwl: Sequence[tuple[float, float]] = (),
                  reltol: float = 1e-4, trtol: float = 0.1,
                  title: str = "spicethermal test bench",
                  description: str = "") -> str:
     """A transient test bench for the subcircuit in ``lib_path``: power step or PWM train.
 
     ``ic`` sets node temperatures at t = 0 (e.g. the periodic steady state), as
-    ``(node, volts)`` with nodes such as ``X1.N1``. A step ramps up linearly over ``rise_s``
-    (default ``1e-6 · tmax_s``: ngspice cannot resolve a much sharper edge at a large maximum
-    step); compare it with the exact ramp response. The default tolerances (``reltol=1e-4``,
+    ``(node, volts)`` with nodes such as ``X1.N1`` (see :func:`initial_conditions`). A step
+    ramps up linearly over ``rise_s`` (default ``1e-5 · tmax_s``: ngspice cannot start on a much
+    sharper edge at a large maximum step, least of all with behavioural elements); compare it
+    with the exact ramp response. ``pwl`` (``(t_s, power_w)`` corners, used
+    instead of ``pulse`` and the step) drives any piecewise-linear power waveform, e.g. a few
+    PWM periods followed by a power-off sample window. The default tolerances (``reltol=1e-4``,
     ``trtol=0.1``) keep ladder responses within 1e-4 of Rth over 8 decades of time.
     """
-    rise_s = max(1e-9, 1e-6 * tmax_s) if rise_s is None else rise_s
+    rise_s = max(1e-9, 1e-5 * tmax_s) if rise_s is None else rise_s
     from . import __version__
 
     check_name(name)
     return environment().get_template("bench/transient.cir.j2").render(
         title=sanitize_comment(title), description=sanitize_comment(description),
         version=__version__, lib_path=str(lib_path), name=name, tref_c=tref_c,
-        power_w=power_w, pulse=pulse, rise_s=rise_s, ic=list(ic), tstop_s=tstop_s,
+        power_w=power_w, pulse=pulse, rise_s=rise_s, ic=list(ic), pwl=list(pwl), tstop_s=tstop_s,
         tstep_s=tmax_s, tmax_s=tmax_s, reltol=reltol, trtol=trtol)
 
 

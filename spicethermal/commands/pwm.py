@@ -1,0 +1,71 @@
+"""``spicethermal pwm MODEL.json --freq HZ --duty D --power W [--window S] [--engine E] [--json]``.
+
+The periodic steady state of a model under a PWM power train: peak, mean, valley and the bench
+reading (the rise at the end of a power-off sample window that starts when an on-phase ends),
+all as rises in K over the reference. ``analytic`` is the closed form (shooting for a model with
+device effects); ``ngspice`` and ``pyspice`` run the exported subcircuit from the periodic
+steady state (:mod:`spicethermal.pwmsim`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+from ..pwmsim import ENGINES
+
+NAME = "pwm"
+HELP = "periodic steady state under PWM: peak, mean, valley and the bench reading"
+
+
+def _number(text: str, low: float | None = None, open_low: bool = False,
+            high: float | None = None) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    if low is not None and (value <= low if open_low else value < low):
+        raise argparse.ArgumentTypeError(f"{text!r} must be {'>' if open_low else '>='} {low:g}")
+    if high is not None and value > high:
+        raise argparse.ArgumentTypeError(f"{text!r} must be <= {high:g}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
+    parser.add_argument("--freq", required=True, metavar="HZ",
+                        type=lambda s: _number(s, 0, open_low=True), help="PWM frequency, Hz")
+    parser.add_argument("--duty", required=True, metavar="D",
+                        type=lambda s: _number(s, 0, high=1), help="duty cycle, 0..1")
+    parser.add_argument("--power", required=True, metavar="W", type=lambda s: _number(s, 0),
+                        help="power during the on-phase, W")
+    parser.add_argument("--window", default=0.0, metavar="S", type=lambda s: _number(s, 0),
+                        help="power-off sample window before the reading, s (default 0: the "
+                             "reading is the peak)")
+    parser.add_argument("--engine", choices=ENGINES, default="analytic",
+                        help="closed form/shooting (default) or ngspice (binary or PySpice)")
+    parser.add_argument("--tref", default=25.0, metavar="DEGC", type=_number,
+                        help="reference temperature, degC (matters for device effects; "
+                             "default 25)")
+    parser.add_argument("--json", action="store_true",
+                        help='print {"peak_k", "mean_k", "valley_k", "reading_k"}')
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..model import ThermalModel
+    from ..pwmsim import pwm_state
+
+    model = ThermalModel.load(args.model)
+    state = pwm_state(model, args.power, args.freq, args.duty, args.window,
+                      engine=args.engine, tref_c=args.tref)
+    if args.json:
+        print(json.dumps(state.as_json()))
+        return 0
+    print(f"# {args.model}: {args.power:g} W at {args.freq:g} Hz, duty {args.duty:g}, "
+          f"window {args.window:g} s, engine {args.engine}; rises over the reference, K")
+    for key, value in state.as_json().items():
+        print(f"{key[:-2]:<8} {value:.6f}")
+    return 0

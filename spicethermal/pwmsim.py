@@ -1,0 +1,303 @@
+"""PWM periodic steady state in ngspice, started where it ends: a few periods instead of thousands.
+
+A cold-start transient needs about five of the slowest time constants (the actuator's is tens of
+seconds) at a step of a fraction of the PWM period: millions of steps per operating point.
+Here each run starts *in* the periodic steady state instead. The initial node temperatures come
+from :meth:`ThermalModel.pwm_initial_state <spicethermal.model.ThermalModel.pwm_initial_state>`
+(closed form for a linear model, shooting for one with device effects) and are set with ``.ic``
+on the subcircuit's nodes (``TJ``, ``X1.N1``, ...: the nodal rises θ of the model's network are
+exactly those node voltages relative to ``TREF``, also for a Foster ladder, whose inner nodes
+hold sums of stage rises). ngspice then simulates ``periods`` periods, and the run is accepted
+only if the last period repeats the first within ``tol_k`` (else :class:`SimulationError`):
+that check is what makes the shortcut safe, since a wrong start would drift.
+
+What a measurement reads (DESIGN.md, ``pwm.csv``): after the periodic part the power source
+(a PWL) gives one more on-phase and then stays off for the sample window; the junction rise at
+the window's end is the reading. Peak, valley and mean come from the last whole period. Edges
+are linear ramps of 1e-4 of the period centred on the ideal switching instants, so the energy per
+period and the timing of the rectangular train the closed form assumes are kept.
+
+>>> from spicethermal.ladder import Foster
+>>> from spicethermal.model import ThermalModel
+>>> m = ThermalModel(Foster.from_tau([10.0, 20.0], [1e-3, 1.0]))
+>>> s = SpicePwm(m).state(0.1, 1e3, 0.5, window_s=1e-4)       # doctest: +SKIP
+>>> abs(s.reading_k - m.pwm(0.1, 1e3, 0.5, 1e-4).reading_k) < 1e-3   # doctest: +SKIP
+True
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import DataFormatError, SimulationError
+from .pwm import PwmState, check_drive
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+    from .model import ThermalModel
+
+#: PWM engines of ``spicethermal pwm`` / ``compare``: the closed form (shooting when the model
+#: is nonlinear) and the two ngspice backends of :mod:`spicethermal.spice`.
+ENGINES = ("analytic", "ngspice", "pyspice")
+SUBCKT = "DUT"
+EDGE = 1e-4  # edge time as a fraction of the period (as spice.Pulse.of)
+
+
+@dataclass(frozen=True)
+class PwmRun:
+    """One ngspice PWM run: the steady state it gives and the waveform behind it.
+
+    ``t_s`` and ``tj_k`` (junction rise over the reference) cover ``periods`` periods from the
+    periodic steady state, then one more on-phase and the power-off sample window.
+    ``drift_k`` is how far the last period strayed from the first (at period starts and
+    on-phase ends, and in peak, valley and mean).
+    """
+
+    state: PwmState
+    t_s: NDArray
+    tj_k: NDArray
+    periods: int
+    drift_k: float
+    engine: str
+    dialect: str
+
+
+def pwm_waveform(power_w: float, freq_hz: float, duty: float, periods: int,
+                 window_s: float = 0.0) -> tuple[list[tuple[float, float]], float]:
+    """PWL corners of ``periods`` periods, one more on-phase, then ``window_s`` with power off.
+
+    Ideal switching instants are ``k T`` (on) and ``(k + D) T`` (off); each edge is a linear ramp
+    of ``1e-4 T`` centred on its instant (shorter for a very small duty or off-time), so each
+    period carries exactly ``P D T`` of energy. Returns the corners and the reading time
+    ``(periods + D) T + window_s``, which is a corner too.
+
+    >>> pts, t_read = pwm_waveform(1.0, 1.0, 0.5, 1)
+    >>> pts[:3], t_read
+    ([(0.0, 0.5), (5e-05, 1.0), (0.49995, 1.0)], 1.5)
+    """
+    check_drive(freq_hz, duty, power_w, window_s)
+    if periods < 1:
+        raise DataFormatError(f"periods = {periods}: must be at least 1")
+    period = 1.0 / freq_hz
+    t_read = (periods + duty) * period + window_s
+    if duty == 0 or power_w == 0:
+        return [(0.0, 0.0), (t_read, 0.0)], t_read
+    on, off = duty * period, (1 - duty) * period
+    edge = EDGE * period
+    edge = min(edge, on / 2, off / 2) if off > 0 else edge  # corners strictly increasing
+    half = edge / 2
+    intervals = [(0.0, t_read - window_s)] if off == 0 else \
+        [(k * period, k * period + on) for k in range(periods + 1)]
+    # the run starts half-way up the first ramp (or at full power when it never switches off)
+    pts: list[tuple[float, float]] = [(0.0, power_w / 2), (half, power_w)] if off else \
+        [(0.0, power_w)]
+    for k, (a, b) in enumerate(intervals):
+        if k:
+            pts += [(a - half, 0.0), (a + half, power_w)]
+        pts += [(b - half, power_w), (b + half, 0.0)]
+    if window_s < half:  # the reading falls on the last falling ramp: make it a corner
+        pts.insert(-1, (t_read, power_w * (0.5 - window_s / edge)))
+        pts = [p for p in pts if p[0] <= t_read]
+    else:
+        pts.append((t_read, 0.0))
+    return pts, t_read
+
+
+@dataclass(frozen=True)
+class SpicePwm:
+    """PWM periodic steady state of ``model`` in ngspice, from the periodic steady state.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        Linear or with device effects (exported as behavioural elements).
+    engine : ``"ngspice"`` (the ``ngspice -b`` binary) or ``"pyspice"`` (libngspice in
+        process); see :func:`spicethermal.spice.simulator`.
+    dialect : the ``.lib`` dialect exported and run (PSPICE/LTspice under ngspice's
+        compatibility modes).
+    topology : ``"foster"`` or ``"cauer"`` (default: the model's own).
+    tref_c : reference temperature driven on ``TREF``, °C (matters for device effects).
+    periods : whole periods simulated (at least 2: the first is compared with the last).
+    tol_k : largest accepted difference between the last period and the first, K.
+
+    Examples
+    --------
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> sp = SpicePwm(ThermalModel(Foster.from_tau([10.0], [1e-3])), periods=2)
+    >>> sp.periods, sp.engine
+    (2, 'ngspice')
+    """
+
+    model: ThermalModel
+    engine: str = "ngspice"
+    dialect: str = "ngspice"
+    topology: str | None = None
+    tref_c: float = 25.0
+    periods: int = 3
+    tol_k: float = 1e-3
+    points_per_period: int = 50
+
+    def __post_init__(self) -> None:
+        from .spice import DIALECTS, TOPOLOGIES
+
+        if self.engine not in ("ngspice", "pyspice"):
+            raise DataFormatError(f"engine {self.engine!r}: expected ngspice or pyspice")
+        if self.dialect not in DIALECTS:
+            raise DataFormatError(f"dialect {self.dialect!r}: expected one of "
+                                  f"{', '.join(DIALECTS)}")
+        if self.topology is not None and self.topology not in TOPOLOGIES:
+            raise DataFormatError(f"topology {self.topology!r}: expected one of "
+                                  f"{', '.join(TOPOLOGIES)}")
+        if int(self.periods) != self.periods or self.periods < 2:
+            raise DataFormatError(f"periods = {self.periods!r}: must be an integer >= 2")
+        if not (np.isfinite(self.tol_k) and self.tol_k > 0):
+            raise DataFormatError(f"tol_k = {self.tol_k!r}: must be positive")
+        if not np.isfinite(self.tref_c):
+            raise DataFormatError(f"tref_c = {self.tref_c!r}: must be finite")
+
+    # -- the exported model ----------------------------------------------------------------
+    @cached_property
+    def _model(self) -> ThermalModel:
+        """The model in the topology that is exported (the .ic nodes are this ladder's)."""
+        return self.model.with_topology(self.topology or self.model.ladder.topology)
+
+    @cached_property
+    def lib_text(self) -> str:
+        """The exported subcircuit (``.SUBCKT DUT TJ TREF``) the runs include."""
+        from .spice import render_lib
+
+        return render_lib(self._model, self.dialect, name=SUBCKT, filename="dut.lib")
+
+    def initial_conditions(self, power_w: float, freq_hz: float,
+                           duty: float) -> list[tuple[str, float]]:
+        """``.ic`` node temperatures (°C) at the start of an on-phase, periodic steady state."""
+        from .spice import internal_nodes
+
+        theta = self._model.pwm_initial_state(power_w, freq_hz, duty, self.tref_c)
+        names = ["TJ" if n == "TJ" else f"X1.{n}" for n in internal_nodes(self._model)]
+        return [(n, self.tref_c + float(th)) for n, th in zip(names, theta, strict=True)]
+
+    def netlist(self, lib_path: str | Path, power_w: float, freq_hz: float, duty: float,
+                window_s: float = 0.0) -> tuple[str, float]:
+        """The test bench for one operating point and its reading time."""
+        from .spice import render_bench
+
+        pts, t_read = pwm_waveform(power_w, freq_hz, duty, self.periods, window_s)
+        period = 1.0 / freq_hz
+        tmax = period / self.points_per_period
+        if window_s > 0:
+            tmax = min(tmax, max(window_s, EDGE * period) / 10)
+        text = render_bench(lib_path, SUBCKT, power_w=power_w, tstop_s=t_read, tmax_s=tmax,
+                            tref_c=self.tref_c, pwl=pts,
+                            ic=self.initial_conditions(power_w, freq_hz, duty),
+                            title="spicethermal PWM periodic steady state",
+                            description=f"{freq_hz:g} Hz, duty {duty:g}, {power_w:g} W, "
+                                        f"window {window_s:g} s")
+        return text, t_read
+
+    # -- running ---------------------------------------------------------------------------
+    def run(self, power_w: float, freq_hz: float, duty: float,
+            window_s: float = 0.0) -> PwmRun:
+        """Simulate one operating point; raise :class:`SimulationError` if it is not periodic."""
+        from .spice import simulator
+
+        check_drive(freq_hz, duty, power_w, window_s)
+        with tempfile.TemporaryDirectory(prefix="spicethermal-pwm-") as tmp:
+            lib = Path(tmp) / "dut.lib"
+            lib.write_text(self.lib_text, encoding="utf-8")
+            text, t_read = self.netlist(lib, power_w, freq_hz, duty, window_s)
+            waves = simulator(self.engine).run(text, ["V(TJ)"], self.dialect)
+        t = np.asarray(waves.t_s, dtype=float)
+        rise = np.asarray(waves["V(TJ)"], dtype=float) - self.tref_c
+        keep = np.concatenate([[True], np.diff(t) > 0])  # ngspice may repeat a time point
+        t, rise = t[keep], rise[keep]
+        if t.size < 3 or not np.all(np.isfinite(rise)) or t[-1] < t_read * (1 - 1e-9):
+            raise SimulationError(f"ngspice returned an incomplete waveform at {freq_hz:g} Hz, "
+                                  f"duty {duty:g} (ended at {t[-1]:g} s of {t_read:g} s)")
+        period = 1.0 / freq_hz
+        first = _period_summary(t, rise, 0, period, duty)
+        last = _period_summary(t, rise, self.periods - 1, period, duty)
+        drift = float(np.max(np.abs(np.subtract(last, first))))
+        if not drift <= self.tol_k:
+            raise SimulationError(
+                f"ngspice PWM run at {freq_hz:g} Hz, duty {duty:g} is not periodic: the last of "
+                f"{self.periods} periods differs from the first by {drift:.3g} K "
+                f"(tolerance {self.tol_k:g} K)")
+        _, peak, valley, mean, _ = last
+        state = PwmState(float(freq_hz), float(duty), float(power_w), float(window_s),
+                         peak_k=peak, mean_k=mean, valley_k=valley,
+                         reading_k=float(np.interp(t_read, t, rise)))
+        return PwmRun(state, t, rise, self.periods, drift, self.engine, self.dialect)
+
+    def state(self, power_w: float, freq_hz: float, duty: float,
+              window_s: float = 0.0) -> PwmState:
+        """The :class:`~spicethermal.pwm.PwmState` of :meth:`run` (rises over the reference)."""
+        return self.run(power_w, freq_hz, duty, window_s).state
+
+    def grid(self, power_w: float | Sequence[float], freq_hz: Sequence[float],
+             duty: Sequence[float], window_s: float = 0.0) -> list[PwmState]:
+        """:meth:`state` at every ``(freq_hz[i], duty[i])`` (with ``power_w`` per point or one)."""
+        f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+        d = np.atleast_1d(np.asarray(duty, dtype=float))
+        p = np.broadcast_to(np.asarray(power_w, dtype=float), f.shape)
+        if f.shape != d.shape:
+            raise DataFormatError("grid: freq_hz and duty must be equally long")
+        return [self.state(float(pi), float(fi), float(di), window_s)
+                for pi, fi, di in zip(p, f, d, strict=True)]
+
+
+def _period_summary(t: NDArray, rise: NDArray, k: int, period: float,
+                    duty: float) -> tuple[float, float, float, float, float]:
+    """(start value, peak, valley, mean, value at the on-phase end) of period ``k``."""
+    a, b = k * period, (k + 1) * period
+    inside = (t > a) & (t < b)
+    tt = np.concatenate([[a], t[inside], [b]])
+    vv = np.concatenate([[np.interp(a, t, rise)], rise[inside], [np.interp(b, t, rise)]])
+    mean = float(np.trapezoid(vv, tt) / period)
+    return (float(vv[0]), float(vv.max()), float(vv.min()), mean,
+            float(np.interp(a + duty * period, t, rise)))
+
+
+def pwm_state(model: ThermalModel, power_w: float, freq_hz: float, duty: float,
+              window_s: float = 0.0, *, engine: str = "analytic", tref_c: float = 25.0,
+              dialect: str = "ngspice", topology: str | None = None) -> PwmState:
+    """Periodic steady state by the named engine (``analytic``, ``ngspice``, ``pyspice``, ``auto``).
+
+    ``analytic`` is :meth:`ThermalModel.pwm` (closed form, or shooting with device effects);
+    ``auto`` picks it for a linear model and ngspice otherwise.
+
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> m = ThermalModel(Foster.from_tau([10.0], [1e-3]))
+    >>> round(pwm_state(m, 0.1, 1e3, 0.5).mean_k, 12)
+    0.5
+    """
+    engine = resolve_engine(engine, model)
+    if engine == "analytic":
+        return model.pwm(power_w, freq_hz, duty, window_s, tref_c)
+    return SpicePwm(model, engine, dialect, topology, tref_c).state(power_w, freq_hz, duty,
+                                                                     window_s)
+
+
+def resolve_engine(engine: str, model: ThermalModel) -> str:
+    """``auto`` → ``analytic`` for a linear model, ``ngspice`` with device effects.
+
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> resolve_engine("auto", ThermalModel(Foster.from_tau([1.0], [1.0])))
+    'analytic'
+    """
+    if engine == "auto":
+        return "analytic" if model.is_linear else "ngspice"
+    if engine not in ENGINES:
+        raise DataFormatError(f"engine {engine!r}: expected auto or one of {', '.join(ENGINES)}")
+    return engine
