@@ -15,6 +15,9 @@ Synthetic cases (:func:`make_case`, deterministic in the seed):
   Rth log-uniform in [1, 200] K/W;
 * noise: white Gaussian, σ = 0.1 % of Rth, added to Zth(t); the fit is not told σ or Rth.
 
+Also reported: how often the true r_i and τ_i lie within 1 and 2 reported standard
+uncertainties (ideal: 68 % and 95 %), the same study with Rth given, and noise-free recovery.
+
 Acceptance (per case): automatic order == true order; |ΣR - Rth| ≤ 0.2 % Rth;
 max |Zfit(t) - Ztrue(t)| ≤ 0.5 % Rth over the data window (400 log-spaced points).
 Targets: order right in ≥ 95 % of cases, no failures; a 46-point fit < 0.1 s, 10,000 points < 2 s.
@@ -78,21 +81,34 @@ def errors(case: Case, fitted: Foster) -> tuple[float, float, float]:
     return abs(fitted.rth - rth) / rth, float(dz.max() / rth), float((dz / zt).max())
 
 
-def study(n_cases: int = 200, first_seed: int = 0) -> dict:
-    """Fit ``n_cases`` synthetic curves; return the counts and worst errors."""
+def study(n_cases: int = 200, first_seed: int = 0, hold_rth: bool = False,
+          noise_of_rth: float = NOISE_OF_RTH) -> dict:
+    """Fit ``n_cases`` synthetic curves; return the counts and worst errors.
+
+    ``hold_rth`` tells the fit the true Rth (ΣR = Rth held); ``noise_of_rth`` = 0 gives
+    noise-free data (then ``worst_param_error`` is the largest relative error of any r or τ).
+    """
     ok_order = ok_rth = ok_zth = 0
-    worst_rth = worst_zth = worst_rel = 0.0
+    worst_rth = worst_zth = worst_rel = worst_param = 0.0
     wrong: list[tuple[int, int, int]] = []
-    times = []
+    times: list[float] = []
+    z_scores: list[float] = []
     for seed in range(first_seed, first_seed + n_cases):
-        case = make_case(seed)
+        case = make_case(seed, noise_of_rth=noise_of_rth)
         t0 = time.perf_counter()
-        res = fit_foster(case.t_s, case.zth_k_per_w)
+        res = fit_foster(case.t_s, case.zth_k_per_w,
+                         rth_k_per_w=case.truth.rth if hold_rth else None)
         times.append(time.perf_counter() - t0)
         e_rth, e_z, e_rel = errors(case, res.foster)
         ok_order += res.order == case.truth.order
         if res.order != case.truth.order:
             wrong.append((seed, case.truth.order, res.order))
+        else:
+            est = np.r_[res.foster.r, res.foster.tau]
+            true = np.r_[case.truth.r, case.truth.tau]
+            worst_param = max(worst_param, float(np.max(np.abs(est / true - 1))))
+            if noise_of_rth > 0:
+                z_scores.extend((est - true) / np.r_[res.u_r_k_per_w, res.u_tau_s])
         ok_rth += e_rth <= 2e-3
         ok_zth += e_z <= 5e-3
         worst_rth, worst_zth, worst_rel = max(worst_rth, e_rth), max(worst_zth, e_z), max(
@@ -100,6 +116,9 @@ def study(n_cases: int = 200, first_seed: int = 0) -> dict:
     return {"cases": n_cases, "order_right": ok_order, "rth_within_0.2%": ok_rth,
             "zth_within_0.5%_of_rth": ok_zth, "worst_rth_error": worst_rth,
             "worst_zth_error_of_rth": worst_zth, "worst_zth_error_relative": worst_rel,
+            "worst_param_error": worst_param,
+            "params_within_1u": float(np.mean(np.abs(z_scores) < 1)) if z_scores else None,
+            "params_within_2u": float(np.mean(np.abs(z_scores) < 2)) if z_scores else None,
             "wrong_orders(seed,true,fit)": wrong, "median_fit_s": statistics.median(times),
             "max_fit_s": max(times)}
 
@@ -124,10 +143,21 @@ def timing(n_points: int, repeats: int = 7) -> float:
 
 def report(n_cases: int = 200) -> dict:
     out = study(n_cases)
+    held = study(n_cases, hold_rth=True)
+    exact = study(n_cases, noise_of_rth=0.0)
     out["median_time_46_points_s"] = timing(46)
     out["median_time_10000_points_s"] = timing(10_000, repeats=3)
+    print(f"{n_cases} random ladders, 0.1 % noise, Rth not given:")
     for k, v in out.items():
-        print(f"{k:32s} {v}")
+        print(f"  {k:32s} {v}")
+    print("same cases, Rth given (ΣR = Rth held):")
+    for k in ("order_right", "zth_within_0.5%_of_rth", "worst_zth_error_of_rth",
+              "wrong_orders(seed,true,fit)"):
+        print(f"  {k:32s} {held[k]}")
+    print("same ladders, noise-free:")
+    for k in ("order_right", "worst_param_error", "wrong_orders(seed,true,fit)"):
+        print(f"  {k:32s} {exact[k]}")
+    out["held"], out["noise_free"] = held, exact
     return out
 
 
@@ -141,6 +171,9 @@ if pytest is not None:
         assert out["zth_within_0.5%_of_rth"] == out["cases"]
         assert out["median_time_46_points_s"] < 0.1
         assert out["median_time_10000_points_s"] < 2.0
+        assert out["held"]["order_right"] >= 0.95 * out["cases"]
+        assert out["noise_free"]["order_right"] == out["cases"]
+        assert out["noise_free"]["worst_param_error"] < 1e-6
 
 
 if __name__ == "__main__":
