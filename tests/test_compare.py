@@ -1,0 +1,256 @@
+"""Measured vs model over a bundle: exact zeros on self-generated data, signs, effects, command."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+from conftest import SHARED
+
+from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
+from spicethermal.cli import main
+from spicethermal.compare import (
+    COMPARISON_FORMAT,
+    Comparison,
+    ComparisonPoint,
+    compare,
+    compare_pwm,
+    cooling_rise_k,
+)
+from spicethermal.effects import Effect
+from spicethermal.errors import DataFormatError
+from spicethermal.model import ThermalModel
+
+FREQS = (500.0, 1e3, 3e3, 5e3, 10e3, 25e3)
+DUTIES = (0.2, 0.5, 0.8)
+POWER_W = 0.094
+WINDOW_S = 1e-4
+T_COOL = np.logspace(-4, 2, 13)
+
+
+def synthetic_bundle(model: ThermalModel, *, window_s: float = WINDOW_S,
+                     manifest_window_s: float | None = None, ambient_c: float = 25.0) -> Bundle:
+    """What a perfect bench would record from ``model``: the PWM grid and two cooling curves
+    (one with a drifting ``tref_c`` column), plus a calibration (not compared)."""
+    f, d = (np.array(x) for x in zip(*[(f, d) for f in FREQS for d in DUTIES], strict=True))
+    tj = [ambient_c + model.pwm(POWER_W, fi, di, window_s, ambient_c).reading_k
+          for fi, di in zip(f, d, strict=True)]
+    pwm = PwmTable(f, d, tj, power_w=POWER_W,
+                   sample_window_s=window_s if manifest_window_s is None else manifest_window_s)
+    tref = 24.0 + 0.01 * np.arange(T_COOL.size)
+    cool1 = CoolingTable(T_COOL, POWER_W, tj_c=ambient_c + cooling_rise_k(model, POWER_W, T_COOL),
+                         tref_steady_c=ambient_c)
+    cool2 = CoolingTable(T_COOL, 2 * POWER_W, tj_c=tref + cooling_rise_k(model, 2 * POWER_W,
+                                                                         T_COOL, 24.0),
+                         tref_c=tref)
+    return Bundle(device="synthetic actuator", ambient_c=ambient_c,
+                  calibration=CalibrationTable([25.0, 75.0], [0.6, 0.5]), pwm=pwm,
+                  cooling=(cool1, cool2))
+
+
+@pytest.fixture
+def model(actuator) -> ThermalModel:
+    return ThermalModel(actuator)
+
+
+@pytest.fixture
+def bundle_dir(tmp_path, model):
+    return synthetic_bundle(model).write(tmp_path / "bundle")
+
+
+# ------------------------------------------------------------------------------ library
+def test_self_generated_bundle_gives_exact_zeros(model, bundle_dir):
+    c = compare(model, Bundle.read(bundle_dir))
+    assert c.datasets == ("pwm", "cooling_1", "cooling_2")  # calibration is not compared
+    assert len(c.dataset("pwm").points) == 18
+    assert len(c.dataset("cooling_2").points) == T_COOL.size
+    assert np.all(c.residuals_k == 0.0)
+    assert c.rms_k == 0.0 and c.max_abs_k == 0.0 and c.engine == "analytic"
+    p = c.dataset("pwm").points[-1]
+    assert dict(p.at) == {"freq_hz": 25e3, "duty": 0.8}
+    assert p.info["window_s"] == WINDOW_S and p.info["power_w"] == POWER_W
+
+
+def test_perturbations_show_with_the_right_sign(model, tmp_path):
+    b = synthetic_bundle(model)
+    tj = b.pwm.tj_c.copy()
+    tj[4] += 0.5  # bench reads hotter than the model at row 4
+    cool = b.cooling[0]
+    tjc = cool.tj_c.copy()
+    tjc[2] -= 0.3  # and colder on the first cooling curve
+    b = b.with_(pwm=PwmTable(b.pwm.freq_hz, b.pwm.duty, tj, power_w=POWER_W,
+                             sample_window_s=WINDOW_S),
+                cooling=(CoolingTable(cool.t_s, POWER_W, tj_c=tjc, tref_steady_c=25.0),
+                         b.cooling[1]))
+    c = compare(model, Bundle.read(b.write(tmp_path / "b")))
+    r = {(p.dataset, i): p.residual_k for name, sub in c.by_dataset().items()
+         for i, p in enumerate(sub.points)}
+    assert r.pop(("pwm", 4)) == pytest.approx(0.5, abs=1e-12)
+    assert r.pop(("cooling_1", 2)) == pytest.approx(-0.3, abs=1e-12)
+    assert max(abs(v) for v in r.values()) < 1e-12
+    assert c.max_abs_k == pytest.approx(0.5, abs=1e-12)
+    assert c.worst(1)[0].dataset == "pwm"
+    assert c.rms_k == pytest.approx(math.sqrt((0.25 + 0.09) / len(c.points)), rel=1e-9)
+
+
+def test_model_with_more_heat_reads_hotter(model, bundle_dir):
+    """A model with a 10 % higher Rth predicts hotter junctions: every residual negative."""
+    lad = model.ladder
+    hot = ThermalModel(type(lad)(np.array(lad.r) * 1.1, np.array(lad.c) / 1.1))
+    c = compare(hot, Bundle.read(bundle_dir))
+    assert np.all(c.residuals_k[c.residuals_k != 0] < 0)
+    assert np.sum(c.residuals_k < 0) > 0.9 * len(c.points)
+
+
+def test_sample_window_effect_overrides_the_bundle(model, tmp_path):
+    """Bundle recorded with a 100 µs window but not saying so (sample_window_s = 0)."""
+    b = Bundle.read(synthetic_bundle(model, manifest_window_s=0.0).write(tmp_path / "b"))
+    plain = compare(model, b, datasets=["pwm"])
+    assert np.all(plain.residuals_k < 0)  # model reads the peak, hotter than the bench
+    assert plain.residuals_k[-1] < -0.1  # 25 kHz: the window is 2.5 periods long
+    with_window = model.with_effects([Effect.create("sample-window", window_s=WINDOW_S)])
+    assert np.all(compare(with_window, b).residuals_k == 0.0)
+    assert np.all(compare(model, b, window_s=WINDOW_S).residuals_k == 0.0)
+
+
+def test_measurement_hook_and_tsp_effect(model, bundle_dir):
+    b = Bundle.read(bundle_dir)
+    seen = []
+
+    def offset(dataset, at, model_c):
+        seen.append(dataset)
+        return model_c + 1.0
+
+    c = compare(model, b, measurement=offset)
+    assert set(seen) == {"pwm", "cooling_1", "cooling_2"}
+    assert np.allclose(c.residuals_k, -1.0, atol=1e-12, rtol=0)
+    q = 1e-3
+    tsp = model.with_effects([Effect.create("tsp-nonlinearity", quad_k_per_k2=q, t_cal_c=25.0)])
+    c2 = compare(tsp, b, datasets=["pwm"])
+    for p in c2.points:
+        true_c = p.measured_c  # the bundle holds the true temperature
+        assert p.residual_k == pytest.approx(-q * (true_c - 25.0) ** 2, abs=1e-9)
+
+
+def test_nonlinear_cooling_starts_at_the_self_consistent_steady_state(actuator):
+    alpha, p, tref = -3e-3, 0.3, 30.0
+    m = ThermalModel(actuator, (Effect.create("temperature-coefficient", alpha_per_k=alpha),))
+    rise = cooling_rise_k(m, p, [0.0, 1e-3, 1e3], tref)
+    rth = actuator.rth
+    # θ = P Rth (1 + α (tref + θ − t0))  →  θ = P Rth (1 + α (tref − t0)) / (1 − α P Rth)
+    expect = p * rth * (1 + alpha * (tref - 25.0)) / (1 - alpha * p * rth)
+    assert rise[0] == pytest.approx(expect, rel=1e-9)
+    assert 0 < rise[1] < rise[0] and abs(rise[2]) < 1e-6
+
+
+def test_errors(model, bundle_dir):
+    b = Bundle.read(bundle_dir)
+    with pytest.raises(DataFormatError, match="cooling_9"):
+        compare(model, b, datasets=["cooling_9"])
+    with pytest.raises(DataFormatError, match="nothing to compare"):
+        compare(model, Bundle(calibration=CalibrationTable([25.0, 75.0], [0.6, 0.5])))
+    case = ThermalModel(model.ladder, reference="case")
+    with pytest.raises(DataFormatError, match="reference"):
+        compare(case, b)
+    with pytest.raises(DataFormatError, match="engine"):
+        compare(model, b, "spectre")
+    with pytest.raises(DataFormatError, match="window_s"):
+        compare(model, b, window_s=-1.0)
+
+
+def test_comparison_document_and_table():
+    pts = (ComparisonPoint("pwm", {"freq_hz": 500.0, "duty": 0.2}, 27.20, 27.56,
+                           {"power_w": 0.094, "window_s": 1e-4}),
+           ComparisonPoint("pwm", {"freq_hz": 25e3, "duty": 0.8}, 37.70, 37.10,
+                           {"power_w": 0.094, "window_s": 1e-4}),
+           ComparisonPoint("cooling_1", {"t_s": 1e-3}, 38.0, 38.5))
+    c = Comparison(pts)
+    doc = json.loads(json.dumps(c.to_json()))
+    assert set(doc) == {"format", "rms_k", "max_abs_k", "points"}
+    assert doc["format"] == COMPARISON_FORMAT
+    assert doc["points"][0] == {"dataset": "pwm", "at": {"freq_hz": 500.0, "duty": 0.2},
+                                "measured_c": 27.20, "model_c": 27.56,
+                                "residual_k": pytest.approx(-0.36)}
+    assert doc["max_abs_k"] == pytest.approx(0.6)
+    text = c.table()
+    assert "Freq (kHz)" in text and "D=20%" in text and "D=80%" in text
+    row = next(line for line in text.splitlines() if line.strip().startswith("0.5 |"))
+    assert "27.20" in row and "27.56" in row and "-0.36" in row
+    assert any(line.startswith("cooling_1") for line in text.splitlines())
+    assert Comparison(()).to_json()["rms_k"] is None
+
+
+def test_paper_table2_layout(actuator):
+    """The paper's measured column through our table: 6 frequencies × 3 duties."""
+    with open(SHARED / "data" / "actuator_table2.csv") as fh:
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    table = PwmTable([float(r["freq_hz"]) for r in rows], [float(r["duty"]) for r in rows],
+                     [float(r["tj_exp_c"]) for r in rows], power_w=POWER_W,
+                     sample_window_s=WINDOW_S)
+    m = ThermalModel(actuator)
+    c = Comparison(compare_pwm(m, table, reference_c=25.0))
+    lines = c.table().splitlines()
+    body = [line for line in lines if line.split("|")[0].strip() in
+            ("0.5", "1", "3", "5", "10", "25")]
+    assert len(body) == 6 and all(line.count("|") == 4 for line in body)
+    for p, r in zip(c.points, rows, strict=True):
+        assert p.residual_k == pytest.approx(float(r["tj_exp_c"]) - p.model_c, abs=1e-12)
+
+
+# ------------------------------------------------------------------------------ ngspice
+@pytest.mark.ngspice
+def test_ngspice_engine_agrees_with_analytic(model, bundle_dir):
+    b = Bundle.read(bundle_dir)
+    c = compare(model, b, "pyspice", datasets=["pwm"])
+    assert c.engine == "pyspice"
+    assert c.max_abs_k < 0.02
+
+
+@pytest.mark.ngspice
+def test_auto_engine_is_ngspice_for_device_effects(actuator, tmp_path):
+    m = ThermalModel(actuator, (Effect.create("temperature-coefficient", alpha_per_k=-3e-3),))
+    pwm = PwmTable([1e3, 25e3], [0.5, 0.2], [0.0 + 30, 28.0], power_w=POWER_W,
+                   sample_window_s=WINDOW_S)
+    b = Bundle(ambient_c=25.0, pwm=pwm)
+    auto = compare(m, b)
+    exact = compare(m, b, "analytic")
+    assert auto.engine == "ngspice" and exact.engine == "analytic"
+    assert np.max(np.abs(auto.residuals_k - exact.residuals_k)) < 0.02
+
+
+# ------------------------------------------------------------------------------ command
+def test_compare_command_json_and_table(model, bundle_dir, tmp_path, capsys):
+    path = str(model.save(tmp_path / "m.json"))
+    assert main(["compare", path, str(bundle_dir), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["format"] == COMPARISON_FORMAT and doc["rms_k"] == 0.0
+    assert len(doc["points"]) == 18 + 2 * T_COOL.size
+    assert {p["dataset"] for p in doc["points"]} == {"pwm", "cooling_1", "cooling_2"}
+    assert main(["compare", path, str(bundle_dir), "--engine", "analytic"]) == 0
+    out = capsys.readouterr().out
+    assert "Freq (kHz)" in out and "cooling_2" in out
+
+
+@pytest.mark.parametrize("extra, word", [(["--engine", "xyce"], "engine"),
+                                         (["--window", "-1"], "window")])
+def test_compare_command_bad_options(model, bundle_dir, tmp_path, capsys, extra, word):
+    path = str(model.save(tmp_path / "m.json"))
+    with pytest.raises(SystemExit) as exc:
+        main(["compare", path, str(bundle_dir), *extra])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and word in err
+
+
+def test_compare_command_bad_files(model, bundle_dir, tmp_path, capsys):
+    path = str(model.save(tmp_path / "m.json"))
+    assert main(["compare", path, str(tmp_path / "missing")]) == 2
+    assert main(["compare", str(tmp_path / "none.json"), str(bundle_dir)]) == 2
+    case = str(ThermalModel(model.ladder, reference="case").save(tmp_path / "case.json"))
+    assert main(["compare", case, str(bundle_dir)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and "missing" in err[0] and "none.json" in err[1]
+    assert "reference" in err[2]
