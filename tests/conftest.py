@@ -1,0 +1,34 @@
+"""Shared fixtures: reference ladders and small helpers for exact comparisons."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spicethermal.ladder import Foster
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared"
+NETLISTS = ROOT / "netlists"
+
+#: The paper-like actuator ladder used across tests: Rth = 146 K/W, taus from 100 µs to 30 s.
+ACTUATOR_R = (6.0, 20.0, 50.0, 70.0)
+ACTUATOR_TAU = (1e-4, 5e-3, 0.4, 30.0)
+
+
+@pytest.fixture
+def actuator() -> Foster:
+    return Foster.from_tau(ACTUATOR_R, ACTUATOR_TAU)
+
+
+def ramp_response(ladder, t, rise_s: float) -> np.ndarray:
+    """Exact rise per watt when power ramps linearly from 0 to 1 W over ``rise_s``, then stays."""
+    f = ladder.to_foster() if ladder.topology == "cauer" else ladder
+    r, tau = np.asarray(f.r), np.asarray(f.tau)
+    t = np.asarray(t, dtype=float)[:, None]
+    late = r * (1 - tau / rise_s * np.exp(-t / tau) * np.expm1(rise_s / tau))
+    early = r * (t / rise_s - tau / rise_s * -np.expm1(-t / tau))
+    return np.where(t >= rise_s, late, early).sum(axis=1)
+
