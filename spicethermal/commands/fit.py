@@ -25,11 +25,18 @@ def _order(text: str) -> int | str:
     if text == "auto":
         return text
     try:
+        return _count(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer or 'auto'") from None
+
+
+def _count(text: str) -> int:
+    try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer or 'auto'") from None
+        value = 0
     if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer or 'auto'")
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
     return value
 
 
@@ -50,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="model file to write (spicethermal-model/1)")
     parser.add_argument("--order", type=_order, default="auto", metavar="N|auto",
                         help="number of RC stages, or auto (default: chosen by BIC)")
-    parser.add_argument("--max-order", type=_order, default=10, metavar="N",
+    parser.add_argument("--max-order", type=_count, default=10, metavar="N",
                         help="largest order tried by --order auto (default 10)")
     parser.add_argument("--rth", type=_positive, metavar="K_PER_W",
                         help="known Rth (K/W), held as ΣR = Rth; needed for a normalized r column")
