@@ -26,6 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from .drive import DriveResult
     from .fit import FitResult
     from .ladder import Cauer, Foster
 
@@ -267,4 +268,104 @@ def fig7(result: FitResult, path: str | os.PathLike, cauer: bool = True,
         plot_ladder(lad, ax_c)
         ax_c.set_title(("(c) " if k == 0 else "") + ax_c.get_title(loc="left"), fontsize=9,
                        loc="left")
+    return save_figure(fig, path)
+
+
+# ------------------------------------------------------------ safe fast drive (drive.py)
+__all__ += ["fig_drive", "plot_drive", "plot_drive_duty"]
+
+
+def plot_drive(result: DriveResult, ax: Axes | None = None, constant: bool = True) -> Axes:
+    """Predicted temperatures under the safe fast drive, on logarithmic time.
+
+    The node (period average), the junction mean and its peak (mean + PWM ripple; the
+    exact switched peaks for a linear model), ``t_max`` and the target band; with
+    ``constant`` also the node and junction peak under the constant hold duty.
+
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> from spicethermal.drive import optimize_drive
+    >>> r = optimize_drive(ThermalModel(Foster.from_tau([10.0, 90.0], [1e-3, 1.0])), 90.0,
+    ...                    50.0, p_max_w=1.0, two_phase=False)
+    >>> plot_drive(r).get_xscale()
+    'log'
+    """
+    ax = _axes(ax, 7.0, 4.2)
+    tr = result.trace
+    t = tr.t_s
+    keep = t > 0
+    name = "junction" if result.node == 0 else f"node {result.node}"
+    ax.axhline(result.t_max_c, color="C3", lw=1.0, ls="--", label=f"t_max {result.t_max_c:g} °C")
+    ax.axhspan(result.target_c - result.tol_k, result.target_c + result.tol_k, color="C2",
+               alpha=0.2, lw=0, label=f"target {result.target_c:g} ± {result.tol_k:g} K")
+    if tr.exact_t_s.size:
+        ex = tr.exact_t_s > 0
+        ax.plot(tr.exact_t_s[ex], tr.exact_peak_c[ex], "-", color="C3", lw=0.8, alpha=0.8,
+                label="junction peak (exact switched)")
+    else:
+        ax.plot(t[keep], tr.junction_peak_c[keep], "-", color="C3", lw=0.8,
+                label="junction peak (mean + ripple)")
+    ax.plot(t[keep], tr.junction_mean_c[keep], "-", color="C1", lw=1.2, label="junction mean")
+    if result.node != 0:
+        ax.plot(t[keep], tr.node_c[keep], "-", color="C0", lw=1.8, label=f"{name} (drive)")
+    if constant:
+        ax.plot(t[keep], tr.constant_node_c[keep], ":", color="C0", lw=1.4,
+                label=f"{name}, constant duty {result.hold_duty:.3f}")
+        ax.plot(t[keep], tr.constant_junction_peak_c[keep], ":", color="C3", lw=1.0,
+                label="junction peak, constant duty")
+    for tt, style in ((result.time_to_target_s, "-"),
+                      (result.constant_duty_time_to_target_s, ":")):
+        if math.isfinite(tt) and tt > 0:
+            ax.axvline(tt, color="C2", ls=style, lw=1.0)
+    ax.set_xscale("log")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("temperature (°C)")
+    ax.set_title(f"{result.method} drive: {result.time_to_target_s:.3g} s to target vs "
+                 f"{result.constant_duty_time_to_target_s:.3g} s at constant duty "
+                 f"(×{result.speedup:.3g})", fontsize=9, loc="left")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper left", fontsize="x-small")
+    return ax
+
+
+def plot_drive_duty(result: DriveResult, ax: Axes | None = None) -> Axes:
+    """The duty profile of the drive (steps) and the hold duty, on logarithmic time."""
+    ax = _axes(ax, 7.0, 2.2)
+    times = [t for t, _ in result.schedule]
+    duties = [d for _, d in result.schedule]
+    t_end = float(result.trace.t_s[-1])
+    first = max(result.period_s, times[1] / 10 if len(times) > 1 else result.period_s)
+    xs = [first, *times[1:], t_end]
+    ys = [*duties, duties[-1]]
+    ax.step(xs, ys, where="post", color="C0", lw=1.4, label="drive")
+    ax.axhline(result.hold_duty, color="C0", ls=":", lw=1.0,
+               label=f"hold duty {result.hold_duty:.3f}")
+    ax.set_xscale("log")
+    ax.set_ylim(-0.02, 1.05)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("duty")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper right", fontsize="x-small")
+    return ax
+
+
+def fig_drive(result: DriveResult, path: str | os.PathLike) -> Path:
+    """Temperatures over the duty profile, as a PNG written atomically to ``path``.
+
+    >>> import tempfile, pathlib
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> from spicethermal.drive import optimize_drive
+    >>> r = optimize_drive(ThermalModel(Foster.from_tau([10.0, 90.0], [1e-3, 1.0])), 90.0,
+    ...                    50.0, p_max_w=1.0, two_phase=False)
+    >>> fig_drive(r, pathlib.Path(tempfile.mkdtemp()) / "drive.png").stat().st_size > 10000
+    True
+    """
+    fig = new_figure(8.0, 6.5)
+    grid = fig.add_gridspec(2, 1, height_ratios=[3.0, 1.3])
+    ax_t = fig.add_subplot(grid[0])
+    ax_d = fig.add_subplot(grid[1], sharex=ax_t)
+    plot_drive(result, ax_t)
+    plot_drive_duty(result, ax_d)
+    ax_t.set_xlabel("")
     return save_figure(fig, path)

@@ -1,0 +1,828 @@
+"""Safe fast drive: the PWM schedule that actuates fastest without overheating the heater.
+
+The paper's opening problem: a thermal actuator responds slowly, more power makes it faster,
+but the heater must survive. Here the heater is switched at ``f_pwm`` with amplitude ``P_max``;
+the duty cycle is the control. The drive must bring an *actuation node* (the junction, or a
+physical Cauer node such as the cavity: ``node=k`` is node k of the model converted to Cauer)
+to a target temperature and keep it there, while the junction's **peak** temperature — the
+state at the end of every on-phase, PWM ripple included — never exceeds ``t_max``.
+
+Definitions
+-----------
+* The node temperature is the period average (what a slow actuator responds to); the junction
+  limit applies to the peak.
+* *Hold duty*: the duty whose steady state puts the node at the target. Its periodic steady
+  state must keep the junction peak below ``t_max``, else the target is not safely reachable.
+* *Time to target*: from switch-on until the node enters the band ``target ± tol`` **and stays
+  in it** (a boost that crosses the target and droops back has not actuated).
+
+Method
+------
+The schedule is a duty profile on a grid of whole PWM periods (fine at first, growing in
+proportion to the elapsed time), ending in the hold duty. It is built greedily, bang-bang
+with state constraints: in each step the largest duty such that (1) the junction peak at the
+step's end stays at or below the limit and (2) the node, even if power were cut after this
+step, never rises above the target (its free response, a look-ahead, prevents overshoot of a
+node deep in the ladder). So the drive boosts at duty 1 until the junction peak reaches
+``t_max``, rides that constraint, then rides the target (duty falling towards the hold duty
+while the slow stages fill), and switches to the hold duty as soon as doing so keeps the node
+within the band forever. A simpler two-phase drive (boost duty for a boost time, then the
+hold duty) is optimized by grid search for comparison; the faster of the two is returned.
+
+Accuracy
+--------
+The optimizer works on the period-averaged power (exact for the mean of a linear network)
+plus the closed-form periodic ripple of :mod:`spicethermal.pwm` at the current duty: an
+approximation that is good when ``f_pwm`` is fast against the stages that carry the ripple.
+It is then checked, for a linear model, on the **exact switched** response (closed form,
+period by period, in modal coordinates), and the limit is tightened by any excess and the
+schedule recomputed, so the reported junction peak is the exact one. With device effects
+(temperature coefficient, phase change) each step is decided on the network frozen at the
+current state, advanced by :meth:`ThermalModel.simulate` (stiff integration of the nonlinear
+network), and the ripple uses the ladder with its resistances scaled to the current junction
+temperature; the reported peak is then the averaged simulation plus that ripple.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import DataFormatError, SimulationError
+from .ladder import Foster
+from .model import Network, Schedule, ThermalModel
+from .pwm import _stage_peaks, check_drive, steady_state
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+DEFAULT_F_PWM_HZ = 1000.0
+DEFAULT_TOL_K = 0.5
+DEFAULT_DUTY_STEP = 0.005
+_SAFETY_K = 2e-3  # the exact peak is brought this far under t_max by the margin iteration
+
+
+# ------------------------------------------------------------------------------ results
+@dataclass(frozen=True)
+class TwoPhase:
+    """The best ``boost_duty`` for ``boost_s``, then the hold duty (grid search)."""
+
+    boost_s: float
+    boost_duty: float
+    time_to_target_s: float
+    peak_junction_c: float
+
+    def as_json(self) -> dict[str, float]:
+        return {"boost_s": self.boost_s, "boost_duty": self.boost_duty,
+                "time_to_target_s": self.time_to_target_s,
+                "peak_junction_c": self.peak_junction_c}
+
+
+@dataclass(frozen=True)
+class Release:
+    """Time for the node to fall from the steady hold to ``release_c`` at ``keep_warm_duty``."""
+
+    release_c: float
+    keep_warm_duty: float
+    time_s: float
+
+    def as_json(self) -> dict[str, float]:
+        return {"release_c": self.release_c, "keep_warm_duty": self.keep_warm_duty,
+                "time_s": self.time_s}
+
+
+@dataclass(frozen=True, eq=False)
+class DriveTrace:
+    """Predicted temperatures (°C) on a time grid, for the drive and for the constant duty.
+
+    ``junction_peak_c`` is the period-averaged junction plus the periodic ripple at the
+    current duty; ``exact_t_s``/``exact_peak_c`` (linear models) are the exact switched
+    junction temperatures at the ends of on-phases.
+    """
+
+    t_s: NDArray
+    duty: NDArray
+    node_c: NDArray
+    junction_mean_c: NDArray
+    junction_peak_c: NDArray
+    constant_node_c: NDArray
+    constant_junction_peak_c: NDArray
+    exact_t_s: NDArray
+    exact_peak_c: NDArray
+
+
+@dataclass(frozen=True, eq=False)
+class DriveResult:
+    """The safe fast drive found by :func:`optimize_drive`.
+
+    ``schedule`` is ``((t_s, duty), ...)``: each duty applies from its time until the next
+    one; the last (the hold duty) applies forever. Times are whole PWM periods, each period
+    starting with its on-phase.
+    """
+
+    model: ThermalModel
+    node: int
+    t_max_c: float
+    target_c: float
+    ambient_c: float
+    p_max_w: float
+    f_pwm_hz: float
+    tol_k: float
+    hold_duty: float
+    hold_peak_junction_c: float
+    schedule: tuple[tuple[float, float], ...]
+    method: str
+    time_to_target_s: float
+    constant_duty_time_to_target_s: float
+    peak_junction_c: float
+    peak_method: str
+    two_phase: TwoPhase | None
+    release: Release | None
+    trace: DriveTrace
+
+    @property
+    def speedup(self) -> float:
+        """Constant-duty time to target over the drive's."""
+        if self.time_to_target_s <= 0:
+            return math.inf
+        return self.constant_duty_time_to_target_s / self.time_to_target_s
+
+    @property
+    def period_s(self) -> float:
+        return 1.0 / self.f_pwm_hz
+
+    def duty_at(self, t_s: float) -> float:
+        """Duty applied at time ``t_s``."""
+        times = [t for t, _ in self.schedule]
+        k = int(np.searchsorted(times, t_s, side="right")) - 1
+        return self.schedule[max(k, 0)][1]
+
+    def power_schedule(self) -> Schedule:
+        """The period-averaged power ``P_max · duty`` as a :class:`Schedule`."""
+        return Schedule(tuple(t for t, _ in self.schedule),
+                        tuple(self.p_max_w * d for _, d in self.schedule))
+
+    def as_json(self) -> dict:
+        """The ``spicethermal drive --json`` document."""
+        return {
+            "time_to_target_s": self.time_to_target_s,
+            "constant_duty_time_to_target_s": self.constant_duty_time_to_target_s,
+            "speedup": self.speedup,
+            "peak_junction_c": self.peak_junction_c,
+            "peak_method": self.peak_method,
+            "method": self.method,
+            "node": self.node,
+            "target_c": self.target_c,
+            "t_max_c": self.t_max_c,
+            "ambient_c": self.ambient_c,
+            "p_max_w": self.p_max_w,
+            "f_pwm_hz": self.f_pwm_hz,
+            "tol_k": self.tol_k,
+            "hold_duty": self.hold_duty,
+            "hold_peak_junction_c": self.hold_peak_junction_c,
+            "schedule": [{"t_s": t, "duty": d} for t, d in self.schedule],
+            "two_phase": self.two_phase.as_json() if self.two_phase else None,
+            "release": self.release.as_json() if self.release else None,
+        }
+
+    def table(self) -> str:
+        """The schedule as a text table (start, end, periods, duty, average power)."""
+        lines = [f"{'from (s)':>12} {'to (s)':>12} {'periods':>8} {'duty':>7} {'P avg (W)':>10}"]
+        for k, (t, d) in enumerate(self.schedule):
+            if k + 1 < len(self.schedule):
+                t1 = self.schedule[k + 1][0]
+                n = f"{round((t1 - t) * self.f_pwm_hz):d}"
+                end = f"{t1:12.6g}"
+            else:
+                n, end = "hold", f"{'∞':>12}"
+            lines.append(f"{t:12.6g} {end} {n:>8} {d:7.4f} {d * self.p_max_w:10.4g}")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        where = "junction" if self.node == 0 else f"Cauer node {self.node}"
+        out = [
+            f"drive of the {where} to {self.target_c:g} °C (±{self.tol_k:g} K), junction peak "
+            f"≤ {self.t_max_c:g} °C, P_max {self.p_max_w:.4g} W at {self.f_pwm_hz:g} Hz, "
+            f"ambient {self.ambient_c:g} °C",
+            f"  {self.method} drive: time to target {self.time_to_target_s:.4g} s, "
+            f"peak junction {self.peak_junction_c:.3f} °C ({self.peak_method})",
+            f"  constant hold duty {self.hold_duty:.4f}: time to target "
+            f"{self.constant_duty_time_to_target_s:.4g} s (speed-up ×{self.speedup:.3g}), "
+            f"hold junction peak {self.hold_peak_junction_c:.2f} °C",
+        ]
+        if self.two_phase:
+            tp = self.two_phase
+            out.append(f"  two-phase drive: duty {tp.boost_duty:.4f} for {tp.boost_s:.4g} s, then "
+                       f"hold: time to target {tp.time_to_target_s:.4g} s")
+        if self.release:
+            r = self.release
+            out.append(f"  release below {r.release_c:g} °C at duty {r.keep_warm_duty:g}: "
+                       f"{r.time_s:.4g} s from the steady hold")
+        return "\n".join(out)
+
+    # -- SPICE ---------------------------------------------------------------------------
+    def spice_sources(self, pin: str = "TJ", ref: str = "0", prefix: str = "IDRV") -> list[str]:
+        """Current sources that inject the switched power of the schedule into ``pin``.
+
+        One ``PULSE`` per constant-duty interval with its number of pulses (ngspice ≥ 39 and
+        LTspice read the 8th PULSE parameter as the pulse count), and an endless ``PULSE`` for
+        the hold. Edges last 1e-4 period and the width is shortened by one edge, so the
+        energy of every period is exactly ``P_max · duty / f_pwm``.
+        """
+        from .spice import Pulse, fmt
+
+        period = self.period_s
+        edge = Pulse.of(self.f_pwm_hz, 0.5).edge_s
+        p = fmt(self.p_max_w)
+        lines = []
+        for k, (t, d) in enumerate(self.schedule):
+            last = k + 1 == len(self.schedule)
+            if d <= 0:
+                continue
+            name = f"{prefix}{k + 1}"
+            if d >= 1:  # fully on: one trapezoid of the interval's length (the hold: DC)
+                if last:
+                    lines.append(f"{name} {ref} {pin} PWL({fmt(t)} 0 {fmt(t + edge)} {p})")
+                    continue
+                length = self.schedule[k + 1][0] - t
+                lines.append(f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
+                             f"{fmt(length - edge)} {fmt(length + 2 * edge)} 1)")
+                continue
+            width = max(d * period - edge, 0.0)
+            head = (f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
+                    f"{fmt(width)} {fmt(period)}")
+            if last:
+                lines.append(head + ")")
+            else:
+                n = round((self.schedule[k + 1][0] - t) / period)
+                lines.append(f"{head} {n:d})")
+        return lines
+
+    def spice_bench(self, name: str = "HEATER", tstop_s: float | None = None,
+                    tmax_s: float | None = None, reltol: float = 1e-4) -> str:
+        """A self-contained ngspice deck: the model's subcircuit, the drive's sources, ``.tran``.
+
+        ``TREF`` sits at the ambient temperature, so ``V(TJ)`` is the junction in °C and
+        ``V(X1.Nk)`` Cauer node k. ``tstop_s`` defaults to :meth:`verification_window_s`,
+        ``tmax_s`` (the maximum step) to 1/20 period.
+        """
+        from . import __version__
+        from .spice import environment, render_lib, sanitize_comment
+
+        tstop = self.verification_window_s() if tstop_s is None else float(tstop_s)
+        tmax = self.period_s / 20 if tmax_s is None else float(tmax_s)
+        return environment().get_template("bench/drive.cir.j2").render(
+            version=__version__, lib=render_lib(self.model, "ngspice", name=name),
+            name=name, tref_c=self.ambient_c, sources=self.spice_sources(),
+            description=sanitize_comment(
+                f"node {self.node} to {self.target_c:g} degC, Tj peak <= {self.t_max_c:g} "
+                f"degC, {self.f_pwm_hz:g} Hz, P_max {self.p_max_w:g} W"),
+            tstop_s=tstop, tstep_s=tmax, tmax_s=tmax, reltol=reltol)
+
+    def verification_window_s(self, max_periods: int = 4000) -> float:
+        """Span worth simulating switched: past the exact peak and the time to target."""
+        t_peak = float(self.trace.exact_t_s[np.argmax(self.trace.exact_peak_c)]) \
+            if self.trace.exact_t_s.size else self.time_to_target_s
+        span = max(2.0 * t_peak, 1.2 * self.time_to_target_s, 20 * self.period_s)
+        return min(span, max_periods * self.period_s)
+
+
+# ------------------------------------------------------------------------------ dynamics
+class _Dynamics:
+    """Period-averaged dynamics ``Cm dx/dt = -G x + e0 P_max d`` of the model's network.
+
+    ``modes(x)`` gives ``(λ, V, Vᵀ Cm)`` of the network (frozen at state ``x`` when the model
+    is nonlinear): ``x = V z``, ``dz/dt = -λ z + V[0] P``.
+    """
+
+    def __init__(self, model: ThermalModel, ambient_c: float, p_max_w: float,
+                 f_pwm_hz: float) -> None:
+        self.model = model
+        self.net = Network.of(model.ladder)
+        self.n = self.net.n
+        self.tref = ambient_c
+        self.p = p_max_w
+        self.period = 1.0 / f_pwm_hz
+        lad = model.ladder
+        foster = lad if isinstance(lad, Foster) else lad.to_foster()
+        self.r = np.asarray(foster.r)
+        self.tau = np.asarray(foster.tau)
+        self.linear = model.is_linear
+        self._fixed = self._eig(self.net.capacitance(), self.net.conductance())
+
+    @staticmethod
+    def _eig(cm: NDArray, g: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        from scipy.linalg import eigh
+
+        lam, v = eigh(g, cm)
+        return lam, v, v.T @ cm
+
+    def modes(self, x: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        if self.linear:
+            return self._fixed
+        cm, g = self.model._matrices(x, self.tref, self.net)
+        return self._eig(cm, g)
+
+    def scale(self, junction_k: float) -> float:
+        """Resistance factor of the temperature coefficient at a junction rise (1 if none)."""
+        tj = self.tref + junction_k
+        return float(np.prod([e.resistance_scale(tj) for e in self.model.device_effects]))
+
+    def ripple(self, duty: NDArray | float, junction_k: float = 0.0) -> NDArray:
+        """Periodic-steady-state junction peak minus mean (K) at ``duty``."""
+        s = self.scale(junction_k) if not self.linear else 1.0
+        d = np.asarray(duty, dtype=float)
+        peaks = _stage_peaks(self.r * s, self.tau * s, self.period, d[..., None]).sum(axis=-1)
+        return self.p * (peaks - d * s * self.r.sum())
+
+    def advance(self, x: NDArray, h: float, duty: float,
+                modes: tuple[NDArray, NDArray, NDArray]) -> NDArray:
+        if self.linear:
+            lam, v, vinv = modes
+            e = np.exp(-lam * h)
+            z = (vinv @ x) * e + self.p * duty * v[0] / lam * -np.expm1(-lam * h)
+            return v @ z
+        # one piece of the nonlinear network, at a looser tolerance than a final prediction
+        end, _ = self.model._integrate(self.net, x, [(0.0, h, self.p * duty)], self.tref,
+                                       rtol=1e-7, atol=1e-8)
+        return end
+
+    def steady(self, power_w: float) -> NDArray:
+        """Node rises under constant average power."""
+        if self.linear:
+            b = np.zeros(self.n)
+            b[0] = power_w
+            return np.linalg.solve(self.net.conductance(), b)
+        return self.model.steady_nodes(power_w, self.tref)
+
+
+# ------------------------------------------------------------------------------ helpers
+def _settle(t: NDArray, y: NDArray, target: float, tol: float) -> tuple[float, int]:
+    """First time after which ``|y - target| <= tol`` for good (interpolated), and the index
+    of the last grid point outside the band (-1 when none). ``inf`` if still outside at the end.
+    """
+    out = np.abs(y - target) > tol
+    if out[-1]:
+        return math.inf, len(t) - 1
+    if not out.any():
+        return float(t[0]), -1
+    i = int(len(out) - 1 - np.argmax(out[::-1]))
+    e0, e1 = abs(y[i] - target) - tol, abs(y[i + 1] - target) - tol
+    w = e0 / (e0 - e1) if e0 != e1 else 1.0
+    return float(t[i] + w * (t[i + 1] - t[i])), i
+
+
+def _bisect(f, a: float, b: float, iters: int = 60) -> float:
+    """Root of ``f`` in ``[a, b]`` with ``f(a) > 0 >= f(b)``."""
+    from scipy.optimize import brentq
+
+    fa, fb = f(a), f(b)
+    if not (fa > 0 >= fb):
+        return b
+    return float(brentq(f, a, b, xtol=1e-12, rtol=1e-10, maxiter=iters))
+
+
+def _time_grid(period: float, horizon: float, marks: tuple[float, ...] = (), n: int = 1500
+               ) -> NDArray:
+    t = np.geomspace(period / 4, horizon, n)
+    return np.unique(np.concatenate([[0.0], t, np.asarray(marks, dtype=float)]))
+
+
+def _compress(steps: list[tuple[int, int, float]], duty_step: float
+              ) -> list[tuple[int, int, float]]:
+    """Merge consecutive steps whose duties span at most ``duty_step`` (energy kept)."""
+    out: list[tuple[int, int, float]] = []
+    group: list[tuple[int, int, float]] = []
+
+    def flush() -> None:
+        if group:
+            n = sum(g[1] for g in group)
+            d = sum(g[1] * g[2] for g in group) / n
+            out.append((group[0][0], n, round(d, 6)))
+            group.clear()
+
+    lo = hi = 0.0
+    for s in steps:
+        if group and (max(hi, s[2]) - min(lo, s[2]) > duty_step or (s[2] >= 1) != (lo >= 1)):
+            flush()
+        if not group:
+            lo = hi = s[2]
+        lo, hi = min(lo, s[2]), max(hi, s[2])
+        group.append(s)
+    flush()
+    return out
+
+
+# ------------------------------------------------------------------------------ the drive
+def _greedy(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: float,
+            x_hold: NDArray, tol_switch: float, growth: float, t_end: float
+            ) -> tuple[list[tuple[int, int, float]], float]:
+    """Bang-bang duty profile under the junction-peak and no-overshoot constraints.
+
+    Returns steps ``(first_period, periods, duty)`` (the hold follows the last one) and the
+    largest junction peak rise (mean + ripple) met at the ends of the steps.
+    """
+    period = dyn.period
+    dgrid = np.linspace(0.0, 1.0, 2001)
+    look = np.concatenate([[0.0], np.geomspace(period / 10, 10 * dyn.tau.max(), 160)])
+    ripple_hold = float(dyn.ripple(hold_duty, x_hold[0]))
+    fixed_ripple = dyn.ripple(dgrid) if dyn.linear else None
+    x = np.zeros(dyn.n)
+    k = 0
+    steps: list[tuple[int, int, float]] = []
+    worst = 0.0
+    while k * period < t_end:
+        m = max(1, int(growth * k))
+        h = m * period
+        modes = dyn.modes(x)
+        lam, v, vinv = modes
+        z_free = (vinv @ x) * np.exp(-lam * h)
+        z_in = dyn.p * v[0] / lam * -np.expm1(-lam * h)
+        # (1) junction peak at the step's end: mean + ripple at that duty
+        aj, bj = float(v[0] @ z_free), float(v[0] @ z_in)
+        rip = fixed_ripple if fixed_ripple is not None else dyn.ripple(dgrid, aj)
+        ok = aj + dgrid * bj + rip <= lim_k
+        d_j = float(dgrid[ok].max()) if ok.any() else 0.0
+        # (2) no overshoot: the node's free response after this step stays <= target
+        decay = v[node] * np.exp(-np.outer(look, lam))
+        a_n, b_n = decay @ z_free, decay @ z_in
+        pos = b_n > 1e-12 * np.abs(b_n).max()
+        d_n = float(np.min((tgt_k - a_n[pos]) / b_n[pos])) if pos.any() else 1.0
+        d = min(1.0, max(0.0, min(d_j, d_n)))
+        x = dyn.advance(x, h, d, modes)
+        worst = max(worst, float(x[0] + dyn.ripple(d, x[0])))
+        steps.append((k, m, d))
+        k += m
+        # switch to the hold once it keeps the node in the band and the junction safe
+        lam, v, vinv = dyn.modes(x)
+        dz = (vinv @ (x - x_hold)) * np.exp(-np.outer(look, lam))
+        if (np.max(np.abs(dz @ v[node])) <= tol_switch
+                and np.max(dz @ v[0]) + x_hold[0] + ripple_hold <= lim_k):
+            break
+    return steps, worst
+
+
+def _switched_peaks(dyn: _Dynamics, intervals: list[tuple[int, int, float]], hold_duty: float,
+                    hold_periods: int, dense: int = 3000) -> tuple[NDArray, NDArray]:
+    """Exact junction rise at the end of every on-phase (linear model), sampled.
+
+    Within an interval of constant duty the period map is affine, ``z -> a z + c`` in modal
+    coordinates, so the state after j periods is ``z* + (z0 - z*) a^j``: every period is
+    available in closed form; long intervals are sampled densely first, then logarithmically.
+    """
+    lam, v, _ = dyn.modes(np.zeros(dyn.n))
+    period = dyn.period
+    z = np.zeros(dyn.n)
+    a = np.exp(-lam * period)
+    ts, peaks = [], []
+    end = intervals[-1][0] + intervals[-1][1] if intervals else 0
+    for first, n, d in [*intervals, (end, hold_periods, hold_duty)]:
+        e_on = np.exp(-lam * d * period)
+        c_on = dyn.p * v[0] / lam * -np.expm1(-lam * d * period)
+        z_star = c_on * np.exp(-lam * (1 - d) * period) / -np.expm1(-lam * period)
+        if n <= 2 * dense:
+            j = np.arange(n)
+        else:
+            j = np.unique(np.concatenate([np.arange(dense),
+                                          np.geomspace(dense, n - 1, dense).astype(int)]))
+        zj = z_star + (z - z_star) * a ** j[:, None]
+        peaks.append((zj * e_on + c_on) @ v[0])
+        ts.append((first + j + d) * period)
+        z = z_star + (z - z_star) * a ** n
+    return np.concatenate(ts), np.concatenate(peaks)
+
+
+def _two_phase(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol: float,
+               hold_duty: float, horizon: float) -> TwoPhase | None:
+    """Grid search over boost time (whole periods) and boost duty, then the hold duty.
+
+    Closed form on the linear model: a candidate is the hold-duty step plus a step of
+    ``boost - hold`` duty that ends at the boost time.
+    """
+    period = dyn.period
+    lam, v, _ = dyn.modes(np.zeros(dyn.n))
+    gain = v[0] / lam
+
+    def resp(row: int, t: NDArray) -> NDArray:  # rise per watt after a step at t = 0
+        tt = np.maximum(t, 0.0)[..., None]
+        return (v[row] * gain * -np.expm1(-lam * tt)).sum(axis=-1)
+
+    def evaluate(tbs: NDArray, dbs: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        t = _time_grid(period, horizon, tuple(tbs), 1200)
+        sn, sj = resp(node, t), resp(0, t)
+        best_t = np.full((tbs.size, dbs.size), math.inf)
+        peak = np.full((tbs.size, dbs.size), math.inf)
+        rip_b = dyn.ripple(dbs)
+        rip_h = float(dyn.ripple(hold_duty))
+        for i, tb in enumerate(tbs):
+            dn = sn - resp(node, t - tb) * (t > tb)
+            dj = sj - resp(0, t - tb) * (t > tb)
+            extra = (dbs - hold_duty)[:, None] * dyn.p
+            y = hold_duty * dyn.p * sn + extra * dn
+            jm = hold_duty * dyn.p * sj + extra * dj
+            jp = np.where(t <= tb, jm + rip_b[:, None], jm + rip_h)
+            peak[i] = jp.max(axis=1)
+            for q in range(dbs.size):
+                if peak[i, q] <= lim_k:
+                    best_t[i, q] = _settle(t, y[q], tgt_k, tol)[0]
+        return best_t, peak, t
+
+    tbs = np.unique(np.maximum(1, np.round(np.geomspace(period, horizon / 4, 90) / period)))
+    dbs = np.linspace(hold_duty, 1.0, 41)
+    times, peaks, _ = evaluate(tbs * period, dbs)
+    if not np.isfinite(times).any():
+        return None
+    i, q = np.unravel_index(np.argmin(times), times.shape)
+    lo, hi = tbs[max(i - 1, 0)], tbs[min(i + 1, tbs.size - 1)]
+    tb2 = np.unique(np.round(np.linspace(lo, hi, 41)))
+    step = dbs[1] - dbs[0]
+    db2 = np.clip(np.linspace(dbs[q] - step, dbs[q] + step, 41), hold_duty, 1.0)
+    times2, peaks2, _ = evaluate(tb2 * period, np.unique(db2))
+    db2 = np.unique(db2)
+    if np.min(times2) <= times[i, q]:
+        i2, q2 = np.unravel_index(np.argmin(times2), times2.shape)
+        return TwoPhase(float(tb2[i2] * period), float(db2[q2]), float(times2[i2, q2]),
+                        float(peaks2[i2, q2]))
+    return TwoPhase(float(tbs[i] * period), float(dbs[q]), float(times[i, q]),
+                    float(peaks[i, q]))
+
+
+def _check(name: str, value: float, low: float = -math.inf, positive: bool = False) -> float:
+    v = float(value)
+    if not math.isfinite(v) or (positive and v <= 0) or v < low:
+        raise DataFormatError(f"{name} = {value!r}: must be finite"
+                              + (" and positive" if positive else "")
+                              + (f" and at least {low:g}" if low > -math.inf else ""))
+    return v
+
+
+def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
+                   ambient_c: float = 25.0, p_max_w: float | None = None,
+                   f_pwm_hz: float = DEFAULT_F_PWM_HZ, node: int = 0, *,
+                   tol_k: float = DEFAULT_TOL_K, release_c: float | None = None,
+                   keep_warm_duty: float = 0.0, duty_step: float = DEFAULT_DUTY_STEP,
+                   two_phase: bool = True) -> DriveResult:
+    """The PWM schedule that brings ``node`` to ``target_c`` fastest with Tj peak ≤ ``t_max_c``.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        Linear or with device effects (temperature coefficient, phase change).
+    t_max_c, target_c, ambient_c : float
+        Junction limit (applies to the PWM peak), target of the node (period average), and
+        the reference temperature, °C.
+    p_max_w : float, optional
+        Heater power when on, W. Default: the largest DC power whose steady state keeps the
+        junction at ``t_max_c`` (then only the ripple-free boost is limited by the target).
+    f_pwm_hz : float
+        PWM frequency; every schedule step is a whole number of periods.
+    node : int
+        0 for the junction, k for Cauer node k of the model converted to Cauer.
+    tol_k : float
+        Half-width of the band the node must settle in (time to target).
+    release_c : float, optional
+        Also report the time for the node to fall below this temperature from the steady hold,
+        with power off or at ``keep_warm_duty``.
+    duty_step : float
+        Consecutive steps whose duties differ by at most this are merged (energy kept).
+    two_phase : bool
+        Also optimize the two-phase drive (boost, then hold) and keep it if it is faster.
+
+    Returns
+    -------
+    DriveResult
+
+    Examples
+    --------
+    >>> from spicethermal.ladder import Foster
+    >>> m = ThermalModel(Foster.from_tau([10.0, 90.0], [1e-3, 1.0]))
+    >>> r = optimize_drive(m, 90.0, 50.0, p_max_w=1.0, two_phase=False)
+    >>> r.peak_junction_c <= 90.0 and r.speedup > 2
+    True
+    """
+    if not isinstance(model, ThermalModel):
+        raise DataFormatError("optimize_drive: model must be a ThermalModel")
+    ambient_c = _check("ambient_c", ambient_c, -273.15)
+    t_max_c = _check("t_max_c", t_max_c)
+    target_c = _check("target_c", target_c)
+    tol_k = _check("tol_k", tol_k, positive=True)
+    duty_step = _check("duty_step", duty_step, 0.0)
+    check_drive(f_pwm_hz, keep_warm_duty)
+    if t_max_c <= ambient_c:
+        raise DataFormatError(f"t_max_c = {t_max_c:g} °C must be above the ambient "
+                              f"{ambient_c:g} °C")
+    if not ambient_c + tol_k < target_c < t_max_c:
+        raise DataFormatError(f"target_c = {target_c:g} °C must lie between the ambient "
+                              f"{ambient_c:g} °C (+ tol {tol_k:g} K) and t_max {t_max_c:g} °C")
+    if not isinstance(node, int | np.integer) or not 0 <= node < model.ladder.order:
+        raise DataFormatError(f"node = {node!r}: the model has Cauer nodes 0.."
+                              f"{model.ladder.order - 1} (0 = junction)")
+    node = int(node)
+    work = model.with_topology("cauer") if node > 0 else model
+    lim_k, tgt_k = t_max_c - ambient_c, target_c - ambient_c
+    if p_max_w is None:
+        p_max_w = _safe_dc_power(work, ambient_c, lim_k)
+    p_max_w = _check("p_max_w", p_max_w, positive=True)
+    dyn = _Dynamics(work, ambient_c, p_max_w, f_pwm_hz)
+    period = dyn.period
+
+    # -- the hold ----------------------------------------------------------------------
+    hold_duty = _hold_duty(dyn, node, tgt_k)
+    if work.is_linear:
+        hold_peak_k = steady_state(work.ladder, p_max_w, f_pwm_hz, hold_duty).peak_k
+    else:
+        hold_peak_k = work.pwm(p_max_w, f_pwm_hz, hold_duty, tref_c=ambient_c).peak_k
+    if hold_peak_k > lim_k:
+        raise DataFormatError(
+            f"target {target_c:g} °C is not safely reachable: holding it needs duty "
+            f"{hold_duty:.4f} at {p_max_w:g} W, whose junction peak is "
+            f"{ambient_c + hold_peak_k:.2f} °C > t_max {t_max_c:g} °C (lower the target, "
+            f"raise f_pwm to shrink the ripple, or lower p_max)")
+    x_hold = dyn.steady(p_max_w * hold_duty)
+    tau_max = float(dyn.tau.max())
+    horizon = 15 * tau_max
+
+    # -- greedy profile with the margin iteration ---------------------------------------
+    margin = 0.0
+    growth = 0.01 if work.is_linear else 0.05
+    for _ in range(6):
+        steps, worst = _greedy(dyn, node, lim_k - margin, tgt_k, hold_duty, x_hold,
+                               0.5 * tol_k, growth, horizon)
+        intervals = _compress(steps, duty_step)
+        if dyn.linear:
+            peak_k, ex_t, ex_pk = _junction_peak(dyn, intervals, hold_duty, horizon)
+        else:  # checked on the final prediction below
+            peak_k, ex_t, ex_pk = worst, np.empty(0), np.empty(0)
+        excess = peak_k - (lim_k - _SAFETY_K)
+        if excess <= 0:
+            break
+        margin += excess + _SAFETY_K
+    else:  # pragma: no cover - the margin iteration converges in 1-3 rounds
+        raise SimulationError("drive: the junction-peak margin iteration did not converge")
+    schedule = _schedule(intervals, hold_duty, period)
+
+    # -- predictions on a time grid ------------------------------------------------------
+    marks = tuple(t for t, _ in schedule)
+    t_grid = _time_grid(period, horizon, marks, 2000)
+    drive = _predict(dyn, node, schedule, t_grid)
+    const = _predict(dyn, node, ((0.0, hold_duty),), t_grid)
+    t_drive = _settle_refined(dyn, node, schedule, t_grid, drive[0], tgt_k, tol_k)
+    t_const = _settle_refined(dyn, node, ((0.0, hold_duty),), t_grid, const[0], tgt_k, tol_k)
+    if not dyn.linear:
+        peak_k = max(peak_k, float(np.max(drive[2])))
+
+    method = "profile"
+    tp = _two_phase(dyn, node, lim_k - margin, tgt_k, tol_k, hold_duty, horizon) \
+        if two_phase and dyn.linear else None
+    if tp is not None and work.is_linear:
+        tp_sched = _schedule([(0, round(tp.boost_s / period), tp.boost_duty)], hold_duty, period)
+        tp_peak, _, _ = _junction_peak(dyn, [(0, round(tp.boost_s / period), tp.boost_duty)],
+                                       hold_duty, horizon)
+        tp = TwoPhase(tp.boost_s, tp.boost_duty,
+                      _settle_refined(dyn, node, tp_sched, t_grid,
+                                      _predict(dyn, node, tp_sched, t_grid)[0], tgt_k, tol_k),
+                      ambient_c + tp_peak)
+    if tp is not None and tp.time_to_target_s < t_drive and tp.peak_junction_c <= t_max_c:
+        method = "two-phase"
+        n_b = round(tp.boost_s / period)
+        intervals = [(0, n_b, tp.boost_duty)]
+        schedule = _schedule(intervals, hold_duty, period)
+        peak_k, ex_t, ex_pk = _junction_peak(dyn, intervals, hold_duty, horizon)
+        drive = _predict(dyn, node, schedule, t_grid)
+        t_drive = tp.time_to_target_s
+
+    release = _release(dyn, node, x_hold, release_c, keep_warm_duty, ambient_c, target_c,
+                       horizon) if release_c is not None else None
+    duty = np.array([schedule[max(0, int(np.searchsorted([s[0] for s in schedule], t,
+                                                           side="right")) - 1)][1]
+                     for t in t_grid])
+    trace = DriveTrace(
+        t_s=t_grid, duty=duty, node_c=ambient_c + drive[0], junction_mean_c=ambient_c + drive[1],
+        junction_peak_c=ambient_c + drive[2], constant_node_c=ambient_c + const[0],
+        constant_junction_peak_c=ambient_c + const[2], exact_t_s=ex_t,
+        exact_peak_c=ambient_c + ex_pk)
+    return DriveResult(
+        model=work, node=node, t_max_c=t_max_c, target_c=target_c, ambient_c=ambient_c,
+        p_max_w=float(p_max_w), f_pwm_hz=float(f_pwm_hz), tol_k=tol_k,
+        hold_duty=hold_duty, hold_peak_junction_c=ambient_c + hold_peak_k, schedule=schedule,
+        method=method, time_to_target_s=t_drive, constant_duty_time_to_target_s=t_const,
+        peak_junction_c=ambient_c + peak_k,
+        peak_method="exact switched PWM" if dyn.linear else "average + periodic ripple",
+        two_phase=tp, release=release, trace=trace)
+
+
+def _safe_dc_power(model: ThermalModel, ambient_c: float, lim_k: float) -> float:
+    """Largest constant power whose steady junction rise is ``lim_k``."""
+    if model.is_linear:
+        return lim_k / model.rth
+    from scipy.optimize import brentq
+
+    hi = lim_k / model.rth
+    while model.steady_nodes(hi, ambient_c)[0] < lim_k:
+        hi *= 2
+    return float(brentq(lambda p: model.steady_nodes(p, ambient_c)[0] - lim_k, 0.0, hi,
+                        xtol=1e-12))
+
+
+def _hold_duty(dyn: _Dynamics, node: int, tgt_k: float) -> float:
+    full = dyn.steady(dyn.p)[node]
+    if full < tgt_k:
+        raise DataFormatError(
+            f"target not reachable: even at duty 1 ({dyn.p:g} W) the node settles at "
+            f"{dyn.tref + full:.2f} °C < {dyn.tref + tgt_k:g} °C; raise p_max")
+    if dyn.linear:
+        return float(tgt_k / full)
+    from scipy.optimize import brentq
+
+    return float(brentq(lambda d: dyn.steady(dyn.p * d)[node] - tgt_k, 0.0, 1.0, xtol=1e-12))
+
+
+def _schedule(intervals: list[tuple[int, int, float]], hold_duty: float, period: float
+              ) -> tuple[tuple[float, float], ...]:
+    out = [(first * period, float(d)) for first, n, d in intervals if n > 0]
+    end = intervals[-1][0] + intervals[-1][1] if intervals else 0
+    merged: list[tuple[float, float]] = []
+    for t, d in [*out, (end * period, float(hold_duty))]:
+        if merged and merged[-1][1] == d:
+            continue
+        merged.append((t, d))
+    return tuple(merged)
+
+
+def _junction_peak(dyn: _Dynamics, intervals: list[tuple[int, int, float]], hold_duty: float,
+                   horizon: float) -> tuple[float, NDArray, NDArray]:
+    """Max junction peak rise of a schedule: exact switched (linear) or averaged + ripple."""
+    if dyn.linear:
+        t, pk = _switched_peaks(dyn, intervals, hold_duty, int(horizon / dyn.period) + 1)
+        return float(pk.max()), t, pk
+    sched = _schedule(intervals, hold_duty, dyn.period)
+    t = _time_grid(dyn.period, horizon, tuple(s[0] for s in sched), 1200)
+    _, _, jp = _predict(dyn, 0, sched, t)
+    return float(jp.max()), np.empty(0), np.empty(0)
+
+
+def _predict(dyn: _Dynamics, node: int, schedule: tuple[tuple[float, float], ...],
+             t: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """Node rise, junction mean rise and junction peak (mean + ripple) on ``t``."""
+    sched = Schedule(tuple(s[0] for s in schedule), tuple(dyn.p * s[1] for s in schedule))
+    tr = dyn.model.simulate(t, sched, dyn.tref)
+    times = np.array([s[0] for s in schedule])
+    duties = np.array([s[1] for s in schedule])
+    # the ripple of a new duty builds up over its first period: until then the previous one's
+    lag = t - dyn.period
+    d = duties[np.clip(np.searchsorted(times, lag, side="left") - 1, 0, None)]
+    if dyn.linear:
+        rip = dyn.ripple(d)
+    else:
+        rip = np.array([float(dyn.ripple(di, j)) for di, j in zip(d, tr.tj_k, strict=True)])
+    return tr.theta_k[:, node], tr.tj_k, tr.tj_k + rip
+
+
+def _settle_refined(dyn: _Dynamics, node: int, schedule: tuple[tuple[float, float], ...],
+                    t: NDArray, y: NDArray, tgt_k: float, tol: float) -> float:
+    ts, i = _settle(t, y, tgt_k, tol)
+    if not dyn.linear or i < 0 or not math.isfinite(ts):
+        return ts
+    sched = Schedule(tuple(s[0] for s in schedule), tuple(dyn.p * s[1] for s in schedule))
+
+    def f(tt: float) -> float:
+        val = dyn.model.simulate([tt], sched, dyn.tref).theta_k[0, node]
+        return abs(val - tgt_k) - tol
+
+    return _bisect(f, float(t[i]), float(t[i + 1]))
+
+
+def _release(dyn: _Dynamics, node: int, x_hold: NDArray, release_c: float,
+             keep_warm_duty: float, ambient_c: float, target_c: float,
+             horizon: float) -> Release:
+    release_c = _check("release_c", release_c)
+    if not release_c < target_c:
+        raise DataFormatError(f"release_c = {release_c:g} °C must be below the target "
+                              f"{target_c:g} °C")
+    rel_k = release_c - ambient_c
+    floor = dyn.steady(dyn.p * keep_warm_duty)[node]
+    if floor >= rel_k:
+        raise DataFormatError(
+            f"release below {release_c:g} °C is not reachable at keep-warm duty "
+            f"{keep_warm_duty:g}: the node settles at {ambient_c + floor:.2f} °C")
+    sched = Schedule((0.0,), (dyn.p * keep_warm_duty,))
+    t = _time_grid(dyn.period, horizon, (), 1500)
+    y = dyn.model.simulate(t, sched, ambient_c, x_hold).theta_k[:, node]
+    below = np.nonzero(y <= rel_k)[0]
+    if below.size == 0:  # pragma: no cover - the floor check makes this unreachable
+        raise SimulationError("release: the node did not fall below the release temperature")
+    i = int(below[0])
+    if i == 0:
+        return Release(release_c, float(keep_warm_duty), 0.0)
+    if dyn.linear:
+        def f(tt: float) -> float:
+            return dyn.model.simulate([tt], sched, ambient_c, x_hold).theta_k[0, node] - rel_k
+
+        ts = _bisect(f, float(t[i - 1]), float(t[i]))
+    else:
+        w = (y[i - 1] - rel_k) / (y[i - 1] - y[i])
+        ts = float(t[i - 1] + w * (t[i] - t[i - 1]))
+    return Release(release_c, float(keep_warm_duty), ts)
