@@ -42,7 +42,7 @@ Method
   log-distance of two neighbouring time constants is less than :data:`MIN_SIGNIFICANCE`
   standard uncertainties (the data do not resolve the stage), or when a time constant lies
   more than :data:`WINDOW_MARGIN` times outside the data's time span. Orders are tried
-  upward from 1 until two orders in a row bring no improvement (or ``max_order``); the chosen
+  upward from 1 until a converged order brings no improvement (or ``max_order``); the chosen
   fit is then polished with tight tolerances. Each order tried is recorded with its
   criterion value and verdict in :attr:`FitResult.trials`.
 
@@ -109,8 +109,8 @@ CRITERION_RULE = (
     f"within {WINDOW_MARGIN:g}x of the data window")
 
 _SPECTRUM_PER_DECADE = 8
-_SEEDS_PER_ORDER = 3
-_PATIENCE = 2
+_SEEDS_PER_ORDER = 2
+_PATIENCE = 1
 
 
 # ----------------------------------------------------------------------------- results
@@ -663,7 +663,8 @@ def fit_foster(
         elif sol is not None and not sol.why and val < best_val:
             chosen, best_val, since_best = sol, val, 0
         else:
-            since_best += 1
+            # an order that did not converge says nothing about saturation: try the next one
+            since_best += 0 if sol is None or not sol.converged else 1
             if chosen is not None and since_best >= _PATIENCE:
                 break
 
