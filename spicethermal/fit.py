@@ -47,8 +47,10 @@ Method
   criterion value and verdict in :attr:`FitResult.trials`.
 
 Measured (``bench/bench_fit.py``): on 200 random 2- to 6-stage ladders with 0.1 % noise the
-order is right in 98 % of cases, Rth within 0.15 %, Zth within 0.22 % of Rth everywhere; a
-46-point fit takes about 0.04 s, a 10,000-point one about 0.07 s.
+order is right in 98 % of cases (98.8 % of 1000), Rth within 0.15 %, Zth within 0.22 % of Rth
+everywhere, and the true r_i, τ_i lie within 1 (2) reported uncertainties in 68 % (95 %) of
+cases; noise-free ladders come back to 1e-13. A 46-point fit takes about 0.03 s, a
+10,000-point one about 0.05 s.
 """
 
 from __future__ import annotations
