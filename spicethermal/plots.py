@@ -26,6 +26,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from .calibration import Calibration
+    from .datasheet import Table1
     from .drive import DriveResult
     from .fit import FitResult
     from .ladder import Cauer, Foster
@@ -66,8 +68,14 @@ def _eng(x: float, unit: str) -> str:
 
 
 # ------------------------------------------------------------------ Fig. 7 (a), (b)
-def _data_style(n: int) -> tuple[str, ...]:
-    return ("o",) if n <= 200 else (",",)
+def _data_style(n: int, curve: bool) -> dict[str, Any]:
+    """Markers for log-spaced data; for dense data a broad band (curve) or fine dots."""
+    if n <= 200:
+        return {"marker": "o", "ls": "none", "ms": 3.5 if curve else 3,
+                "mfc": "none" if curve else None}
+    if curve:
+        return {"ls": "-", "lw": 5, "alpha": 0.35, "solid_capstyle": "butt"}
+    return {"marker": ".", "ls": "none", "ms": 1.5, "alpha": 0.6}
 
 
 def plot_fit(result: FitResult, ax: Axes | None = None, stages: bool = True) -> Axes:
@@ -86,8 +94,8 @@ def plot_fit(result: FitResult, ax: Axes | None = None, stages: bool = True) -> 
     t = np.asarray(result.t_s)
     tt = np.geomspace(t[0], t[-1], 400)
     f = result.foster
-    ax.plot(t, result.zth_k_per_w, *_data_style(t.size), ms=3.5, mfc="none", color="C0",
-            label=f"data ({t.size} points)")
+    ax.plot(t, result.zth_k_per_w, color="C0", label=f"data ({t.size} points)",
+            **_data_style(t.size, curve=True))
     ax.plot(tt, f.zth(tt), "-", color="C3", lw=1.6,
             label=f"Foster fit, order {f.order}, Rth = {f.rth:.4g} K/W")
     if stages and f.order > 1:
@@ -109,12 +117,12 @@ def plot_residuals(result: FitResult, ax: Axes | None = None) -> Axes:
     rms = result.rms_k_per_w
     ax.axhline(0.0, color="0.3", lw=0.8)
     ax.axhspan(-rms, rms, color="C0", alpha=0.12, lw=0, label=f"±rms = {rms:.3g} K/W")
-    ax.plot(t, result.residuals, *_data_style(t.size), ms=3, color="C0")
+    ax.plot(t, result.residuals, color="C0", **_data_style(t.size, curve=False))
     ax.set_xscale("log")
     ax.set_xlabel("t (s)")
     ax.set_ylabel("data − fit (K/W)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
+    ax.legend(loc="best", fontsize="small")
     if result.rth_k_per_w > 0:
         sec = ax.secondary_yaxis("right", functions=(
             lambda y: 100 * y / result.rth_k_per_w, lambda p: p * result.rth_k_per_w / 100))
@@ -368,4 +376,69 @@ def fig_drive(result: DriveResult, path: str | os.PathLike) -> Path:
     plot_drive(result, ax_t)
     plot_drive_duty(result, ax_d)
     ax_t.set_xlabel("")
+    return save_figure(fig, path)
+
+
+# --------------------------------------------------- Fig. 2 and Table 1 (the demo report)
+def plot_calibration(cal: Calibration, ax: Axes | None = None) -> Axes:
+    """V_tsp against temperature: the points and the fitted curve (paper Fig. 2)."""
+    ax = ax if ax is not None else new_figure().add_subplot()
+    t = np.asarray(cal.temp_c)
+    grid = np.linspace(t.min(), t.max(), 200)
+    ax.plot(t, np.asarray(cal.v_tsp_v) * 1e3, "o", color="C0", label="calibration points")
+    ax.plot(grid, cal.voltage(grid) * 1e3, "-", color="C1",
+            label=f"fit, K = {cal.k_factor_mv_per_k:.3f} mV/K")
+    ax.set_xlabel("temperature (°C)")
+    ax.set_ylabel("V_tsp (mV)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    return ax
+
+
+def fig_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
+    """Fig. 2: the calibration with its residuals in kelvin underneath.
+
+    >>> import tempfile, pathlib
+    >>> from spicethermal.calibration import Calibration
+    >>> cal = Calibration.fit([20, 40, 60, 80], [0.60, 0.556, 0.5121, 0.468])
+    >>> fig_calibration(cal, pathlib.Path(tempfile.mkdtemp()) / "c.png").exists()
+    True
+    """
+    fig = new_figure(6.4, 5.2)
+    grid = fig.add_gridspec(2, 1, height_ratios=[3, 1.3])
+    ax = fig.add_subplot(grid[0])
+    plot_calibration(cal, ax)
+    ax.set_title("TSP calibration (Fig. 2)", fontsize=10, loc="left")
+    ax2 = fig.add_subplot(grid[1], sharex=ax)
+    ax2.axhline(0, color="0.5", lw=0.8)
+    ax2.plot(np.asarray(cal.temp_c), cal.residuals_k, "o-", color="C3", ms=4)
+    ax2.set_ylabel("residual (K)")
+    ax2.set_xlabel("temperature (°C)")
+    ax2.grid(True, alpha=0.3)
+    return save_figure(fig, path)
+
+
+def fig_table1(table: Table1, path: str | os.PathLike) -> Path:
+    """Measured vs datasheet r(t) on log time, with the error in percent underneath."""
+    fig = new_figure(6.4, 5.2)
+    grid = fig.add_gridspec(2, 1, height_ratios=[3, 1.3])
+    ax = fig.add_subplot(grid[0])
+    t = np.asarray(table.t_s)
+    ax.loglog(t, table.datasheet_r, "s-", color="0.3", label="datasheet")
+    ax.loglog(t, table.measured_r, "o-", color="C0", label="measured (this bench)")
+    if table.reference_r is not None:
+        ax.loglog(t, table.reference_r, "^--", color="C2", label="the paper's bench")
+    ax.set_ylabel("r(t) = Zth / Rth")
+    ax.set_title(f"{table.device}: thermal impedance vs datasheet (Table 1)", fontsize=10,
+                 loc="left")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax2 = fig.add_subplot(grid[1], sharex=ax)
+    ax2.axhline(0, color="0.5", lw=0.8)
+    ax2.semilogx(t, table.error_percent, "o-", color="C0", label="this bench")
+    if table.reference_error_percent is not None:
+        ax2.semilogx(t, table.reference_error_percent, "^--", color="C2", label="paper")
+    ax2.set_ylabel("error (%)")
+    ax2.set_xlabel("time (s)")
+    ax2.grid(True, which="both", alpha=0.3)
     return save_figure(fig, path)
