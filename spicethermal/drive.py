@@ -360,19 +360,29 @@ class _Dynamics:
 
 
 # ------------------------------------------------------------------------------ helpers
+def _settle_rows(t: NDArray, y: NDArray, target: float, tol: float) -> tuple[NDArray, NDArray]:
+    """Per row of ``y``: the first time after which ``|y - target| <= tol`` for good
+    (interpolated; ``inf`` if still outside at the end) and the index of the last grid point
+    outside the band (-1 when none)."""
+    y = np.atleast_2d(y)
+    err = np.abs(y - target) - tol
+    out = err > 0
+    last = np.where(out.any(axis=1), y.shape[1] - 1 - np.argmax(out[:, ::-1], axis=1), -1)
+    i = np.clip(last, 0, y.shape[1] - 2)
+    rows = np.arange(y.shape[0])
+    e0, e1 = err[rows, i], err[rows, i + 1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(e0 != e1, e0 / (e0 - e1), 1.0)
+    ts = t[i] + w * (t[i + 1] - t[i])
+    ts = np.where(last < 0, t[0], ts)
+    ts = np.where(out[:, -1], np.inf, ts)
+    return ts, last
+
+
 def _settle(t: NDArray, y: NDArray, target: float, tol: float) -> tuple[float, int]:
-    """First time after which ``|y - target| <= tol`` for good (interpolated), and the index
-    of the last grid point outside the band (-1 when none). ``inf`` if still outside at the end.
-    """
-    out = np.abs(y - target) > tol
-    if out[-1]:
-        return math.inf, len(t) - 1
-    if not out.any():
-        return float(t[0]), -1
-    i = int(len(out) - 1 - np.argmax(out[::-1]))
-    e0, e1 = abs(y[i] - target) - tol, abs(y[i + 1] - target) - tol
-    w = e0 / (e0 - e1) if e0 != e1 else 1.0
-    return float(t[i] + w * (t[i + 1] - t[i])), i
+    """:func:`_settle_rows` for one curve."""
+    ts, last = _settle_rows(t, y, target, tol)
+    return float(ts[0]), int(last[0])
 
 
 def _bisect(f, a: float, b: float, iters: int = 60) -> float:
@@ -503,6 +513,7 @@ def _two_phase(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol: float
     ``boost - hold`` duty that ends at the boost time.
     """
     period = dyn.period
+    band = 0.98 * tol  # a curve that grazes the band's edge between grid points is not robust
     lam, v, _ = dyn.modes(np.zeros(dyn.n))
     gain = v[0] / lam
 
@@ -525,29 +536,32 @@ def _two_phase(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol: float
             jm = hold_duty * dyn.p * sj + extra * dj
             jp = np.where(t <= tb, jm + rip_b[:, None], jm + rip_h)
             peak[i] = jp.max(axis=1)
-            for q in range(dbs.size):
-                if peak[i, q] <= lim_k:
-                    best_t[i, q] = _settle(t, y[q], tgt_k, tol)[0]
+            best_t[i] = np.where(peak[i] <= lim_k, _settle_rows(t, y, tgt_k, band)[0], np.inf)
         return best_t, peak, t
 
-    tbs = np.unique(np.maximum(1, np.round(np.geomspace(period, horizon / 4, 90) / period)))
-    dbs = np.linspace(hold_duty, 1.0, 41)
+    tbs = np.unique(np.maximum(1, np.round(np.geomspace(period, horizon / 4, 160) / period)))
+    dbs = np.linspace(hold_duty, 1.0, 141)
     times, peaks, _ = evaluate(tbs * period, dbs)
     if not np.isfinite(times).any():
         return None
     i, q = np.unravel_index(np.argmin(times), times.shape)
-    lo, hi = tbs[max(i - 1, 0)], tbs[min(i + 1, tbs.size - 1)]
-    tb2 = np.unique(np.round(np.linspace(lo, hi, 41)))
-    step = dbs[1] - dbs[0]
-    db2 = np.clip(np.linspace(dbs[q] - step, dbs[q] + step, 41), hold_duty, 1.0)
-    times2, peaks2, _ = evaluate(tb2 * period, np.unique(db2))
-    db2 = np.unique(db2)
-    if np.min(times2) <= times[i, q]:
+    best = (float(times[i, q]), float(tbs[i]), float(dbs[q]), float(peaks[i, q]))
+    # zoom in around the best candidate: +-2 grid steps in both, three times
+    tb_lo, tb_hi = tbs[max(i - 2, 0)], tbs[min(i + 2, tbs.size - 1)]
+    d_step = 2 * (dbs[1] - dbs[0])
+    for _ in range(3):
+        tb2 = np.unique(np.maximum(1, np.round(np.linspace(tb_lo, tb_hi, 25))))
+        db2 = np.unique(np.clip(np.linspace(best[2] - d_step, best[2] + d_step, 25),
+                                hold_duty, 1.0))
+        times2, peaks2, _ = evaluate(tb2 * period, db2)
         i2, q2 = np.unravel_index(np.argmin(times2), times2.shape)
-        return TwoPhase(float(tb2[i2] * period), float(db2[q2]), float(times2[i2, q2]),
-                        float(peaks2[i2, q2]))
-    return TwoPhase(float(tbs[i] * period), float(dbs[q]), float(times[i, q]),
-                    float(peaks[i, q]))
+        if times2[i2, q2] <= best[0]:
+            best = (float(times2[i2, q2]), float(tb2[i2]), float(db2[q2]),
+                    float(peaks2[i2, q2]))
+        span = max((tb_hi - tb_lo) / 6, 2.0)
+        tb_lo, tb_hi = max(1.0, best[1] - span), best[1] + span
+        d_step /= 4
+    return TwoPhase(best[1] * period, best[2], best[0], best[3])
 
 
 def _check(name: str, value: float, low: float = -math.inf, positive: bool = False) -> float:
