@@ -115,6 +115,8 @@ class Spectrum:
         time constants outside it come from the √t extension and the steady-state hold.
     params : the settings used (iterations or λ, grid, extension).
     label : name of the source curve.
+    data_zth_k_per_w, data_derivative_k_per_w : the resampled (and extended) curve and its
+        derivative ``dZth/d(ln t)`` at ``t = tau_s`` (the grids coincide), if known.
     """
 
     tau_s: NDArray
@@ -124,6 +126,8 @@ class Spectrum:
     t_resolved_s: tuple[float, float]
     params: dict[str, Any] = field(default_factory=dict)
     label: str = ""
+    data_zth_k_per_w: NDArray | None = field(default=None, repr=False)
+    data_derivative_k_per_w: NDArray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         tau = np.array(self.tau_s, dtype=float).ravel()
@@ -140,6 +144,14 @@ class Spectrum:
         for name, arr in (("tau_s", tau), ("r_density_k_per_w", dens)):
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
+        for name in ("data_zth_k_per_w", "data_derivative_k_per_w"):
+            value = getattr(self, name)
+            if value is not None:
+                arr = np.array(value, dtype=float).ravel()
+                if arr.size != tau.size:
+                    raise DataFormatError(f"Spectrum: {name} must match tau_s in size")
+                arr.setflags(write=False)
+                object.__setattr__(self, name, arr)
         object.__setattr__(self, "t_resolved_s", tuple(float(x) for x in self.t_resolved_s))
         object.__setattr__(self, "params", dict(self.params))
 
@@ -492,4 +504,4 @@ def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike 
         t_reliable_s = max(float(curve.t_s[0]), early.masked_s[1]) if early else float(
             curve.t_s[0])
     return Spectrum(t, dens, method, resolution, (float(t_reliable_s), float(curve.t_s[-1])),
-                    params, curve.label)
+                    params, curve.label, data_zth_k_per_w=a, data_derivative_k_per_w=d)
