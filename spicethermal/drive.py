@@ -120,7 +120,9 @@ class DriveResult:
 
     ``schedule`` is ``((t_s, duty), ...)``: each duty applies from its time until the next
     one; the last (the hold duty) applies forever. Times are whole PWM periods, each period
-    starting with its on-phase.
+    starting with its on-phase. ``ripple_margin_k`` is how far the averaged-plus-ripple limit
+    had to be tightened for the exact switched peak to respect ``t_max`` (a measure of the
+    averaging approximation; 0 when it was conservative).
     """
 
     model: ThermalModel
@@ -142,6 +144,7 @@ class DriveResult:
     two_phase: TwoPhase | None
     release: Release | None
     trace: DriveTrace
+    ripple_margin_k: float = 0.0
 
     @property
     def speedup(self) -> float:
@@ -184,6 +187,7 @@ class DriveResult:
             "hold_duty": self.hold_duty,
             "hold_peak_junction_c": self.hold_peak_junction_c,
             "schedule": [{"t_s": t, "duty": d} for t, d in self.schedule],
+            "ripple_margin_k": self.ripple_margin_k,
             "two_phase": self.two_phase.as_json() if self.two_phase else None,
             "release": self.release.as_json() if self.release else None,
         }
@@ -594,7 +598,8 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
     f_pwm_hz : float
         PWM frequency; every schedule step is a whole number of periods.
     node : int
-        0 for the junction, k for Cauer node k of the model converted to Cauer.
+        0 for the junction, k for Cauer node k of the model converted to Cauer (exactly; a
+        phase-change effect's ``node`` then also counts Cauer nodes, as in the Cauer export).
     tol_k : float
         Half-width of the band the node must settle in (time to target).
     release_c : float, optional
@@ -725,7 +730,7 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
         method=method, time_to_target_s=t_drive, constant_duty_time_to_target_s=t_const,
         peak_junction_c=ambient_c + peak_k,
         peak_method="exact switched PWM" if dyn.linear else "average + periodic ripple",
-        two_phase=tp, release=release, trace=trace)
+        two_phase=tp, release=release, trace=trace, ripple_margin_k=margin)
 
 
 def _safe_dc_power(model: ThermalModel, ambient_c: float, lim_k: float) -> float:

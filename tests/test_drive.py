@@ -268,3 +268,18 @@ def test_schedule_is_whole_periods(cavity_drive):
     np.testing.assert_allclose(n, np.round(n), atol=1e-6)
     assert isinstance(r.power_schedule(), Schedule)
     assert r.duty_at(0.0) == 1.0 and r.duty_at(1e6) == r.hold_duty
+
+
+@pytest.mark.ngspice
+@pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
+def test_cli_verify_runs_the_deck(demo, tmp_path, capsys):
+    path = demo.save(tmp_path / "act.json")
+    code = cli.main(["drive", str(path), "--t-max", "90", "--target", "60", "--p-max", "2",
+                     "--node", "2", "--verify", "--json"])
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    ng = doc["ngspice"]
+    assert ng["ngspice_peak_junction_c"] <= 90.05
+    assert ng["ngspice_peak_junction_c"] == pytest.approx(ng["predicted_peak_junction_c"],
+                                                          abs=0.01)
+    assert doc["ripple_margin_k"] >= 0
