@@ -587,7 +587,7 @@ def plot_differential_structure(functions: StructureFunction | Sequence[Structur
         ax.axvline(separation.r_k_per_w, color="k", ls="--", lw=1.0)
     ax.set_yscale("log")
     ax.set_xlabel("ΣR from the junction (K/W)")
-    ax.set_ylabel("K = dΣC/dΣR (J²/(K²·W))")
+    ax.set_ylabel("K = dΣC/dΣR (W²·s/K²)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper left", fontsize="small")
     return ax

@@ -1,0 +1,80 @@
+"""``spicethermal structure SOURCE [SOURCE2] [-o FIG.png] [--json]``: structure functions.
+
+Each SOURCE (as for ``spicethermal spectrum``: bundle directory, Zth CSV, PyRth ``.txt``,
+T3Ster ``.raw``) goes Zth(t) → time-constant spectrum (NID) → Foster ladder
+(``--stages-per-decade``) → exact Cauer ladder → cumulative structure function, ΣC against
+ΣR from the junction outwards. With two sources the point where they separate is found
+(:func:`spicethermal.structure.separation`: the first ΣR from which
+``|Δ log10 ΣC| > --threshold`` holds to the end of the range both resolve) and marked.
+
+``--json`` output:
+
+* one source: exactly ``{"cumulative": {"r_k_per_w": [...], "c_j_per_k": [...]}}``;
+* two sources: a JSON **list** of two such objects, in the order given, each with two more
+  keys: ``"source"`` (the argument) and ``"separation"`` (the same comparison in both:
+  ``{"r_k_per_w", "c_j_per_k", "threshold_decades", "r_range_k_per_w",
+  "max_difference_decades", "labels"}``, ``r_k_per_w`` null when they do not separate).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from .spectrum import _positive, add_source_arguments, load_curve, spectrum_options
+
+NAME = "structure"
+HELP = "cumulative and differential structure functions; two sources: where they separate"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("sources", metavar="SOURCE", nargs="+",
+                        help="one or two sources: bundle directory, Zth CSV, PyRth .txt, "
+                             "T3Ster .raw")
+    parser.add_argument("-o", "--output", metavar="FIG.png",
+                        help="write the figure (cumulative and differential structure "
+                             "functions, separation marked)")
+    parser.add_argument("--json", action="store_true",
+                        help="print ΣR and ΣC as JSON (a list of two objects for two sources)")
+    parser.add_argument("--stages-per-decade", type=_positive, default=10.0, metavar="N",
+                        help="Foster stages per decade of τ from the spectrum (default 10)")
+    parser.add_argument("--threshold", type=_positive, default=None, metavar="DECADES",
+                        help="separation threshold on |Δ log10 ΣC| (default 0.05)")
+    add_source_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import DataFormatError
+    from ..spectrum import time_constant_spectrum
+    from ..structure import SEPARATION_THRESHOLD, StructureFunction, separation
+
+    if len(args.sources) > 2:
+        raise DataFormatError(f"structure takes one or two sources, got {len(args.sources)}")
+    functions = []
+    for source in args.sources:
+        curve = load_curve(source, curve=args.curve, calibration=args.calibration,
+                           power_w=args.power)
+        spec = time_constant_spectrum(curve, **spectrum_options(args))
+        functions.append(StructureFunction.from_spectrum(spec, args.stages_per_decade))
+    sep = None
+    if len(functions) == 2:
+        threshold = SEPARATION_THRESHOLD if args.threshold is None else args.threshold
+        sep = separation(functions[0], functions[1], threshold_decades=threshold)
+    if args.output:
+        from ..plots import fig_structure
+
+        fig_structure(functions, args.output, sep)
+    if args.json:
+        if sep is None:
+            print(json.dumps(functions[0].to_dict()))
+        else:
+            print(json.dumps([{"source": src, **sf.to_dict(), "separation": sep.to_dict()}
+                              for src, sf in zip(args.sources, functions, strict=True)]))
+        return 0
+    for sf in functions:
+        print(sf)
+    if sep is not None:
+        print(sep)
+    if args.output:
+        print(f"wrote figure {args.output}")
+    return 0
