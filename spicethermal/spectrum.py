@@ -496,7 +496,7 @@ def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike 
         resolution = _fwhm_decades(z, psf)
         params.update(info)
     # what the grid misses (Zth at its first point, mostly) goes into the first cell, so
-    # that ΣR equals the curve's final value
+    # that ΣR is not below the curve's final value
     dens[0] += max(float(a[-1]) - float(dens.sum()) * float(z[1] - z[0]), 0.0) / float(
         z[1] - z[0])
     if t_reliable_s is None:
