@@ -356,11 +356,28 @@ class _Dynamics:
 
     def steady(self, power_w: float) -> NDArray:
         """Node rises under constant average power."""
-        if self.linear:
-            b = np.zeros(self.n)
-            b[0] = power_w
-            return np.linalg.solve(self.net.conductance(), b)
-        return self.model.steady_nodes(power_w, self.tref)
+        b = np.zeros(self.n)
+        b[0] = power_w
+        lin = np.linalg.solve(self.net.conductance(), b)
+        if self.linear or power_w == 0:
+            return lin
+        # every resistance scales with the junction temperature (capacitance, hence a phase
+        # change, does not matter in steady state): solve the scalar  x = s(x) · lin[0]
+        from scipy.optimize import brentq
+
+        def f(x: float) -> float:
+            return x - self.scale(x) * lin[0]
+
+        hi = lin[0]
+        for _ in range(60):
+            if f(hi) > 0:
+                break
+            hi *= 2
+        else:
+            raise SimulationError(f"no steady state at {power_w:g} W: the temperature "
+                                  "coefficient makes the junction run away")
+        x = brentq(f, 0.0, hi, xtol=1e-13, rtol=1e-14)
+        return self.scale(x) * lin
 
 
 # ------------------------------------------------------------------------------ helpers
@@ -665,7 +682,11 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
     horizon = 15 * tau_max
 
     # -- greedy profile with the margin iteration ---------------------------------------
-    margin = 0.0
+    # linear: tighten by the exact switched excess; nonlinear: by the switching margin of
+    # the linear surrogate plus the excess of the steps over their frozen-network prediction
+    switching = 0.0 if work.is_linear else _surrogate_margin(dyn, node, lim_k, tgt_k, tol_k,
+                                                               duty_step, horizon)
+    margin = switching
     growth = 0.01 if work.is_linear else 0.05
     for _ in range(6):
         steps, worst = _greedy(dyn, node, lim_k - margin, tgt_k, hold_duty, x_hold,
@@ -673,8 +694,11 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
         intervals = _compress(steps, duty_step)
         if dyn.linear:
             peak_k, ex_t, ex_pk = _junction_peak(dyn, intervals, hold_duty, horizon)
-        else:  # checked on the final prediction below
-            peak_k, ex_t, ex_pk = worst, np.empty(0), np.empty(0)
+        else:  # the averaged nonlinear simulation (mean + ripple) between the steps too
+            sched = _schedule(intervals, hold_duty, period)
+            grid = _time_grid(period, horizon, tuple(t for t, _ in sched), 2000)
+            worst = max(worst, float(np.max(_predict(dyn, node, sched, grid)[2])))
+            peak_k, ex_t, ex_pk = worst + switching, np.empty(0), np.empty(0)
         excess = peak_k - (lim_k - _SAFETY_K)
         if excess <= 0:
             break
@@ -690,8 +714,8 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
     const = _predict(dyn, node, ((0.0, hold_duty),), t_grid)
     t_drive = _settle_refined(dyn, node, schedule, t_grid, drive[0], tgt_k, tol_k)
     t_const = _settle_refined(dyn, node, ((0.0, hold_duty),), t_grid, const[0], tgt_k, tol_k)
-    if not dyn.linear:
-        peak_k = max(peak_k, float(np.max(drive[2])))
+    if not dyn.linear:  # averaged nonlinear simulation + ripple, plus the switching margin
+        peak_k = max(peak_k, float(np.max(drive[2])) + switching)
 
     method = "profile"
     tp = _two_phase(dyn, node, lim_k - margin, tgt_k, tol_k, hold_duty, horizon) \
@@ -731,6 +755,35 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
         peak_junction_c=ambient_c + peak_k,
         peak_method="exact switched PWM" if dyn.linear else "average + periodic ripple",
         two_phase=tp, release=release, trace=trace, ripple_margin_k=margin)
+
+
+def _surrogate_margin(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol_k: float,
+                      duty_step: float, horizon: float) -> float:
+    """Switching margin of a nonlinear model, from its linear surrogate.
+
+    How far the averaged + ripple limit must be tightened for the exact switched peak to
+    respect it comes from the fast stages over a few periods; it is taken from the linear
+    ladder with its resistances scaled to the junction limit (temperature coefficient).
+    """
+    lad = dyn.model.ladder
+    s = dyn.scale(lim_k)
+    scaled = type(lad)(np.asarray(lad.r) * s, lad.c)
+    sur = _Dynamics(ThermalModel(scaled), dyn.tref, dyn.p, 1 / dyn.period)
+    try:
+        hold = _hold_duty(sur, node, tgt_k)
+    except DataFormatError:
+        return 0.0
+    x_hold = sur.steady(sur.p * hold)
+    margin = 0.0
+    for _ in range(6):
+        steps, _ = _greedy(sur, node, lim_k - margin, tgt_k, hold, x_hold, 0.5 * tol_k,
+                           0.01, horizon)
+        peak, _, _ = _junction_peak(sur, _compress(steps, duty_step), hold, horizon)
+        excess = peak - (lim_k - _SAFETY_K)
+        if excess <= 0:
+            break
+        margin += excess + _SAFETY_K
+    return margin
 
 
 def _safe_dc_power(model: ThermalModel, ambient_c: float, lim_k: float) -> float:
