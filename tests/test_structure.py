@@ -76,7 +76,10 @@ def test_identified_structure_function_matches_the_true_ladder(seed):
     resolved ΣC range (:meth:`StructureFunction.resolved_c_range`, about 1e-3 .. 80-340 J/K
     here), except within a factor 2 in ΣC of the true staircase's corners (the corner
     itself is a jump of ΣR at one ΣC, which any method of finite resolution rounds off).
-    Measured: at most 1.8 % of Rth; at the middle of each riser within 4 % of the local ΣR.
+    Measured over 10 seeds (bench/bench_spectrum.py): at most 0.93 % of Rth. At the middle
+    of each riser (geometric mean of its two ΣC levels) ΣR is within 2 % of the local ΣR, or
+    0.5 % of Rth where the local ΣR is small (the die: 0.1 K/W, 5 % of Rth; measured at most
+    1.6 % on the other risers and 4 % = 0.2 % of Rth on the die).
     """
     true = LAYERS.to_foster()
     t = np.logspace(-6, 3, 361)
@@ -92,7 +95,8 @@ def test_identified_structure_function_matches_the_true_ladder(seed):
         cc = np.geomspace(a, b, 60)
         assert np.max(np.abs(sf.r_at(cc) - r_true[k - 1])) < 0.02 * LAYERS.rth
         mid = np.sqrt(c_true[k - 1] * c_true[k])
-        assert float(sf.r_at(mid)) == pytest.approx(r_true[k - 1], rel=0.04)
+        assert abs(float(sf.r_at(mid)) - r_true[k - 1]) < max(0.02 * r_true[k - 1],
+                                                               0.005 * LAYERS.rth)
         compared += 1
     assert compared == 3
     assert sf.rth_k_per_w == pytest.approx(LAYERS.rth, rel=5e-3)

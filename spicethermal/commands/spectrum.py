@@ -62,7 +62,7 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
                         help="deconvolution: Bayesian iteration (default) or NNLS + Tikhonov "
                              "(L-curve)")
     parser.add_argument("--iterations", type=_count, metavar="N",
-                        help="Bayesian iterations (default 4000)")
+                        help="Bayesian iterations (default 2000)")
     parser.add_argument("--points-per-decade", type=_count, metavar="N",
                         help="log-time grid density (default 40)")
 
