@@ -26,9 +26,12 @@ Steps of :func:`time_constant_spectrum`:
      Richardson–Lucy update ``R ← R · Wᵀ(a′ / W R) / Wᵀ1``. Its regularisation is the number
      of iterations; default :data:`BAYES_ITERATIONS`.
    * ``"nnls"`` — non-negative least squares with Tikhonov regularisation of the second
-     difference, ``min ‖W R − a′‖² + λ² ‖D₂ R‖²`` with ``R ≥ 0``, ``λ`` chosen at the corner
-     (largest curvature) of the L-curve ``(log ‖W R − a′‖, log ‖D₂ R‖)`` over a logarithmic
-     sweep of ``λ``.
+     difference, ``min ‖W R − a′‖² + λ² ‖D₂ R‖²`` with ``R ≥ 0``, over a logarithmic sweep
+     of ``λ``. Default choice of λ: Morozov's discrepancy principle with the noise taken from
+     the least-regularised fit — the largest λ whose ``‖W R − a′‖²`` exceeds that fit's by at
+     most one standard deviation of χ² (a factor ``1 + √(2/m)``, m data). Or
+     ``lambda_rule="lcurve"``: the corner (largest curvature) of the L-curve
+     ``(log ‖W R − a′‖, log ‖D₂ R‖)``, which on noisy data tends to over-smooth.
 
 **Resolution** (stored in :attr:`Spectrum.resolution_decades`): the full width at half
 maximum, in decades of τ, of the spectrum the same method with the same settings returns for
@@ -84,7 +87,7 @@ SG_WINDOW = 5
 #: Default extension before the first sample (√t law) and after the last (steady state).
 PRE_DECADES = 1.0
 POST_DECADES = 1.0
-#: Number of λ values of the L-curve sweep of ``"nnls"``.
+#: Number of λ values of the sweep of ``"nnls"``.
 LCURVE_POINTS = 24
 
 Method = Literal["bayes", "nnls"]
@@ -402,8 +405,10 @@ def _second_difference(n: int) -> NDArray:
     return d2
 
 
-def _nnls_tikhonov(w: NDArray, d: NDArray) -> tuple[NDArray, float, dict[str, Any]]:
-    """NNLS with second-difference Tikhonov regularisation; λ at the L-curve corner."""
+def _nnls_tikhonov(w: NDArray, d: NDArray, rule: str = "discrepancy"
+                   ) -> tuple[NDArray, float, dict[str, Any]]:
+    """NNLS with second-difference Tikhonov regularisation over a sweep of λ; λ by the
+    discrepancy principle (default) or at the L-curve corner."""
     from scipy.optimize import nnls
 
     n = w.shape[1]
@@ -418,15 +423,19 @@ def _nnls_tikhonov(w: NDArray, d: NDArray) -> tuple[NDArray, float, dict[str, An
         sols.append(x)
         res.append(max(float(np.linalg.norm(w @ x - d)), 1e-300))
         reg.append(max(float(np.linalg.norm(lmat @ x)), 1e-300))
-    lr, lx = np.log(res), np.log(reg)
-    # curvature of the parametric curve (log residual, log seminorm) against log λ
-    ll = np.log(lambdas)
-    d1r, d1x = np.gradient(lr, ll), np.gradient(lx, ll)
-    d2r, d2x = np.gradient(d1r, ll), np.gradient(d1x, ll)
-    kappa = (d1r * d2x - d2r * d1x) / np.power(d1r**2 + d1x**2 + 1e-300, 1.5)
-    inner = slice(1, LCURVE_POINTS - 1)
-    k = int(np.argmax(kappa[inner])) + 1
+    if rule == "discrepancy":
+        # Morozov: the largest λ whose residual stays within one standard deviation of χ²
+        # (‖r‖² ≤ ‖r₀‖² (1 + √(2/m)), m data) of the least-regularised fit's ‖r₀‖² = m σ̂²
+        limit = res[0] * math.sqrt(1.0 + math.sqrt(2.0 / d.size))
+        k = int(np.flatnonzero(np.asarray(res) <= limit)[-1])
+    else:
+        lr, lx, ll = np.log(res), np.log(reg), np.log(lambdas)
+        d1r, d1x = np.gradient(lr, ll), np.gradient(lx, ll)
+        d2r, d2x = np.gradient(d1r, ll), np.gradient(d1x, ll)
+        kappa = (d1r * d2x - d2r * d1x) / np.power(d1r**2 + d1x**2 + 1e-300, 1.5)
+        k = int(np.argmax(kappa[1:-1])) + 1
     info = {"lambda": float(lambdas[k]), "lambda_rel": float(lambdas[k] / scale),
+            "lambda_rule": rule,
             "l_curve": {"lambda": lambdas.tolist(), "residual": list(map(float, res)),
                         "seminorm": list(map(float, reg))}}
     return sols[k], float(lambdas[k]), info
@@ -436,20 +445,22 @@ def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike 
                            *, method: Method = "bayes", points_per_decade: int = POINTS_PER_DECADE,
                            iterations: int = BAYES_ITERATIONS, pre_decades: float = PRE_DECADES,
                            post_decades: float = POST_DECADES,
-                           t_reliable_s: float | None = None) -> Spectrum:
+                           t_reliable_s: float | None = None,
+                           lambda_rule: Literal["discrepancy", "lcurve"] = "discrepancy"
+                           ) -> Spectrum:
     """Time-constant spectrum of a Zth(t) curve by deconvolution (see the module docstring).
 
     Parameters
     ----------
     source : a :class:`~spicethermal.curves.ZthCurve`, or times (s) with ``zth_k_per_w``.
     zth_k_per_w : Zth (K/W) at those times, when ``source`` is an array of times.
-    method : ``"bayes"`` (Bayesian iteration, default) or ``"nnls"`` (NNLS + Tikhonov with
-        the L-curve choice of λ).
+    method : ``"bayes"`` (Bayesian iteration, default) or ``"nnls"`` (NNLS + Tikhonov).
     points_per_decade : grid density in t and τ.
     iterations : number of Bayesian iterations (``"bayes"``).
     pre_decades, post_decades : extension before the data (√t) and after them (steady).
     t_reliable_s : first time the data are trusted (default: the end of the masked
         electrical transient of a cooling curve, else the first sample); only reported.
+    lambda_rule : how ``"nnls"`` picks λ: ``"discrepancy"`` (default) or ``"lcurve"``.
 
     Returns
     -------
@@ -466,6 +477,8 @@ def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike 
     curve = _as_curve(source, zth_k_per_w)
     if method not in ("bayes", "nnls"):
         raise DataFormatError(f"method = {method!r}: 'bayes' or 'nnls'")
+    if lambda_rule not in ("discrepancy", "lcurve"):
+        raise DataFormatError(f"lambda_rule = {lambda_rule!r}: 'discrepancy' or 'lcurve'")
     if isinstance(points_per_decade, bool) or int(points_per_decade) != points_per_decade \
             or not 4 <= points_per_decade <= 200:
         raise DataFormatError(f"points_per_decade = {points_per_decade!r}: an integer 4..200")
@@ -490,7 +503,7 @@ def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike 
         resolution = _bayes_resolution(int(points_per_decade), int(iterations))
         params["iterations"] = int(iterations)
     else:
-        dens, lam, info = _nnls_tikhonov(w, d)
+        dens, lam, info = _nnls_tikhonov(w, d, lambda_rule)
         mid = (i0 + i1) // 2
         lmat = _second_difference(w.shape[1])
         wtw = w.T @ w
