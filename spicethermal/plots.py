@@ -12,6 +12,9 @@ Contents
 * NID (T3Ster-style analysis): :func:`plot_spectrum_fit`, :func:`plot_spectrum`,
   :func:`fig_spectrum`; structure functions :func:`plot_cumulative_structure`,
   :func:`plot_differential_structure`, :func:`fig_structure` (separation marked).
+* Diagnosis — residuals per data set :func:`plot_dataset_residuals`, before/after an effect
+  :func:`fig_before_after`, candidates :func:`plot_candidates`, :func:`fig_candidates`;
+  all in :func:`diagnosis_figures`.
 """
 
 from __future__ import annotations
@@ -32,7 +35,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from .calibration import Calibration
+    from .compare import Comparison
     from .datasheet import Table1
+    from .diagnose import Diagnosis
     from .drive import DriveResult
     from .fit import FitResult
     from .ladder import Cauer, Foster
@@ -616,3 +621,126 @@ def fig_structure(functions: StructureFunction | Sequence[StructureFunction],
     ax_b.set_title("(b) differential structure function", fontsize=10, loc="left")
     ax_a.set_xlabel("")
     return save_figure(fig, path)
+
+
+# ---------------------------------------------- diagnosis: before/after residuals (diagnose.py)
+def _residual_axes_style(ax: Axes, dataset: str) -> None:
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.grid(True, which="both", alpha=0.3)
+    if dataset == "pwm":
+        ax.set_xscale("log")
+        ax.set_xlabel("PWM frequency (Hz)")
+    elif dataset == "calibration":
+        ax.set_xlabel("calibration temperature (°C)")
+    else:
+        ax.set_xscale("log")
+        ax.set_xlabel("time after the cut (s)")
+    ax.set_ylabel("measured − model (K)")
+
+
+def plot_dataset_residuals(comparison: Comparison, dataset: str, ax: Axes | None = None,
+                           color: str | None = None) -> Axes:
+    """Residuals (K) of one data set of a :class:`~spicethermal.compare.Comparison`: cooling
+    curves against log time, the PWM grid against frequency (one line per duty), the
+    calibration against temperature.
+
+    >>> from spicethermal.compare import Comparison, ComparisonPoint
+    >>> c = Comparison((ComparisonPoint("cooling_1", {"t_s": 1e-3}, 30.0, 29.5),
+    ...                 ComparisonPoint("cooling_1", {"t_s": 1e-2}, 29.0, 29.1)))
+    >>> plot_dataset_residuals(c, "cooling_1").get_ylabel()
+    'measured − model (K)'
+    """
+    ax = _axes(ax)
+    sub = comparison.dataset(dataset)
+    r = sub.residuals_k
+    if dataset == "pwm":
+        duties = sorted({p.at["duty"] for p in sub.points})
+        for k, d in enumerate(duties):
+            pts = sorted((p for p in sub.points if p.at["duty"] == d),
+                         key=lambda p: p.at["freq_hz"])
+            ax.plot([p.at["freq_hz"] for p in pts], [p.residual_k for p in pts], "o-",
+                    color=f"C{k}", ms=4, label=f"D = {100 * d:g} %")
+        if duties:
+            ax.legend(fontsize=7)
+    elif dataset == "calibration":
+        ax.plot([p.at["temp_c"] for p in sub.points], r, "o-", color=color or "C3", ms=4)
+    else:
+        ax.plot([p.at["t_s"] for p in sub.points], r, "o-", color=color or "C0", ms=3, lw=0.8)
+    _residual_axes_style(ax, dataset)
+    return ax
+
+
+def fig_before_after(before: Comparison, after: Comparison, path: str | os.PathLike,
+                     titles: Sequence[str] = ("before", "after")) -> Path:
+    """Residuals of every data set, before (left) and after (right) an effect is added, one
+    row per data set with a shared vertical scale, so the error can be seen to fall.
+
+    >>> import tempfile, pathlib
+    >>> from spicethermal.compare import Comparison, ComparisonPoint
+    >>> b = Comparison((ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.5}, 30.0, 31.0),))
+    >>> a = Comparison((ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.5}, 30.0, 30.1),))
+    >>> fig_before_after(b, a, pathlib.Path(tempfile.mkdtemp()) / "ba.png").exists()
+    True
+    """
+    names = list(dict.fromkeys([*before.datasets, *after.datasets]))
+    fig = new_figure(9.0, 2.3 * max(len(names), 1) + 0.4)
+    axes = fig.subplots(max(len(names), 1), 2, squeeze=False)
+    for row, name in enumerate(names):
+        lim = 0.0
+        for col, (cmp, title) in enumerate(zip((before, after), titles, strict=True)):
+            ax = axes[row][col]
+            plot_dataset_residuals(cmp, name, ax)
+            sub = cmp.dataset(name)
+            if sub.points:
+                lim = max(lim, sub.max_abs_k)
+                ax.set_title(f"{title}: {name}, RMS {sub.rms_k:.3g} K", fontsize=9, loc="left")
+        for col in (0, 1):
+            if lim > 0:
+                axes[row][col].set_ylim(-1.1 * lim, 1.1 * lim)
+    return save_figure(fig, path)
+
+
+def plot_candidates(result: Diagnosis, ax: Axes | None = None) -> Axes:
+    """Pooled RMS of the baseline and of every candidate effect (log scale), the verdict's
+    candidate highlighted, the improvement written on each bar."""
+    ax = _axes(ax, 6.4, 3.2)
+    names = ["baseline"] + [c.effect.name for c in result.candidates]
+    values = [result.baseline.rms_k] + [c.rms_k for c in result.candidates]
+    colors = ["0.6"] + ["C2" if c.effect.name == result.verdict_effect else "C0"
+                        for c in result.candidates]
+    y = np.arange(len(names))[::-1]
+    ax.barh(y, values, color=colors)
+    for yi, v, c in zip(y[1:], values[1:], result.candidates, strict=True):
+        ax.text(v, yi, f" {c.improvement:.1f}×", va="center", fontsize=8)
+    ax.set_yticks(y, names, fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlabel("RMS over every data set (K)")
+    ax.grid(True, axis="x", which="both", alpha=0.3)
+    ax.set_title(f"verdict: {result.verdict_effect or 'none'}", fontsize=10, loc="left")
+    return ax
+
+
+def fig_candidates(result: Diagnosis, path: str | os.PathLike) -> Path:
+    """:func:`plot_candidates` as a PNG file."""
+    fig = new_figure(6.4, 0.45 * (len(result.candidates) + 1) + 1.2)
+    plot_candidates(result, fig.add_subplot())
+    return save_figure(fig, path)
+
+
+def diagnosis_figures(result: Diagnosis, out_dir: str | os.PathLike) -> list[Path]:
+    """The diagnosis figures, written into ``out_dir``: the residuals before and after the
+    verdict's effect (``diagnosis_before_after.png``; after = the best candidate when no
+    effect was found), the candidates (``diagnosis_candidates.png``) and, for a Table-2
+    diagnosis, Δ(f, D) with the explanations tried (``diagnosis_table2.png``).
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    best = result.best or (result.candidates[0] if result.candidates else None)
+    after = best.comparison if best is not None else result.baseline
+    label = f"with {best.effect.name}" if best is not None else "(no candidate)"
+    paths.append(fig_before_after(result.baseline, after, out / "diagnosis_before_after.png",
+                                  ("baseline", label)))
+    if result.candidates:
+        paths.append(fig_candidates(result, out / "diagnosis_candidates.png"))
+    return paths

@@ -321,4 +321,4 @@ def test_cli_fit_effects_are_checked(zth_csv, tmp_path, capsys):
     assert main(["fit", str(zth_csv), "-o", out, "--effect", "no-such-effect"]) == 2
     assert "known effects" in capsys.readouterr().err
     assert main(["fit", str(zth_csv), "-o", out, "--effect", "temperature-coefficient"]) == 2
-    assert "not available yet" in capsys.readouterr().err
+    assert "needs a bundle directory" in capsys.readouterr().err

@@ -117,11 +117,41 @@ def _from_bundle(path: Path, index: int, rth: float | None) -> tuple[Any, bool, 
     return curve, held or rth is not None, bundle.reference
 
 
+def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
+    """``--effect``: the ladder and the named effects fitted to every data set of a bundle
+    (:func:`spicethermal.diagnose.fit_with_effects`)."""
+    from .. import __version__
+    from ..bundle import Bundle
+    from ..diagnose import fit_with_effects
+    from ..effects import spec
+
+    for name in args.effect:
+        spec(name)
+    if not source.is_dir():
+        raise DataFormatError(f"{source}: --effect needs a bundle directory (the effects are "
+                              f"fitted to its cooling curves, PWM grid and calibration)")
+    model = fit_with_effects(Bundle.read(source), args.effect, order=args.order,
+                             provenance={"tool": f"spicethermal {__version__} fit",
+                                         "source": str(source)})
+    if args.topology != model.ladder.topology:
+        model = model.with_topology(args.topology)
+    out = model.save(args.output)
+    if not args.quiet:
+        print(f"{model.ladder.order}-stage ladder, Rth = {model.rth:.5g} K/W; effects: "
+              + "; ".join(f"{e.name} (" + ", ".join(f"{k} = {v:.4g}" for k, v in
+                                                     e.params.items()) + ")"
+                          for e in model.effects))
+        print(f"wrote {out}")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     from .. import __version__
     from ..fit import fit_model
 
     source = Path(args.source)
+    if args.effect:
+        return _run_with_effects(args, source)
     if source.is_dir():
         curve, held, reference = _from_bundle(source, args.curve, args.rth)
     elif source.exists():

@@ -1,0 +1,477 @@
+"""Diagnosis: where a linear ladder fails, which catalogued effect is missing, and by how much
+the error falls when it is added.
+
+:func:`diagnose` compares a model with every data set of a bundle (each cooling curve, the
+PWM grid, the calibration), localises the misfit (time decade, frequency, duty, temperature
+band), fits every candidate effect of the catalogue (:mod:`spicethermal.effectfit`) and ranks
+them. The result (:class:`Diagnosis`) prints as a short report and serialises to the
+``spicethermal-diagnosis/1`` document of DESIGN.md.
+
+Criterion (stated)
+------------------
+Residuals ``r = measured − model`` in kelvin. Each data set ``d`` gets a noise estimate
+``σ_d`` that no model choice can bias: the scatter of consecutive baseline residuals,
+``σ_d = 1.4826 · MAD(Δr) / √2`` (smooth misfits cancel in the differences), at least
+:data:`NOISE_FLOOR_K`. A model's criterion is ``BIC = Σ_d RSS_d / σ_d² + k ln N`` with ``k``
+the number of effect parameters fitted and ``N`` the number of points. An effect is *found*
+when the best candidate (lowest BIC)
+
+1. lowers the BIC by at least :data:`MIN_BIC_DROP` (strong evidence on Kass & Raftery's scale),
+2. lowers the pooled RMS by at least :data:`MIN_IMPROVEMENT` ×, and
+3. explains the misfit: every data set's RMS with the effect is within
+   :data:`EXPLAINED_RATIO` × its noise estimate.
+
+Clean data fail (1) and (2): an effect fitted to noise gains little. An effect outside the
+catalogue fails (2) or (3): the verdict is then null and the reason says where the misfit is.
+When the baseline already fits every data set within :data:`EXPLAINED_RATIO` × its noise,
+nothing is missing.
+
+The pooled RMS (``rms_k``; ``improvement = baseline rms / candidate rms``) weighs every point
+equally, as ``spicethermal compare`` does, with the calibration points added.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .compare import Comparison, ComparisonPoint
+from .effectfit import (
+    BundleData,
+    EffectFit,
+    baseline_ladder,
+    fit_effect,
+    fit_with_effects,
+    needs,
+    predict,
+)
+from .effects import CATALOGUE, Effect
+from .errors import DataFormatError, FitError, SimulationError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+    from .bundle import Bundle
+    from .ladder import Cauer, Foster
+    from .model import ThermalModel
+
+__all__ = ["DIAGNOSIS_FORMAT", "Candidate", "Diagnosis", "comparison_of", "diagnose",
+           "fit_with_effects", "localise", "noise_estimates"]
+
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/1"
+#: An effect must lower the pooled RMS at least this many times.
+MIN_IMPROVEMENT = 2.0
+#: ... and lower the BIC by at least this much.
+MIN_BIC_DROP = 10.0
+#: ... and leave every data set within this many noise estimates (RMS / σ_d).
+EXPLAINED_RATIO = 2.0
+#: Noise estimates are at least this (K): the resolution of any real bench.
+NOISE_FLOOR_K = 0.005
+#: How many worst points the document lists.
+WORST_POINTS = 5
+
+
+# --------------------------------------------------------------------------------------------
+# residuals, noise, localisation
+# --------------------------------------------------------------------------------------------
+def comparison_of(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Effect] = (),
+                  engine: str = "analytic") -> Comparison:
+    """Measured vs model at every point of every data set (calibration included), as a
+    :class:`~spicethermal.compare.Comparison` (its points carry the data set and ``at``)."""
+    pred = predict(data, ladder, effects)
+    points: list[ComparisonPoint] = []
+    for name in data.datasets:
+        for at, meas, mod in zip(data.coordinates(name), data.measured(name), pred[name],
+                                 strict=True):
+            points.append(ComparisonPoint(name, at, float(meas), float(mod)))
+    return Comparison(tuple(points), engine)
+
+
+def noise_estimates(comparison: Comparison) -> dict[str, float]:
+    """Noise standard deviation (K) of every data set from consecutive residual differences
+    (see the module docstring), at least :data:`NOISE_FLOOR_K`.
+
+    >>> c = Comparison(tuple(ComparisonPoint("x", {"t_s": i}, 0.1 * (-1) ** i, 0.0)
+    ...                      for i in range(9)))
+    >>> round(noise_estimates(c)["x"], 4)
+    0.2097
+    """
+    out = {}
+    for name, sub in comparison.by_dataset().items():
+        r = sub.residuals_k
+        if r.size < 3:
+            out[name] = max(float(np.std(r)), NOISE_FLOOR_K)
+            continue
+        d = np.diff(r)
+        mad = float(np.median(np.abs(d - np.median(d))))
+        out[name] = max(1.4826 * mad / math.sqrt(2), NOISE_FLOOR_K)
+    return out
+
+
+def _rms(x: NDArray) -> float:
+    return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
+
+
+def _groupings(sub: Comparison, name: str) -> list[list[tuple[str, NDArray]]]:
+    """Ways to split one data set for localisation, each a list of (label, residuals): the
+    PWM grid by frequency and by duty, the calibration by 20 K band, a cooling curve by time
+    decade (a decade at either end with fewer than 3 points joins its neighbour)."""
+    pts, r = sub.points, sub.residuals_k
+
+    def split(labels: list[str]) -> list[tuple[str, NDArray]]:
+        groups: dict[str, list[float]] = {}
+        for lab, x in zip(labels, r, strict=True):
+            groups.setdefault(lab, []).append(float(x))
+        return [(k, np.array(v)) for k, v in groups.items()]
+
+    if name == "pwm":
+        return [split([f"{p.at['freq_hz'] / 1e3:g} kHz" for p in pts]),
+                split([f"duty {100 * p.at['duty']:g} %" for p in pts])]
+    if name == "calibration":
+        lows = [20 * math.floor(p.at["temp_c"] / 20) for p in pts]
+        return [split([f"{lo:g}-{lo + 20:g} °C" for lo in lows])]
+    ks = np.floor(np.log10([p.at["t_s"] for p in pts]) + 1e-9).astype(int)
+    for end, step in ((ks.max(), -1), (ks.min(), 1)):
+        if np.sum(ks == end) < 3 and np.unique(ks).size > 1:
+            ks[ks == end] = end + step
+    return [split([f"{_time(10.0 ** k)}-{_time(10.0 ** (k + 1))}" for k in ks])]
+
+
+def _time(t: float) -> str:
+    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("µs", 1e-6), ("ns", 1e-9)):
+        if t >= scale * 0.999:
+            return f"{t / scale:g} {unit}"
+    return f"{t:g} s"
+
+
+def localise(comparison: Comparison, noise: Mapping[str, float] | None = None) -> list[str]:
+    """One sentence per data set whose misfit exceeds its noise (all data sets when ``noise``
+    is None), worst first: where its residuals are largest and their sign."""
+    noise = noise or {}
+    found = []
+    for name, sub in comparison.by_dataset().items():
+        rms = sub.rms_k
+        sigma = noise.get(name)
+        if sigma is not None and rms <= EXPLAINED_RATIO * sigma:
+            continue
+        parts = []
+        for grouping in _groupings(sub, name):
+            label, worst = max(grouping, key=lambda g: _rms(g[1]))
+            mean = float(np.mean(worst))
+            parts.append(f"{label} (RMS {_rms(worst):.3g} K, readings "
+                         f"{'above' if mean > 0 else 'below'} the model by {abs(mean):.3g} K "
+                         f"on average)")
+        found.append((rms, f"{name}: RMS {rms:.3g} K"
+                      + (f" ({rms / sigma:.0f}× its noise)" if sigma else "")
+                      + ", largest at " + " and at ".join(parts)))
+    return [s for _, s in sorted(found, key=lambda x: -x[0])]
+
+
+# --------------------------------------------------------------------------------------------
+# result
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    """One candidate effect fitted to the bundle."""
+
+    effect: Effect
+    ladder: Foster
+    comparison: Comparison
+    n_params: int
+    bic: float
+    improvement: float
+    evidence: str
+    explained: bool
+    fit_s: float
+
+    @property
+    def rms_k(self) -> float:
+        return self.comparison.rms_k
+
+    def to_json(self) -> dict[str, Any]:
+        return {"effect": self.effect.name, "params": dict(self.effect.params),
+                "rms_k": self.rms_k, "improvement": self.improvement,
+                "evidence": self.evidence}
+
+
+@dataclass(frozen=True, eq=False)
+class Diagnosis:
+    """What :func:`diagnose` found. ``str()`` is the human report, :meth:`to_json` the
+    ``spicethermal-diagnosis/1`` document."""
+
+    baseline: Comparison
+    baseline_model: ThermalModel
+    noise_k: Mapping[str, float]
+    baseline_bic: float
+    candidates: tuple[Candidate, ...]
+    verdict_effect: str | None
+    verdict_reason: str
+    where: tuple[str, ...]
+    skipped: Mapping[str, str] = field(default_factory=dict)
+    elapsed_s: float = 0.0
+    source: str = ""
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def best(self) -> Candidate | None:
+        """The verdict's candidate (None when no effect was found)."""
+        if self.verdict_effect is None:
+            return None
+        return next(c for c in self.candidates if c.effect.name == self.verdict_effect)
+
+    def model(self) -> ThermalModel:
+        """The baseline model with the verdict's effect (and its ladder) added."""
+        best = self.best
+        if best is None:
+            return self.baseline_model
+        return type(self.baseline_model)(best.ladder, (*self.baseline_model.effects,
+                                                       best.effect),
+                                         self.baseline_model.reference,
+                                         self.baseline_model.provenance)
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``spicethermal-diagnosis/1`` document."""
+        worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
+                 for p in self.baseline.worst(WORST_POINTS)]
+        return {"format": DIAGNOSIS_FORMAT,
+                "baseline": {"rms_k": self.baseline.rms_k, "max_abs_k": self.baseline.max_abs_k,
+                             "worst": worst},
+                "candidates": [c.to_json() for c in self.candidates],
+                "verdict": {"effect": self.verdict_effect, "reason": self.verdict_reason}}
+
+    def __str__(self) -> str:
+        lines = [f"diagnosis of {self.source or 'the bundle'}: "
+                 f"{len(self.baseline.points)} points in {', '.join(self.baseline.datasets)}",
+                 f"baseline (linear {self.baseline_model.ladder.order}-stage ladder"
+                 + (f" + {', '.join(e.name for e in self.baseline_model.effects)}"
+                    if self.baseline_model.effects else "")
+                 + f"): RMS {self.baseline.rms_k:.3g} K, worst {self.baseline.max_abs_k:.3g} K",
+                 "where it fails:"]
+        lines += [f"  {s}" for s in self.where] or ["  nowhere beyond the noise"]
+        lines.append("worst points:")
+        for p in self.baseline.worst(WORST_POINTS):
+            lines.append(f"  {p.dataset:12s} {_at_text(p.at):24s} {p.residual_k:+8.3f} K")
+        lines.append("candidates (best first; ΔBIC vs baseline, RMS, improvement):")
+        for c in self.candidates:
+            params = ", ".join(f"{k} = {_num(v)}" for k, v in c.effect.params.items())
+            lines.append(f"  {c.effect.name:24s} ΔBIC {c.bic - self.baseline_bic:+10.1f}  "
+                         f"RMS {c.rms_k:.3g} K  {c.improvement:6.2f}×  ({params})")
+        for name, why in self.skipped.items():
+            lines.append(f"  {name:24s} not tried: {why}")
+        lines.append(f"verdict: {self.verdict_effect or 'none'} — {self.verdict_reason}")
+        best = self.best
+        if best is not None:
+            lines.append(f"evidence: {best.evidence}")
+            lines.append(f"error before → after: RMS {self.baseline.rms_k:.3g} → "
+                         f"{best.rms_k:.3g} K, worst {self.baseline.max_abs_k:.3g} → "
+                         f"{best.comparison.max_abs_k:.3g} K")
+            for name, sub in self.baseline.by_dataset().items():
+                lines.append(f"  {name:12s} {sub.rms_k:8.3f} → "
+                             f"{best.comparison.dataset(name).rms_k:8.3f} K")
+        lines.append(f"({self.elapsed_s:.1f} s)")
+        return "\n".join(lines)
+
+
+def _num(v: float) -> str:
+    return f"{v:.4g}"
+
+
+def _at_text(at: Mapping[str, float]) -> str:
+    if "freq_hz" in at:
+        return f"{at['freq_hz'] / 1e3:g} kHz, D = {100 * at['duty']:g} %"
+    if "temp_c" in at:
+        return f"{at['temp_c']:g} °C"
+    return f"t = {_time(at['t_s'])}"
+
+
+# --------------------------------------------------------------------------------------------
+# evidence sentences
+# --------------------------------------------------------------------------------------------
+def _most_improved(base: Comparison, cand: Comparison) -> tuple[str, float, float]:
+    rows = [(n, b.rms_k, cand.dataset(n).rms_k) for n, b in base.by_dataset().items()]
+    return max(rows, key=lambda r: r[1] - r[2])
+
+
+def _evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Comparison) -> str:
+    e, p = fit.effect, fit.effect.params
+    name, before, after = _most_improved(base, cand)
+    gain = f"{name} RMS {before:.3g} → {after:.3g} K"
+    if e.name == "temperature-coefficient":
+        pw, rth = fit.facts.get("powers_w", []), fit.facts.get("rth_k_per_w", [])
+        meas = ", ".join(f"{r:.4g} K/W at {q:g} W" for q, r in zip(pw, rth, strict=True))
+        return (f"Rth measured {meas}: the curves do not scale with power; "
+                f"R(T) = R0·(1 {p['alpha_per_k']:+.3g}/K·(T − {p['t0_c']:g} °C)) makes them "
+                f"fit ({gain})")
+    if e.name == "phase-change":
+        hot = [c.name for c in data.cooling if float(np.max(c.tj_c)) > p["t_c"] - p["width_k"]]
+        return (f"the misfit sits where {', '.join(hot) or 'no curve'} crosses "
+                f"{p['t_c']:.4g} ± {p['width_k']:.2g} °C; a latent heat of {p['latent_j']:.3g} J "
+                f"there explains it ({gain})")
+    if e.name == "sample-window":
+        mean = float(np.mean(base.dataset("pwm").residuals_k)) if data.pwm is not None else 0.0
+        declared = fit.facts.get("declared_s", 0.0)
+        return (f"PWM readings are {mean:+.3g} K off on average while the cooling curves fit; "
+                f"a {p['window_s'] * 1e6:.3g} µs power-off window before each sample "
+                f"(declared {declared * 1e6:g} µs) explains it ({gain})")
+    if e.name == "electrical-transient":
+        return (f"cooling readings in the first {p['masked_s'] * 1e6:.3g} µs are off by up to "
+                f"{p['amplitude_k']:+.3g} K and recover; the transient (masked and √t-"
+                f"extrapolated for the ladder) explains them ({gain})")
+    if e.name == "tsp-nonlinearity":
+        cal = base.dataset("calibration").residuals_k if data.calibration is not None else \
+            np.zeros(1)
+        return (f"the linear calibration's residuals bow by {np.ptp(cal):.3g} K; a TSP error "
+                f"{p['quad_k_per_k2']:.3g} K/K²·(T − {p['t_cal_c']:.3g} °C)² explains the "
+                f"calibration and the readings ({gain})")
+    return gain  # pragma: no cover - every catalogued effect has a sentence
+
+
+# --------------------------------------------------------------------------------------------
+# the diagnosis
+# --------------------------------------------------------------------------------------------
+def _criterion(comparison: Comparison, noise: Mapping[str, float], k: int) -> float:
+    chi2 = sum(float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2
+               for name, sub in comparison.by_dataset().items())
+    return chi2 + k * math.log(max(len(comparison.points), 2))
+
+
+def _explained(comparison: Comparison, noise: Mapping[str, float]) -> bool:
+    return all(sub.rms_k <= EXPLAINED_RATIO * noise[name]
+               for name, sub in comparison.by_dataset().items())
+
+
+def diagnose(bundle: Bundle, model: ThermalModel | None = None,
+             effects: Sequence[str] | None = None,
+             progress: Callable[[str], None] | None = None) -> Diagnosis:
+    """Compare, localise, fit every candidate effect, rank them and give the verdict.
+
+    Parameters
+    ----------
+    bundle : the measurements (``spicethermal-bundle/1``).
+    model : the baseline model; default the linear ladder of the bundle's lowest-power cooling
+        curve refitted to all its cooling curves (:func:`~spicethermal.effectfit.baseline_ladder`).
+        Its effects stay in every candidate; the candidates are the catalogued effects it lacks.
+    effects : candidate names (default: every catalogued effect).
+    progress : called with a short text before each step.
+
+    Examples
+    --------
+    >>> from spicethermal.scenarios import scenario_bundle
+    >>> d = diagnose(scenario_bundle("sample-window", seed=0))
+    >>> d.verdict_effect, d.best.improvement > 3
+    ('sample-window', True)
+    """
+    from .model import ThermalModel
+
+    t_start = time.perf_counter()
+    say = progress or (lambda _text: None)
+    data = BundleData.from_bundle(bundle)
+    if not data.datasets:
+        raise DataFormatError(f"{data.source}: nothing to diagnose (no cooling, pwm or "
+                              f"calibration data)")
+    if model is not None and model.reference != bundle.reference:
+        raise DataFormatError(f"{data.source}: measured against the {bundle.reference} but the "
+                              f"model's reference is {model.reference}")
+    say("baseline ladder")
+    if model is None:
+        ladder = baseline_ladder(data)
+        model = ThermalModel(ladder, (), bundle.reference,
+                             {"tool": "spicethermal diagnose", "baseline": "linear ladder"})
+    else:
+        ladder = model.ladder if model.ladder.topology == "foster" else model.ladder.to_foster()
+    present = [e.name for e in model.effects]
+    base = comparison_of(data, ladder, model.effects)
+    noise = noise_estimates(base)
+    bic0 = _criterion(base, noise, 0)
+    names = list(effects) if effects is not None else list(CATALOGUE)
+    cands, skipped = [], {}
+    for name in names:
+        if name in present:
+            skipped[name] = "already in the model"
+            continue
+        why = needs(name, data)
+        if why:
+            skipped[name] = why
+            continue
+        say(f"fitting {name}")
+        t0 = time.perf_counter()
+        try:
+            fit = fit_effect(data, ladder, name, model.effects)
+            cmp = comparison_of(data, fit.ladder, [*model.effects, fit.effect])
+        except (FitError, SimulationError) as exc:
+            skipped[name] = f"fit failed: {exc}"
+            continue
+        bic = _criterion(cmp, noise, fit.n_params)
+        improvement = base.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
+        cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
+                               _evidence(fit, data, base, cmp), _explained(cmp, noise),
+                               time.perf_counter() - t0))
+    cands.sort(key=lambda c: c.bic)
+    where = tuple(localise(base, noise))
+    effect, reason = _verdict(base, noise, bic0, cands, where)
+    return Diagnosis(base, model, noise, bic0, tuple(cands), effect, reason, where, skipped,
+                     time.perf_counter() - t_start, data.source)
+
+
+def _verdict(base: Comparison, noise: Mapping[str, float], bic0: float,
+             cands: Sequence[Candidate], where: Sequence[str]) -> tuple[str | None, str]:
+    if _explained(base, noise):
+        return None, (f"the model fits every data set within {EXPLAINED_RATIO:g}× its noise "
+                      f"(RMS {base.rms_k:.3g} K): no effect is missing")
+    located = where[0] if where else "the misfit is spread over the data sets"
+    if not cands:
+        return None, f"no candidate effect could be fitted; the misfit: {located}"
+    best = cands[0]
+    drop = bic0 - best.bic
+    if drop >= MIN_BIC_DROP and best.improvement >= MIN_IMPROVEMENT and best.explained:
+        return best.effect.name, (
+            f"{best.effect.name} lowers the RMS {best.improvement:.1f}× "
+            f"({base.rms_k:.3g} → {best.rms_k:.3g} K) and the BIC by {drop:.0f}, and leaves "
+            f"every data set within {EXPLAINED_RATIO:g}× its noise")
+    why = []
+    if best.improvement < MIN_IMPROVEMENT:
+        why.append(f"the best candidate, {best.effect.name}, lowers the RMS only "
+                   f"{best.improvement:.2f}× (needs {MIN_IMPROVEMENT:g}×)")
+    elif drop < MIN_BIC_DROP:
+        why.append(f"the best candidate, {best.effect.name}, lowers the BIC only by "
+                   f"{drop:.1f} (needs {MIN_BIC_DROP:g})")
+    else:
+        left = [n for n, s in best.comparison.by_dataset().items()
+                if s.rms_k > EXPLAINED_RATIO * noise[n]]
+        why.append(f"the best candidate, {best.effect.name}, leaves {', '.join(left)} above "
+                   f"{EXPLAINED_RATIO:g}× its noise")
+    return None, f"no catalogued effect explains the misfit: {why[0]}; where it fails: {located}"
+
+
+def write_report(result: Diagnosis, out_dir: str | Path) -> Path:
+    """Write the HTML report of a diagnosis (``index.html``, self-contained but for its PNG
+    figures beside it, from ``templates/report/diagnosis.html.j2``) into ``out_dir``."""
+    import jinja2
+
+    from .files import atomic_write_text
+    from .plots import diagnosis_figures
+    from .spice import _template_dir
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    figs = diagnosis_figures(result, out)
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(_template_dir())),
+                             undefined=jinja2.StrictUndefined,
+                             autoescape=jinja2.select_autoescape(["html", "j2"]))
+    html = env.get_template("report/diagnosis.html.j2").render(
+        diagnosis=result, doc=result.to_json(), figures=[p.name for p in figs],
+        text=str(result))
+    return atomic_write_text(out / "index.html", html)
+
+
+def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float | None = None,
+                   window_s: float = 1e-4, ambient_c: float = 25.0) -> Diagnosis:
+    """Measured vs simulated PWM readings (placeholder until the Table 2 analysis lands)."""
+    raise FitError(f"{path}: the diagnosis of a measured-vs-simulated table is not available "
+                   f"yet")

@@ -1,0 +1,849 @@
+"""Fitting the catalogued effects to a measurement bundle, with fast exact forward models.
+
+The diagnosis (:mod:`spicethermal.diagnose`) and ``spicethermal fit --effect`` need, for every
+candidate effect, its parameters fitted to the data sets that show it, and the model's
+predictions of every data point with the effect in place. This module holds both.
+
+Data (:class:`BundleData`): each cooling curve (dataset ``cooling_k``, the junction reading at
+every ``t_s``), the PWM grid (``pwm``: the reading at the end of the sample window) and the
+calibration (``calibration``: the temperature that the least-squares *linear* calibration of
+the bundle gives for each calibration voltage, against the thermocouple temperature).
+
+Forward models (:func:`predict`), all exact for the catalogue's physics:
+
+* linear ladder: closed forms (``Foster.cooling``, :func:`spicethermal.pwm.steady_state`);
+* ``temperature-coefficient`` on a cooling curve: every resistance scales with the same
+  ``s(Tj) = 1 + α (Tj − T0)``, so with the power off the network is linear in the warped
+  time ``u`` with ``dt/du = s``; ``θ(u) = e^{−Au} θ(0)`` and
+  ``t(u) = (1 + α(Tref − T0)) u + α Σ vᵢ τᵢ (1 − e^{−u/τᵢ})`` in closed form, inverted by
+  Newton's method. The starting state is the self-consistent steady state. This is the
+  nonlinear solution itself, not a linearisation (checked against the Radau integration of
+  :class:`~spicethermal.model.ThermalModel` in the tests);
+* ``temperature-coefficient`` under PWM: the ladder frozen at the self-consistent mean
+  junction temperature of the periodic state (the resistance ripple is ``α`` times the
+  temperature ripple, a few 0.1 %; checked against the model's shooting solution to a few mK);
+* ``phase-change`` on a cooling curve: the nodal network with the band's heat capacity at its
+  node, integrated by LSODA with an exact rank-one inverse of the capacity matrix until the
+  node leaves the band, then exact modal steps (< 1 mK from the model's Radau integration);
+  curves that stay six band widths away from the band use the closed form. Under PWM the
+  mean is exact (a heat capacity does not change it) and, when the band is within reach, the
+  ripple is computed with the capacity frozen at the mean temperature
+  (:func:`pc_frozen_ladder`, quasi-static), else in closed form;
+* measurement effects: ``sample-window`` (the PWM reading at the end of the window),
+  ``electrical-transient`` (cooling readings off by ``A·e^{−5t/masked_s}``),
+  ``tsp-nonlinearity`` (readings ``T + q (T − T_cal)²``; in the calibration data set the
+  linear fit absorbs the straight part, leaving ``q (u − P u)/(1 + q b_u)`` with
+  ``u = (T − T_cal)²``, ``P`` the projection on straight lines and ``b_u`` the slope of ``u``).
+
+Fits (:func:`fit_effect`): the effect's parameters by :func:`scipy.optimize.least_squares`
+on the data sets the effect acts on. The ladder is refitted where the effect changes what the
+ladder was fitted from: jointly for ``temperature-coefficient`` (the ladder at ``T0``), by
+alternation for ``tsp-nonlinearity`` and ``electrical-transient`` (the reference cooling curve
+corrected by the inverse measurement model, then :func:`~spicethermal.fit.fit_foster` at the
+same order); it is held for ``phase-change`` (fitted from the curve that does not cross the
+band) and ``sample-window`` (cooling curves are not affected).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .effects import CATALOGUE, Effect
+from .errors import DataFormatError, FitError, SimulationError
+from .ladder import Cauer, Foster
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import ArrayLike, NDArray
+
+    from .bundle import Bundle
+    from .model import ThermalModel
+
+#: Phase-change bands further than this many widths from every temperature are ignored.
+BAND_REACH = 6.0
+#: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
+TRANSIENT_RATE = 5.0
+
+
+# --------------------------------------------------------------------------------------------
+# data
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class CurveData:
+    """One cooling curve: readings ``tj_c`` at ``t_s`` (t > 0 only), the reference at every
+    point, the power before the cut and the steady reading just before it (or None)."""
+
+    name: str
+    t_s: NDArray
+    tj_c: NDArray
+    tref_c: NDArray
+    power_w: float
+    tref_steady_c: float
+    tj_steady_c: float | None
+    has_tref_column: bool
+
+
+@dataclass(frozen=True, eq=False)
+class PwmData:
+    """The PWM grid: one reading per row, and the bundle's declared sample window."""
+
+    freq_hz: NDArray
+    duty: NDArray
+    power_w: NDArray
+    tref_c: NDArray
+    tj_c: NDArray
+    window_s: float
+
+
+@dataclass(frozen=True, eq=False)
+class CalData:
+    """Calibration points: thermocouple ``temp_c`` and the temperature ``read_c`` that the
+    least-squares straight line gives for the measured voltage."""
+
+    temp_c: NDArray
+    read_c: NDArray
+
+    def curvature_basis(self, t_cal_c: float) -> tuple[NDArray, float]:
+        """``(u − P u, b_u)`` for ``u = (T − t_cal)²`` (see the module docstring)."""
+        t = self.temp_c
+        a = np.column_stack([np.ones_like(t), t])
+        u = (t - t_cal_c) ** 2
+        coef, *_ = np.linalg.lstsq(a, u, rcond=None)
+        return u - a @ coef, float(coef[1])
+
+
+@dataclass(frozen=True, eq=False)
+class BundleData:
+    """The arrays of a bundle that the diagnosis compares against, by data set name.
+
+    >>> from spicethermal.bundle import Bundle, PwmTable
+    >>> d = BundleData.from_bundle(Bundle(ambient_c=25.0,
+    ...                            pwm=PwmTable([1e3], [0.5], [30.0], power_w=0.1)))
+    >>> d.datasets
+    ('pwm',)
+    """
+
+    cooling: tuple[CurveData, ...] = ()
+    pwm: PwmData | None = None
+    calibration: CalData | None = None
+    ambient_c: float = 25.0
+    source: str = "bundle"
+
+    @classmethod
+    def from_bundle(cls, bundle: Bundle) -> BundleData:
+        ambient = bundle.ambient_c if bundle.ambient_c is not None else 25.0
+        curves = []
+        for i, c in enumerate(bundle.cooling):
+            tj = np.asarray(bundle.cooling_tj_c(i), dtype=float)
+            rows, steady = bundle.cooling_reference_c(i)
+            if steady is None:
+                steady = float(rows[0]) if rows is not None else ambient
+            tref = (np.asarray(rows, dtype=float) if rows is not None
+                    else np.full(tj.size, float(steady)))
+            keep = c.t_s > 0
+            curves.append(CurveData(f"cooling_{i + 1}", np.asarray(c.t_s)[keep], tj[keep],
+                                    tref[keep], float(c.power_w), float(steady),
+                                    c.tj_steady_c, rows is not None))
+        pwm = None
+        if bundle.pwm is not None:
+            p = bundle.pwm
+            tref = (np.asarray(p.tref_c, dtype=float) if p.tref_c is not None
+                    else np.full(p.freq_hz.size, ambient))
+            pwm = PwmData(np.asarray(p.freq_hz, float), np.asarray(p.duty, float),
+                          np.asarray(p.powers_w, float), tref, np.asarray(p.tj_c, float),
+                          float(p.sample_window_s))
+        cal = None
+        if bundle.calibration is not None and np.unique(bundle.calibration.temp_c).size >= 3:
+            line = bundle.calibration.fit(1)
+            cal = CalData(np.asarray(bundle.calibration.temp_c, float),
+                          np.asarray(line.temperature(bundle.calibration.v_tsp_v), float))
+        return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle")
+
+    @property
+    def datasets(self) -> tuple[str, ...]:
+        """Names of the data sets, in report order."""
+        names = [c.name for c in self.cooling]
+        if self.pwm is not None:
+            names.append("pwm")
+        if self.calibration is not None:
+            names.append("calibration")
+        return tuple(names)
+
+    def curve(self, name: str) -> CurveData:
+        return next(c for c in self.cooling if c.name == name)
+
+    def measured(self, name: str) -> NDArray:
+        """Measured values (°C) of data set ``name``."""
+        if name == "pwm":
+            return self.pwm.tj_c
+        if name == "calibration":
+            return self.calibration.read_c
+        return self.curve(name).tj_c
+
+    def coordinates(self, name: str) -> list[dict[str, float]]:
+        """``at`` of every point of data set ``name``."""
+        if name == "pwm":
+            return [{"freq_hz": float(f), "duty": float(d)}
+                    for f, d in zip(self.pwm.freq_hz, self.pwm.duty, strict=True)]
+        if name == "calibration":
+            return [{"temp_c": float(t)} for t in self.calibration.temp_c]
+        return [{"t_s": float(t)} for t in self.curve(name).t_s]
+
+    @property
+    def reference_curve(self) -> CurveData:
+        """The lowest-power cooling curve: the one a linear ladder is fitted from (the
+        least heated, as the paper measured)."""
+        if not self.cooling:
+            raise DataFormatError(f"{self.source}: no cooling curve to fit a ladder from")
+        return min(self.cooling, key=lambda c: c.power_w)
+
+    @property
+    def reference_c(self) -> float:
+        """The reference temperature the temperature coefficient is centred on."""
+        return self.cooling[0].tref_steady_c if self.cooling else self.ambient_c
+
+
+# --------------------------------------------------------------------------------------------
+# forward models
+# --------------------------------------------------------------------------------------------
+def _foster(ladder: Foster | Cauer) -> Foster:
+    return ladder if isinstance(ladder, Foster) else ladder.to_foster()
+
+
+def tc_steady_scale(rth0: float, alpha: float, t0_c: float, tref_c: float,
+                    power_w: float) -> float:
+    """Self-consistent resistance factor ``s`` of a ladder (Rth0 at T0) under constant power.
+
+    ``θ = P Rth0 s`` and ``s = 1 + α (Tref + θ − T0)`` give
+    ``s = (1 + α (Tref − T0)) / (1 − α P Rth0)``.
+
+    >>> round(tc_steady_scale(100.0, -2e-3, 25.0, 25.0, 0.5), 6)
+    0.909091
+    """
+    s = (1 + alpha * (tref_c - t0_c)) / (1 - alpha * power_w * rth0)
+    if not (math.isfinite(s) and s > 0.05):
+        raise SimulationError(f"temperature coefficient {alpha:g}/K at {power_w:g} W has no "
+                              f"steady state (thermal runaway or R below 5 % of R0)")
+    return s
+
+
+def tc_cooling_rise(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: float,
+                    power_w: float, t_s: ArrayLike) -> NDArray:
+    """Junction rise (K) after ``power_w`` is cut, with ``R(T) = R0 (1 + α (Tj − T0))``.
+
+    Exact (warped-time solution, module docstring). ``ladder`` holds R0.
+
+    >>> f = Foster.from_tau([10.0], [1.0])
+    >>> r = tc_cooling_rise(f, 0.0, 25.0, 25.0, 2.0, [0.0, 1.0])
+    >>> [round(float(x), 9) for x in r] == [20.0, round(20 * math.exp(-1), 9)]
+    True
+    """
+    f = _foster(ladder)
+    r0, tau0 = np.asarray(f.r), np.asarray(f.tau)
+    t = np.asarray(t_s, dtype=float)
+    s_ss = tc_steady_scale(f.rth, alpha, t0_c, tref_c, power_w)
+    v0 = power_w * r0 * s_ss
+    a = 1 + alpha * (tref_c - t0_c)
+    if alpha == 0:
+        return (v0 * np.exp(-t[:, None] / tau0)).sum(axis=1)
+    s_lo, s_hi = sorted((s_ss, a))
+    if s_lo <= 0.05:
+        raise SimulationError("temperature coefficient makes a resistance vanish")
+    u = t / (0.5 * (s_lo + s_hi))
+    for _ in range(60):
+        e = np.exp(-u[:, None] / tau0)
+        tu = a * u + alpha * (v0 * tau0 * (1 - e)).sum(axis=1)
+        su = a + alpha * (v0 * e).sum(axis=1)
+        step = (tu - t) / su
+        u = np.clip(u - step, t / s_hi, t / s_lo)
+        if np.all(np.abs(step) <= 1e-13 * (u + 1e-300)):
+            break
+    return (v0 * np.exp(-u[:, None] / tau0)).sum(axis=1)
+
+
+def tc_frozen_ladder(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: float,
+                     mean_power_w: float) -> Foster:
+    """The ladder at the self-consistent mean junction temperature under ``mean_power_w``
+    (every R and τ times ``s``; C unchanged)."""
+    f = _foster(ladder)
+    s = tc_steady_scale(f.rth, alpha, t0_c, tref_c, mean_power_w)
+    return Foster.from_tau(np.asarray(f.r) * s, np.asarray(f.tau) * s)
+
+
+def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
+    p = effect.params
+    return (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
+            and t_lo_c < p["t_c"] + BAND_REACH * p["width_k"])
+
+
+def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
+                    t_s: ArrayLike) -> NDArray:
+    """Junction rise (K) after ``power_w`` is cut, with the ``phase-change`` heat capacity.
+
+    The nodal network (the one :class:`~spicethermal.model.ThermalModel` and the SPICE export
+    use) with the band's capacity at its node, ``M(θ) dθ/dt = −G θ``, integrated by LSODA
+    with an exact rank-one inverse of ``M`` and its Jacobian (agrees with the model's Radau
+    integration to < 1 mK, 10× faster); closed form when the curve stays more than
+    :data:`BAND_REACH` widths away from the band.
+    """
+    from scipy.integrate import solve_ivp
+
+    from .model import Network
+
+    f = _foster(ladder)
+    t = np.asarray(t_s, dtype=float)
+    rise0 = power_w * f.rth
+    if not _band_reached(effect, tref_c, tref_c + rise0):
+        return power_w * f.cooling(t)
+    net = Network.of(ladder)
+    g = net.conductance()
+    cinv = np.linalg.inv(net.capacitance())
+    p = effect.params
+    node = int(p["node"])
+    ce = cinv[:, node]
+    norm = p["latent_j"] / (p["width_k"] * math.sqrt(2 * math.pi))
+    b = np.zeros(net.n)
+    b[0] = power_w
+    theta0 = np.linalg.solve(g, b)
+
+    def minv(theta: NDArray, y: NDArray) -> NDArray:
+        z = (tref_c + theta[node] - p["t_c"]) / p["width_k"]
+        cx = norm * math.exp(-0.5 * z * z)
+        cy = cinv @ y
+        return cy - cx * ce * cy[node] / (1 + cx * ce[node])
+
+    def rhs(_t: float, theta: NDArray) -> NDArray:
+        return minv(theta, -g @ theta)
+
+    def jac(_t: float, theta: NDArray) -> NDArray:
+        return np.column_stack([minv(theta, -g[:, k]) for k in range(net.n)])
+
+    t_end = float(t.max()) if t.size else 0.0
+    if t_end <= 0:
+        return np.full(t.shape, float(theta0[0]))
+    order = np.argsort(t)
+    below = p["t_c"] - BAND_REACH * p["width_k"]
+
+    def left_band(_t: float, theta: NDArray) -> float:
+        return tref_c + theta[node] - below
+
+    left_band.terminal = True  # type: ignore[attr-defined]
+    left_band.direction = -1  # type: ignore[attr-defined]
+    sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
+                    rtol=1e-7, atol=1e-6, first_step=min(f.tau) / 1000, events=left_band)
+    if not sol.success:
+        raise SimulationError(f"phase-change cooling integration failed: {sol.message}")
+    out = np.empty(t.shape)
+    got = sol.y[0]
+    out[order[:got.size]] = got
+    if got.size < t.size:  # below the band the network is linear again: exact modal steps
+        from scipy.linalg import eigh
+
+        t_exit, theta_exit = float(sol.t_events[0][0]), sol.y_events[0][0]
+        lam, v = eigh(g, net.capacitance())
+        z0 = np.linalg.solve(v, theta_exit)
+        rest = t[order[got.size:]] - t_exit
+        out[order[got.size:]] = (z0 * np.exp(-lam * rest[:, None])) @ v[0, :]
+    return out
+
+
+def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float,
+                     mean_power_w: float) -> Foster:
+    """The junction's Foster equivalent of the network with the band's heat capacity frozen
+    at the node's mean temperature under ``mean_power_w``.
+
+    A heat capacity does not change a periodic state's mean (the enthalpy returns each
+    period), only its ripple; this is what the PWM prediction uses when the ripple reaches
+    the band (a quasi-static approximation, unlike the cooling curves).
+    """
+    from scipy.linalg import eigh
+
+    from .model import Network
+
+    net = Network.of(ladder)
+    g, cm = net.conductance(), net.capacitance()
+    b = np.zeros(net.n)
+    b[0] = mean_power_w
+    node = int(effect.params["node"])
+    p = effect.params
+    z = (tref_c + float(np.linalg.solve(g, b)[node]) - p["t_c"]) / p["width_k"]
+    cm[node, node] += p["latent_j"] * math.exp(-0.5 * z * z) / (p["width_k"] *
+                                                                math.sqrt(2 * math.pi))
+    lam, v = eigh(g, cm)
+    return Foster.from_tau(v[0, :] ** 2 / lam, 1 / lam)
+
+
+def _effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
+    return {e.name: e for e in effects}
+
+
+def tsp_reading(temp_c: ArrayLike, effect: Effect | None) -> NDArray:
+    """What a linear-calibrated TSP reads at true temperature ``temp_c``."""
+    t = np.asarray(temp_c, dtype=float)
+    if effect is None:
+        return t
+    return t + effect.params["quad_k_per_k2"] * (t - effect.params["t_cal_c"]) ** 2
+
+
+def tsp_true(read_c: ArrayLike, effect: Effect | None) -> NDArray:
+    """Inverse of :func:`tsp_reading` (the root on the calibrated branch)."""
+    r = np.asarray(read_c, dtype=float)
+    if effect is None or effect.params["quad_k_per_k2"] == 0:
+        return r
+    q, tc = effect.params["quad_k_per_k2"], effect.params["t_cal_c"]
+    disc = np.clip(1 + 4 * q * (r - tc), 0.0, None)
+    return tc + 2 * (r - tc) / (1 + np.sqrt(disc))
+
+
+def transient_offset(t_s: ArrayLike, effect: Effect | None) -> NDArray:
+    """Reading error (K) of the electrical transient at ``t_s`` after the cut."""
+    t = np.asarray(t_s, dtype=float)
+    if effect is None or effect.params["masked_s"] <= 0:
+        return np.zeros(t.shape)
+    p = effect.params
+    return p["amplitude_k"] * np.exp(-TRANSIENT_RATE * t / p["masked_s"])
+
+
+def _model(ladder: Foster | Cauer, effects: Sequence[Effect]) -> ThermalModel:
+    from .model import ThermalModel
+
+    return ThermalModel(ladder, tuple(effects))
+
+
+def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
+                   effects: Sequence[Effect]) -> NDArray:
+    """True junction temperature (°C) along a cooling curve under the device effects."""
+    fx = _effects_map(effects)
+    tc, pc = fx.get("temperature-coefficient"), fx.get("phase-change")
+    tref = curve.tref_steady_c
+    if tc is not None and pc is not None:
+        from .compare import cooling_rise_k
+
+        rise = cooling_rise_k(_model(ladder, [tc, pc]), curve.power_w, curve.t_s, tref)
+    elif tc is not None:
+        rise = tc_cooling_rise(ladder, tc.params["alpha_per_k"], tc.params["t0_c"], tref,
+                               curve.power_w, curve.t_s)
+    elif pc is not None:
+        rise = pc_cooling_rise(ladder, pc, tref, curve.power_w, curve.t_s)
+    else:
+        rise = curve.power_w * ladder.cooling(curve.t_s)
+    return curve.tref_c + rise
+
+
+def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect]) -> NDArray:
+    """True junction temperature (°C) at the end of the sample window of every PWM row."""
+    from .pwm import steady_state
+
+    fx = _effects_map(effects)
+    tc, pc, sw = (fx.get(n) for n in ("temperature-coefficient", "phase-change",
+                                      "sample-window"))
+    window = float(sw.params["window_s"]) if sw is not None else data.window_s
+    out = np.empty(data.freq_hz.size)
+    for i, (f, d, p, tref) in enumerate(zip(data.freq_hz, data.duty, data.power_w, data.tref_c,
+                                            strict=True)):
+        lad: Foster | Cauer = ladder
+        if tc is not None:
+            lad = tc_frozen_ladder(ladder, tc.params["alpha_per_k"], tc.params["t0_c"], tref,
+                                   p * d)
+        if pc is not None and _band_reached(pc, tref, tref + p * _foster(lad).rth):
+            lad = pc_frozen_ladder(lad, pc, tref, p * d)
+        out[i] = tref + steady_state(lad, p, f, d, window).reading_k
+    return out
+
+
+def predict(data: BundleData, ladder: Foster | Cauer,
+            effects: Sequence[Effect] = ()) -> dict[str, NDArray]:
+    """What the bench would read (°C) at every point of every data set, by data set name.
+
+    >>> from spicethermal.bundle import Bundle, PwmTable
+    >>> d = BundleData.from_bundle(Bundle(ambient_c=25.0,
+    ...                            pwm=PwmTable([1e3], [0.5], [30.0], power_w=0.1)))
+    >>> round(float(predict(d, Foster.from_tau([100.0], [10.0]))["pwm"][0]), 3)
+    30.0
+    """
+    fx = _effects_map(effects)
+    tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
+    out: dict[str, NDArray] = {}
+    for c in data.cooling:
+        out[c.name] = tsp_reading(cooling_true_c(c, ladder, effects), tsp) + \
+            transient_offset(c.t_s, tr)
+    if data.pwm is not None:
+        out["pwm"] = tsp_reading(pwm_true_c(data.pwm, ladder, effects), tsp)
+    if data.calibration is not None:
+        cal = data.calibration
+        model = cal.temp_c.copy()
+        if tsp is not None:
+            q = tsp.params["quad_k_per_k2"]
+            basis, b_u = cal.curvature_basis(tsp.params["t_cal_c"])
+            model = model + q * basis / (1 + q * b_u)
+        out["calibration"] = model
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# the ladder
+# --------------------------------------------------------------------------------------------
+def reference_ladder(data: BundleData, order: int | str = "auto",
+                     correct: Callable[[CurveData], tuple[NDArray, float | None]] | None = None,
+                     mask_s: float | str | None = "auto") -> Foster:
+    """A linear ladder fitted (:func:`~spicethermal.fit.fit_foster`, ΣR = Rth held) to the
+    Zth of the reference (lowest-power) cooling curve, as ``spicethermal fit`` does, optionally
+    corrected first by ``correct(curve) -> (tj_c, tj_steady_c)`` (an inverse measurement
+    model). The electrical transient is masked and extrapolated by √t (``mask_s``, see
+    :meth:`~spicethermal.curves.ZthCurve.from_cooling`)."""
+    from .curves import ZthCurve
+    from .fit import fit_foster
+
+    c = data.reference_curve
+    tj, steady = (c.tj_c, c.tj_steady_c) if correct is None else correct(c)
+    curve = ZthCurve.from_cooling(c.t_s, tj, c.power_w, steady,
+                                  c.tref_c if c.has_tref_column else None, c.tref_steady_c,
+                                  mask_s=mask_s, label=c.name)
+    return fit_foster(curve.t_s, curve.zth_k_per_w, order=order,
+                      rth_k_per_w=curve.rth_k_per_w).foster
+
+
+def transient_spans(data: BundleData) -> dict[str, float]:
+    """Per cooling curve, the span (s) the electrical transient corrupts, as detected by
+    :func:`~spicethermal.curves.detect_transient` (0 when none is seen)."""
+    from .curves import detect_transient
+
+    return {c.name: detect_transient(c.t_s, c.tj_c) for c in data.cooling}
+
+
+def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
+    """The linear ladder the diagnosis starts from: :func:`reference_ladder` (order chosen by
+    BIC on the lowest-power curve), then refitted jointly to every cooling curve's readings
+    outside their detected transients (same order), so that the effects are compared with
+    the best linear model of all the curves rather than of one."""
+    ladder = reference_ladder(data, order)
+    if len(data.cooling) < 2:
+        return ladder
+    lad, _, _ = joint_fit(data, [c.name for c in data.cooling], ladder, True, [], [], [],
+                          lambda x: [], exclude=transient_spans(data))
+    return lad
+
+
+# --------------------------------------------------------------------------------------------
+# fits
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class EffectFit:
+    """One fitted effect: the effect, the ladder that goes with it, how many effect
+    parameters were fitted, and facts for the evidence sentence."""
+
+    effect: Effect
+    ladder: Foster
+    n_params: int
+    facts: Mapping[str, Any] = field(default_factory=dict)
+
+
+def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
+    return BundleData(tuple(c for c in data.cooling if c.name in names),
+                      data.pwm if "pwm" in names else None,
+                      data.calibration if "calibration" in names else None,
+                      data.ambient_c, data.source)
+
+
+def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
+         hi: Sequence[float], **kw: Any):
+    from scipy.optimize import least_squares
+
+    lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    x0 = np.asarray(x0, dtype=float)
+    pad = 1e-9 * np.maximum(1.0, np.abs(x0))
+    x0 = np.clip(x0, lo_a + pad, hi_a - pad)
+    size = fun(x0).size
+
+    def safe(x: NDArray) -> NDArray:
+        try:
+            with np.errstate(over="raise", invalid="raise"):
+                r = fun(x)
+        except (SimulationError, FloatingPointError, DataFormatError, ValueError):
+            return np.full(size, 1e6)
+        return r if np.all(np.abs(r) < 1e6) else np.full(size, 1e6)
+
+    return least_squares(safe, x0, bounds=(lo_a, hi_a), x_scale="jac", **kw)
+
+
+def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
+              fit_ladder: bool, x0: Sequence[float], lo: Sequence[float], hi: Sequence[float],
+              build: Callable[[NDArray], list[Effect]], *,
+              exclude: Mapping[str, float] | None = None,
+              max_nfev: int | None = None) -> tuple[Foster, list[Effect], Any]:
+    """Least squares of the readings of data sets ``names`` over the effect parameters
+    ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
+    ``log R`` and ``log τ`` (same order). Cooling points before ``exclude[name]`` s are left
+    out. Returns the ladder, the effects and scipy's result."""
+    f = _foster(ladder)
+    m = f.order if fit_ladder else 0
+    sub = _subset(data, names)
+    keep = {n: (sub.curve(n).t_s >= (exclude or {}).get(n, 0.0)) if n.startswith("cooling")
+            else slice(None) for n in names}
+    meas = {n: data.measured(n)[keep[n]] for n in names}
+
+    def split(x: NDArray) -> tuple[Foster, NDArray]:
+        if not m:
+            return f, x
+        return Foster.from_tau(np.exp(x[:m]), np.exp(x[m:2 * m])), x[2 * m:]
+
+    def fun(x: NDArray) -> NDArray:
+        lad, xe = split(x)
+        pred = predict(sub, lad, build(xe))
+        return np.concatenate([pred[n][keep[n]] - meas[n] for n in names])
+
+    start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
+    big = np.full(2 * m, np.inf)
+    res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
+               np.concatenate([-big, np.asarray(lo, float)]),
+               np.concatenate([big, np.asarray(hi, float)]), max_nfev=max_nfev)
+    lad, xe = split(res.x)
+    return lad, build(xe), res
+
+
+def _others(effects: Sequence[Effect], name: str) -> list[Effect]:
+    return [e for e in effects if e.name != name]
+
+
+def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
+                      effects: Sequence[Effect] = ()) -> EffectFit:
+    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected)."""
+    if data.pwm is None:
+        raise FitError("sample-window needs a PWM data set")
+    base = _others(effects, "sample-window")
+
+    def build(x: NDArray) -> list[Effect]:
+        return [*base, Effect.create("sample-window", window_s=float(x[0]) * 1e-6)]
+
+    hi_us = 1e6 * min(1.0, 20.0 / float(np.min(data.pwm.freq_hz)))
+    best = None
+    for s in (10.0, 100.0, 1000.0):
+        if s < hi_us:
+            r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
+            if best is None or r[2].cost < best[2].cost:
+                best = r
+    lad, effs, _ = best
+    return EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s})
+
+
+def fit_temperature_coefficient(data: BundleData, ladder: Foster | Cauer,
+                                effects: Sequence[Effect] = ()) -> EffectFit:
+    """α (``t0_c`` = the reference temperature) jointly with the ladder at ``T0`` from every
+    cooling curve; the initial α from ``1/Rth(P) = 1/Rth0 − α P`` across the curves."""
+    if not data.cooling:
+        raise FitError("temperature-coefficient needs cooling curves")
+    f = _foster(ladder)
+    t0 = data.reference_c
+    names = [c.name for c in data.cooling]
+    base = _others(effects, "temperature-coefficient")
+    tsp = _effects_map(base).get("tsp-nonlinearity")
+    powers, rths = [], []
+    for c in data.cooling:
+        top = c.tj_steady_c if c.tj_steady_c is not None else float(c.tj_c[0])
+        powers.append(c.power_w)
+        rths.append((float(tsp_true(top, tsp)) - c.tref_steady_c) / c.power_w)
+    powers_a, rths_a = np.array(powers), np.array(rths)
+    alpha0 = 0.0
+    if np.unique(powers_a).size >= 2:
+        slope, _ = np.polyfit(powers_a, 1 / rths_a, 1)
+        alpha0 = float(np.clip(-slope, -0.015, 0.015))
+    # the given ladder describes the curves at their mean scale; start from it at T0
+    s_mean = float(np.mean([tc_steady_scale(f.rth, alpha0, t0, c.tref_steady_c, c.power_w)
+                            for c in data.cooling])) if abs(alpha0) > 0 else 1.0
+    start = Foster.from_tau(np.asarray(f.r) / s_mean, np.asarray(f.tau) / s_mean)
+
+    def build(x: NDArray) -> list[Effect]:
+        return [*base, Effect.create("temperature-coefficient", alpha_per_k=float(x[0]) * 1e-3,
+                                     t0_c=t0)]
+
+    lad, effs, _ = joint_fit(data, names, start, True, [alpha0 * 1e3], [-15.0], [15.0], build,
+                             exclude=transient_spans(data) if "electrical-transient" not in
+                             _effects_map(base) else None)
+    return EffectFit(effs[-1], lad, 1, {"powers_w": powers, "rth_k_per_w": rths})
+
+
+def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]) -> float:
+    """Where a latent-heat band most likely sits: the model temperature of the hottest curve
+    where its residual grows fastest in log time."""
+    c = max(data.cooling, key=lambda c: c.power_w)
+    model = cooling_true_c(c, ladder, base)
+    resid = c.tj_c - model
+    smooth = np.convolve(resid, np.ones(3) / 3, mode="same")
+    grow = np.gradient(smooth, np.log(c.t_s))
+    return float(model[int(np.argmax(grow[1:-1])) + 1])
+
+
+def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
+                     effects: Sequence[Effect] = ()) -> EffectFit:
+    """Latent heat, band centre and width (at the junction node) from the cooling curves,
+    with the ladder of the lowest-power curve held: the band is sought above that curve's
+    temperatures (a band it crossed would be in its ladder), up to the hottest reading.
+    Starts: where the hottest curve's residual grows fastest in log time, and the
+    catalogue's 64.7 °C (methanol) when it lies in that range."""
+    if not data.cooling:
+        raise FitError("phase-change needs cooling curves")
+    names = [c.name for c in data.cooling]
+    base = _others(effects, "phase-change")
+    try:
+        ref = reference_ladder(data, _foster(ladder).order)
+    except (FitError, DataFormatError):
+        ref = _foster(ladder)
+    hot = max(data.cooling, key=lambda c: float(np.max(c.tj_c)))
+    t_hi = float(np.max(hot.tj_c))
+    t_lo = float(np.max(data.reference_curve.tj_c)) if len(data.cooling) > 1 else \
+        float(np.min(hot.tj_c))
+    if t_hi - t_lo < 1.0:
+        raise FitError("phase-change: no curve reaches temperatures the lowest-power curve "
+                       "does not")
+    span = t_hi - t_lo
+    c_scale = float(max(ref.c))
+
+    def build(x: NDArray) -> list[Effect]:
+        return [*base, Effect.create("phase-change", latent_j=math.exp(x[0]) * c_scale,
+                                     t_c=float(x[1]), width_k=float(x[2]), node=0)]
+
+    centres = [float(np.clip(_band_start(data, ref, base), t_lo + 0.02 * span,
+                             t_hi - 0.02 * span))]
+    default = CATALOGUE["phase-change"].params["t_c"].default
+    if t_lo < default < t_hi and abs(default - centres[0]) > 2.0:
+        centres.append(default)
+    lo = [math.log(1e-6), t_lo, 0.2]
+    hi = [math.log(10.0), t_hi, max(0.3, span / 4)]
+    starts = [joint_fit(data, names, ref, False, [math.log(1e-2), tc, min(1.5, hi[2] * 0.9)],
+                        lo, hi, build, max_nfev=6) for tc in centres]
+    first = min(starts, key=lambda r: r[2].cost)
+    best = joint_fit(data, names, ref, False, first[2].x, lo, hi, build, max_nfev=30)
+    lad, effs, _ = best
+    return EffectFit(effs[-1], lad, 3, {"t_range_c": (t_lo, t_hi)})
+
+
+def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
+                             effects: Sequence[Effect] = ()) -> EffectFit:
+    """Amplitude and span of the transient jointly with the ladder, from every point of every
+    cooling curve (the early ones included)."""
+    if not data.cooling:
+        raise FitError("electrical-transient needs cooling curves")
+    names = [c.name for c in data.cooling]
+    base = _others(effects, "electrical-transient")
+    first = min(float(c.t_s[0]) for c in data.cooling)
+    pred = predict(_subset(data, names), ladder, base)
+    amp0 = float(np.mean([data.measured(n)[0] - pred[n][0] for n in names]))
+    spans = [s for s in transient_spans(data).values() if s > 0]
+    span0 = max(float(np.median(spans)) if spans else 1e-4, 10 * first)
+
+    def build(x: NDArray) -> list[Effect]:
+        return [*base, Effect.create("electrical-transient", amplitude_k=float(x[0]),
+                                     masked_s=10 ** float(x[1]))]
+
+    lad, effs, _ = joint_fit(data, names, ladder, True, [amp0, math.log10(span0)],
+                             [-1e3, math.log10(first) - 1], [1e3, 0.0], build)
+    return EffectFit(effs[-1], lad, 2, {})
+
+
+def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
+                         effects: Sequence[Effect] = ()) -> EffectFit:
+    """``q`` and ``t_cal_c`` jointly with the ladder from every data set: the calibration
+    residuals fix ``q``, the readings of the curves and the PWM grid ``t_cal_c``."""
+    names = list(data.datasets)
+    if not names:
+        raise FitError("tsp-nonlinearity needs data")
+    base = _others(effects, "tsp-nonlinearity")
+    tcal0 = data.reference_c
+    q0 = 0.0
+    if data.calibration is not None:
+        basis, _ = data.calibration.curvature_basis(tcal0)
+        resid = data.calibration.read_c - data.calibration.temp_c
+        q0 = float(basis @ resid / max(float(basis @ basis), 1e-300))
+    temps = np.concatenate([data.measured(n) for n in names])
+    lo_t, hi_t = float(np.min(temps)) - 50, float(np.max(temps)) + 50
+    qmax = 1e4 * 0.2 / max(hi_t - lo_t, 1.0)
+
+    def build(x: NDArray) -> list[Effect]:
+        return [*base, Effect.create("tsp-nonlinearity", quad_k_per_k2=float(x[0]) * 1e-4,
+                                     t_cal_c=float(x[1]))]
+
+    x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]
+    lad, effs, _ = joint_fit(data, names, ladder, bool(data.cooling), x0, [-qmax, lo_t],
+                             [qmax, hi_t], build,
+                             exclude=transient_spans(data) if "electrical-transient" not in
+                             _effects_map(base) else None)
+    return EffectFit(effs[-1], lad, 2, {})
+
+
+FITTERS: Mapping[str, Callable[..., EffectFit]] = {
+    "temperature-coefficient": fit_temperature_coefficient,
+    "phase-change": fit_phase_change,
+    "sample-window": fit_sample_window,
+    "electrical-transient": fit_electrical_transient,
+    "tsp-nonlinearity": fit_tsp_nonlinearity,
+}
+
+
+def needs(name: str, data: BundleData) -> str:
+    """Why effect ``name`` cannot be fitted to ``data`` ("" when it can)."""
+    if name == "sample-window" and data.pwm is None:
+        return "no PWM data set"
+    if name in ("temperature-coefficient", "phase-change", "electrical-transient") \
+            and not data.cooling:
+        return "no cooling curve"
+    return ""
+
+
+def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
+               effects: Sequence[Effect] = ()) -> EffectFit:
+    """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``.
+
+    Raises :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
+    """
+    if name not in FITTERS:
+        from .effects import spec
+
+        spec(name)  # the catalogue's error for an unknown name
+        raise FitError(f"effect {name!r} has no fit")  # pragma: no cover
+    why = needs(name, data)
+    if why:
+        raise FitError(f"cannot fit {name}: {why}")
+    return FITTERS[name](data, ladder, effects)
+
+
+def fit_with_effects(bundle: Bundle, names: Sequence[str], order: int | str = "auto",
+                     provenance: Mapping[str, Any] | None = None,
+                     base: ThermalModel | None = None) -> ThermalModel:
+    """A model of ``bundle`` with the named effects fitted.
+
+    Starts from ``base`` (its ladder and effects) or else from :func:`baseline_ladder` (the
+    lowest-power cooling curve's ladder refitted to every cooling curve), then fits each
+    named effect in turn (the ladder refitted where the effect needs it, see
+    :func:`fit_effect`).
+
+    Examples
+    --------
+    >>> from spicethermal.scenarios import scenario_bundle
+    >>> m = fit_with_effects(scenario_bundle("sample-window", seed=0), ["sample-window"])
+    >>> round(m.effect("sample-window").params["window_s"] * 1e6)
+    99
+    """
+    from .model import ThermalModel
+
+    data = BundleData.from_bundle(bundle)
+    if base is not None:
+        ladder: Foster = _foster(base.ladder)
+        effects: list[Effect] = list(base.effects)
+        reference = base.reference
+        prov = {**dict(base.provenance), **dict(provenance or {})}
+    else:
+        ladder = baseline_ladder(data, order)
+        effects = []
+        reference = bundle.reference
+        prov = dict(provenance or {})
+    for name in names:
+        fitted = fit_effect(data, ladder, name, effects)
+        ladder = fitted.ladder
+        effects = [*_others(effects, name), fitted.effect]
+    prov["effects_fit"] = {"method": "spicethermal.effectfit", "effects": list(names),
+                           "params": {e.name: dict(e.params) for e in effects}}
+    return ThermalModel(ladder, tuple(effects), reference, prov)

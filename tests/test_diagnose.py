@@ -1,0 +1,149 @@
+"""Diagnosis on bundles with a hidden effect: the verdict names it and the error falls ≥ 3×;
+clean data and an effect outside the catalogue give no verdict, with the misfit located.
+Also the JSON contract, the command, ``fit --effect`` and ``compare`` after it."""
+
+from __future__ import annotations
+
+import functools
+import json
+
+import numpy as np
+import pytest
+
+from spicethermal.bundle import Bundle
+from spicethermal.cli import main
+from spicethermal.compare import compare
+from spicethermal.diagnose import (
+    DIAGNOSIS_FORMAT,
+    MIN_IMPROVEMENT,
+    diagnose,
+    fit_with_effects,
+    localise,
+)
+from spicethermal.effects import known_names
+from spicethermal.model import ThermalModel
+from spicethermal.scenarios import SCENARIOS, expected_effect, scenario_bundle
+
+SEEDS = (0, 1)
+CATALOGUED = [s for s in SCENARIOS if expected_effect(s) is not None]
+
+
+@functools.cache
+def _diagnosis(name: str, seed: int):
+    return diagnose(scenario_bundle(name, seed=seed))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("name", CATALOGUED)
+def test_hidden_effect_is_named_and_the_error_falls(name, seed):
+    d = _diagnosis(name, seed)
+    assert d.verdict_effect == expected_effect(name), d.verdict_reason
+    best = d.best
+    assert d.candidates[0] is best  # ranked first
+    assert best.rms_k * 3 <= d.baseline.rms_k
+    assert best.improvement >= 3
+    assert name in str(d) and "evidence:" in str(d)
+    # the others do not explain it
+    assert all(c.improvement < best.improvement for c in d.candidates[1:])
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_clean_data_have_no_verdict(seed):
+    d = _diagnosis("clean", seed)
+    assert d.verdict_effect is None
+    assert "no effect is missing" in d.verdict_reason
+    assert all(c.improvement < MIN_IMPROVEMENT for c in d.candidates)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_uncatalogued_drift_is_located_not_named(seed):
+    """Ambient drift during the 0.30 W curve: no catalogued effect, misfit in cooling_2 late."""
+    d = _diagnosis("ambient-drift", seed)
+    assert d.verdict_effect is None
+    assert "no catalogued effect explains" in d.verdict_reason
+    assert "cooling_2" in d.verdict_reason and "10 s-100 s" in d.verdict_reason
+    assert d.where and d.where[0].startswith("cooling_2")
+
+
+def test_localise_names_frequency_and_duty():
+    d = _diagnosis("sample-window", 0)
+    text = " ".join(localise(d.baseline))
+    assert "pwm:" in text and "kHz" in text and "below the model" in text
+
+
+def test_document_follows_the_contract():
+    d = _diagnosis("temperature-coefficient", 0)
+    doc = json.loads(json.dumps(d.to_json()))
+    assert set(doc) == {"format", "baseline", "candidates", "verdict"}
+    assert doc["format"] == DIAGNOSIS_FORMAT
+    assert set(doc["baseline"]) == {"rms_k", "max_abs_k", "worst"}
+    assert doc["baseline"]["worst"] and all(set(w) == {"dataset", "at", "residual_k"}
+                                            for w in doc["baseline"]["worst"])
+    worst = [abs(w["residual_k"]) for w in doc["baseline"]["worst"]]
+    assert worst == sorted(worst, reverse=True) and worst[0] == doc["baseline"]["max_abs_k"]
+    assert {c["effect"] for c in doc["candidates"]} == set(known_names())
+    for c in doc["candidates"]:
+        assert set(c) == {"effect", "params", "rms_k", "improvement", "evidence"}
+        assert c["improvement"] == pytest.approx(doc["baseline"]["rms_k"] / c["rms_k"])
+        assert isinstance(c["evidence"], str) and c["evidence"].count(". ") == 0
+    assert doc["verdict"]["effect"] == "temperature-coefficient"
+    assert doc["candidates"][0]["effect"] == "temperature-coefficient"
+    alpha = doc["candidates"][0]["params"]["alpha_per_k"]
+    assert alpha == pytest.approx(-3e-3, rel=0.03)
+
+
+def test_a_model_with_the_effect_leaves_nothing_to_find():
+    b = scenario_bundle("sample-window", seed=0)
+    model = fit_with_effects(b, ["sample-window"])
+    d = diagnose(b, model, effects=["sample-window", "temperature-coefficient"])
+    assert d.verdict_effect is None
+    assert d.skipped["sample-window"] == "already in the model"
+
+
+# ------------------------------------------------------------------------------ commands
+def test_diagnose_command_json_and_report(tmp_path, capsys):
+    bundle = scenario_bundle("electrical-transient", seed=0).write(tmp_path / "b")
+    assert main(["diagnose", str(bundle), "--json", "--report", str(tmp_path / "rep"),
+                 "--effect", "electrical-transient", "--effect", "sample-window"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["format"] == DIAGNOSIS_FORMAT
+    assert doc["verdict"]["effect"] == "electrical-transient"
+    assert [c["effect"] for c in doc["candidates"]] == ["electrical-transient", "sample-window"]
+    page = (tmp_path / "rep" / "index.html").read_text()
+    assert "electrical-transient" in page and "<img" in page
+    assert (tmp_path / "rep" / "diagnosis_before_after.png").stat().st_size > 10000
+    assert main(["diagnose", str(bundle), "--effect", "electrical-transient"]) == 0
+    out = capsys.readouterr().out
+    assert "verdict: electrical-transient" in out and "where it fails:" in out
+
+
+@pytest.mark.parametrize("args, word", [
+    (["missing-dir"], "no such"),
+    (["BUNDLE", "--effect", "convection"], "known effects"),
+    (["BUNDLE", "--model", "none.json"], "none.json"),
+])
+def test_diagnose_command_errors(tmp_path, capsys, args, word):
+    bundle = scenario_bundle("clean", seed=0).write(tmp_path / "b")
+    args = [str(bundle) if a == "BUNDLE" else str(tmp_path / a) if a.endswith(("dir", "json"))
+            else a for a in args]
+    assert main(["diagnose", *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and word in err
+
+
+def test_fit_effect_then_compare_shows_the_error_fall(tmp_path, capsys):
+    bundle = scenario_bundle("tsp-nonlinearity", seed=1).write(tmp_path / "b")
+    plain, better = str(tmp_path / "plain.json"), str(tmp_path / "tsp.json")
+    assert main(["fit", str(bundle), "-o", plain, "-q"]) == 0
+    assert main(["fit", str(bundle), "--effect", "tsp-nonlinearity", "-o", better]) == 0
+    assert "tsp-nonlinearity (quad_k_per_k2 = " in capsys.readouterr().out
+    model = ThermalModel.load(better)
+    assert model.effect("tsp-nonlinearity").params["quad_k_per_k2"] == pytest.approx(
+        4e-4, rel=0.05)
+    b = Bundle.read(bundle)
+    before = compare(ThermalModel.load(plain), b)
+    after = compare(model, b)
+    assert after.rms_k * 3 < before.rms_k
+    assert main(["compare", better, str(bundle), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["rms_k"] == pytest.approx(after.rms_k)
+    assert np.isfinite(after.max_abs_k)

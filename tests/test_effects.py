@@ -1,0 +1,166 @@
+"""Effects: the catalogue contract, the fast forward models against the model's own nonlinear
+integration and closed forms, and each effect's fit recovering its hidden parameters."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from spicethermal.bundle import Bundle, CalibrationTable, PwmTable
+from spicethermal.effectfit import (
+    BundleData,
+    baseline_ladder,
+    fit_effect,
+    pc_cooling_rise,
+    pc_frozen_ladder,
+    predict,
+    tc_cooling_rise,
+    tc_frozen_ladder,
+    tc_steady_scale,
+    tsp_reading,
+    tsp_true,
+)
+from spicethermal.effects import CATALOGUE, DEVICE, MEASUREMENT, Effect, known_names
+from spicethermal.errors import DataFormatError, FitError
+from spicethermal.ladder import Foster
+from spicethermal.model import Schedule, ThermalModel
+from spicethermal.scenarios import HIDDEN, actuator, scenario_bundle
+
+CONTRACT = {"temperature-coefficient": DEVICE, "phase-change": DEVICE,
+            "sample-window": MEASUREMENT, "electrical-transient": MEASUREMENT,
+            "tsp-nonlinearity": MEASUREMENT}
+
+
+def test_catalogue_names_kinds_and_units():
+    assert {n: CATALOGUE[n].kind for n in known_names()} == CONTRACT
+    for s in CATALOGUE.values():
+        assert s.params and all(p.unit is not None and p.low <= p.default <= p.high
+                                for p in s.params.values())
+    with pytest.raises(DataFormatError, match="known effects"):
+        Effect.create("convection")
+    with pytest.raises(DataFormatError, match="alpha_per_k"):
+        Effect.create("temperature-coefficient", alpha_per_k=1.0)
+    with pytest.raises(DataFormatError, match="unknown parameter"):
+        Effect.create("sample-window", window=1e-4)
+
+
+# ------------------------------------------------------------------ temperature coefficient
+def test_tc_steady_scale_is_self_consistent():
+    rth, alpha, p, tref = 146.0, -3e-3, 0.3, 30.0
+    s = tc_steady_scale(rth, alpha, 25.0, tref, p)
+    theta = p * rth * s
+    assert s == pytest.approx(1 + alpha * (tref + theta - 25.0), rel=1e-14)
+    with pytest.raises(Exception, match="steady state"):
+        tc_steady_scale(rth, 0.02, 25.0, 25.0, 1.0)  # runaway: 1 - α P Rth < 0
+
+
+def test_tc_cooling_is_the_models_nonlinear_solution(actuator):
+    """The warped-time closed form against the model's Radau integration of the network."""
+    alpha = -3e-3
+    m = ThermalModel(actuator, (Effect.create("temperature-coefficient", alpha_per_k=alpha),))
+    t = np.geomspace(1e-5, 100, 15)
+    theta0 = m.steady_nodes(0.3, 25.0)
+    exact = m.simulate(t, Schedule((0.0,), (0.0,)), 25.0, theta0).tj_k
+    fast = tc_cooling_rise(actuator, alpha, 25.0, 25.0, 0.3, t)
+    assert np.max(np.abs(fast - exact)) < 1e-5
+    assert tc_cooling_rise(actuator, alpha, 25.0, 25.0, 0.3, [0.0])[0] == pytest.approx(
+        theta0[0], rel=1e-12)
+    lin = tc_cooling_rise(actuator, 0.0, 25.0, 25.0, 0.3, t)
+    assert np.allclose(lin, 0.3 * actuator.cooling(t), rtol=1e-13, atol=0)
+
+
+def test_tc_pwm_quasi_static_matches_shooting(actuator):
+    """Frozen at the mean temperature vs the model's shooting solution (two corners)."""
+    eff = Effect.create("temperature-coefficient", alpha_per_k=-3e-3)
+    m = ThermalModel(actuator, (eff,))
+    for f, d in ((500.0, 0.8), (25e3, 0.2)):
+        exact = m.pwm(0.1, f, d, 1e-4, 25.0).reading_k
+        lad = tc_frozen_ladder(actuator, -3e-3, 25.0, 25.0, 0.1 * d)
+        from spicethermal.pwm import steady_state
+
+        assert steady_state(lad, 0.1, f, d, 1e-4).reading_k == pytest.approx(exact, abs=5e-3)
+
+
+# ------------------------------------------------------------------------- phase change
+def test_pc_cooling_matches_the_models_integration(actuator):
+    eff = HIDDEN["phase-change"]
+    m = ThermalModel(actuator, (eff,))
+    t = np.geomspace(1e-5, 100, 25)
+    from spicethermal.compare import cooling_rise_k
+
+    exact = cooling_rise_k(m, 0.3, t, 25.0)
+    fast = pc_cooling_rise(actuator, eff, 25.0, 0.3, t)
+    assert np.max(np.abs(fast - exact)) < 2e-3
+    lin = 0.3 * actuator.cooling(t)
+    assert np.max(fast - lin) > 1.0  # the latent heat holds the junction up by kelvins
+    cold = pc_cooling_rise(actuator, eff, 25.0, 0.12, t)  # never reaches the band
+    assert np.array_equal(cold, 0.12 * actuator.cooling(t))
+
+
+def test_pc_frozen_ladder_keeps_rth_and_slows_the_junction(actuator):
+    eff = Effect.create("phase-change", latent_j=0.05, t_c=40.0, width_k=2.0)
+    lad = pc_frozen_ladder(actuator, eff, 25.0, 0.1)  # mean node rise 14.6 K: in the band
+    assert lad.rth == pytest.approx(actuator.rth, rel=1e-10)
+    assert lad.zth(1e-3) < actuator.zth(1e-3)
+
+
+# ------------------------------------------------------------------------- measurement
+def test_tsp_reading_and_its_inverse():
+    eff = Effect.create("tsp-nonlinearity", quad_k_per_k2=4e-4, t_cal_c=25.0)
+    t = np.linspace(0.0, 150.0, 31)
+    r = tsp_reading(t, eff)
+    assert r[t == 85.0][0] == pytest.approx(85.0 + 4e-4 * 3600, abs=1e-12)
+    assert np.allclose(tsp_true(r, eff), t, atol=1e-10)
+
+
+def test_predict_calibration_curvature_is_exact():
+    """A quadratic TSP seen through the least-squares line: predicted = observed residuals."""
+    temps = np.arange(20.0, 101.0, 10.0)
+    q = 4e-4
+    volts = 0.65 - 2e-3 * ((temps - 25) + q * (temps - 25) ** 2)
+    b = Bundle(ambient_c=25.0, calibration=CalibrationTable(temps, volts),
+               pwm=PwmTable([1e3], [0.5], [30.0], power_w=0.1))
+    data = BundleData.from_bundle(b)
+    eff = Effect.create("tsp-nonlinearity", quad_k_per_k2=q, t_cal_c=25.0)
+    pred = predict(data, Foster.from_tau([100.0], [1.0]), [eff])["calibration"]
+    assert np.max(np.abs(pred - data.calibration.read_c)) < 1e-9
+    assert np.ptp(data.calibration.read_c - temps) > 0.3
+
+
+def test_sample_window_prediction_reads_lower_than_the_peak(actuator):
+    b = Bundle(ambient_c=25.0, pwm=PwmTable([500.0, 25e3], [0.5, 0.5], [30.0, 30.0],
+                                            power_w=0.1))
+    data = BundleData.from_bundle(b)
+    peak = predict(data, actuator)["pwm"]
+    read = predict(data, actuator, [Effect.create("sample-window", window_s=1e-4)])["pwm"]
+    assert np.all(read < peak)
+    assert peak[0] - read[0] > peak[1] - read[1] > 0.1  # larger ripple at 500 Hz
+
+
+# -------------------------------------------------------------------------------- fits
+@pytest.mark.parametrize("name, key, rel", [
+    ("temperature-coefficient", "alpha_per_k", 0.03),
+    ("phase-change", "latent_j", 0.05),
+    ("sample-window", "window_s", 0.12),
+    ("electrical-transient", "amplitude_k", 0.02),
+    ("tsp-nonlinearity", "quad_k_per_k2", 0.05),
+])
+def test_fit_recovers_the_hidden_parameter(name, key, rel):
+    data = BundleData.from_bundle(scenario_bundle(name, seed=3))
+    fit = fit_effect(data, baseline_ladder(data), name)
+    truth = HIDDEN[name].params[key]
+    assert fit.effect.params[key] == pytest.approx(truth, rel=rel)
+    if name == "phase-change":
+        assert fit.effect.params["t_c"] == pytest.approx(64.7, abs=0.3)
+
+
+def test_fit_needs_the_right_data():
+    data = BundleData.from_bundle(Bundle(ambient_c=25.0,
+                                         pwm=PwmTable([1e3], [0.5], [30.0], power_w=0.1)))
+    with pytest.raises(FitError, match="cooling"):
+        fit_effect(data, actuator(), "temperature-coefficient")
+    with pytest.raises(DataFormatError, match="known effects"):
+        fit_effect(data, actuator(), "no-such-effect")
+    assert math.isfinite(predict(data, actuator())["pwm"][0])
