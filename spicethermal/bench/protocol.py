@@ -364,24 +364,24 @@ class Sample(Message):
 
     @property
     def t_s(self) -> float:
-        return self.t_us * 1e-6
+        return self.t_us / 1e6
 
     @property
     def v_tsp_v(self) -> float:
         """TSP: heater-diode voltage minus reference-diode voltage, V (negative when hot)."""
-        return self.v_tsp_uv * 1e-6
+        return self.v_tsp_uv / 1e6
 
     @property
     def power_w(self) -> float:
-        return self.v_d_uv * 1e-6 * self.i_ua * 1e-6
+        return self.v_d_uv * self.i_ua / 1e12
 
     @property
     def tamb_c(self) -> float:
-        return self.tamb_mc * 1e-3
+        return self.tamb_mc / 1e3
 
     @property
     def taux_c(self) -> float:
-        return self.taux_mc * 1e-3
+        return self.taux_mc / 1e3
 
 
 @dataclass(frozen=True)
