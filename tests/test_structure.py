@@ -41,6 +41,16 @@ def test_lanczos_cauer_equals_the_rational_continued_fraction():
     assert np.allclose(fast.c, exact.c, rtol=1e-13, atol=0)
 
 
+def test_lanczos_cauer_detects_lost_precision_and_retries(monkeypatch):
+    import spicethermal.structure as st
+
+    f = Foster.from_tau(np.linspace(1, 3, 20), np.logspace(-6, 2, 20))
+    good = cauer_ladder(f)
+    monkeypatch.setattr(st, "_lanczos_digits", lambda ladder: 30)  # far too few digits
+    again = cauer_ladder(f)
+    assert np.allclose(again.r, good.r, rtol=1e-9) and np.allclose(again.c, good.c, rtol=1e-9)
+
+
 def test_lanczos_cauer_round_trips_at_order_20():
     f = Foster.from_tau(np.linspace(1, 3, 20), np.logspace(-6, 2, 20))
     back = cauer_ladder(f).to_foster()
