@@ -24,7 +24,10 @@ Steps of :func:`time_constant_spectrum`:
    * ``"bayes"`` (default) — the Bayesian iteration of Kennett, Prestwich and Robinson
      (1978), used by Székely for NID and by PyRth: the multiplicative, non-negative
      Richardson–Lucy update ``R ← R · Wᵀ(a′ / W R) / Wᵀ1``. Its regularisation is the number
-     of iterations; default :data:`BAYES_ITERATIONS`.
+     of iterations; default :data:`BAYES_ITERATIONS`. A constant background of
+     :data:`BACKGROUND_SIGMAS` noise standard deviations of ``a′`` (robust estimate from its
+     second differences) is added to data and model, so that noisy samples near zero are
+     used as they are rather than clipped at zero (clipping biases the spectrum upwards).
    * ``"nnls"`` — non-negative least squares with Tikhonov regularisation of the second
      difference, ``min ‖W R − a′‖² + λ² ‖D₂ R‖²`` with ``R ≥ 0``, over a logarithmic sweep
      of ``λ``. Default choice of λ: Morozov's discrepancy principle with the noise taken from
@@ -38,6 +41,9 @@ maximum, in decades of τ, of the spectrum the same method with the same setting
 a single time constant in the middle of the grid (its point-spread function; noise-free
 data for ``"bayes"``, the model-resolution matrix for ``"nnls"``). Two time constants closer
 than about this cannot be told apart.
+
+The resistance the grid cannot hold (Zth at the grid's first point, a few mK/W) is added to
+the first cell, so ΣR is not below the curve's final value.
 
 A :class:`Spectrum` lumps into a Foster ladder of any order (:meth:`Spectrum.to_foster`),
 which goes to Cauer and to a ``.lib`` through the existing code
