@@ -309,6 +309,8 @@ class Separation:
     """Where two cumulative structure functions part (see :func:`separation`).
 
     ``r_k_per_w`` is ``None`` when they do not part within the compared range.
+    ``first_exceeds_r_k_per_w`` is the first ΣR at which the difference exceeds the threshold
+    at all (even if the curves come together again after it).
     """
 
     r_k_per_w: float | None
@@ -317,10 +319,12 @@ class Separation:
     r_range_k_per_w: tuple[float, float]
     max_difference_decades: float
     labels: tuple[str, str] = ("", "")
+    first_exceeds_r_k_per_w: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
         return {"r_k_per_w": self.r_k_per_w, "c_j_per_k": self.c_j_per_k,
+                "first_exceeds_r_k_per_w": self.first_exceeds_r_k_per_w,
                 "threshold_decades": self.threshold_decades,
                 "r_range_k_per_w": list(self.r_range_k_per_w),
                 "max_difference_decades": self.max_difference_decades,
@@ -333,9 +337,13 @@ class Separation:
             return (f"{a} and {b} do not separate over ΣR {lo:.3g}..{hi:.3g} K/W "
                     f"(|Δlog10 ΣC| ≤ {self.max_difference_decades:.3f} < "
                     f"{self.threshold_decades})")
-        return (f"{a} and {b} separate at ΣR = {self.r_k_per_w:.4g} K/W "
+        text = (f"{a} and {b} separate at ΣR = {self.r_k_per_w:.4g} K/W "
                 f"(ΣC = {self.c_j_per_k:.4g} J/K; |Δlog10 ΣC| > {self.threshold_decades} "
-                f"over ΣR {lo:.3g}..{hi:.3g} K/W)")
+                f"from there to the end of ΣR {lo:.3g}..{hi:.3g} K/W")
+        first = self.first_exceeds_r_k_per_w
+        if first is not None and first < self.r_k_per_w:
+            text += f"; first exceeded, transiently, at {first:.3g} K/W"
+        return text + ")"
 
 
 def separation(a: StructureFunction, b: StructureFunction, *,
@@ -376,10 +384,12 @@ def separation(a: StructureFunction, b: StructureFunction, *,
     r = np.linspace(lo, hi, int(points))
     ca, cb = a.c_at(r), b.c_at(r)
     diff = np.abs(np.log10(ca) - np.log10(cb))
+    over = np.flatnonzero(diff > threshold_decades)
+    first = float(r[over[0]]) if over.size else None
     below = np.flatnonzero(diff <= threshold_decades)
     if below.size and below[-1] == r.size - 1:
         return Separation(None, None, float(threshold_decades), (lo, hi), float(diff.max()),
-                          labels)
+                          labels, first)
     i = int(below[-1]) + 1 if below.size else 0
     return Separation(float(r[i]), float(math.sqrt(ca[i] * cb[i])), float(threshold_decades),
-                      (lo, hi), float(diff.max()), labels)
+                      (lo, hi), float(diff.max()), labels, first)

@@ -157,6 +157,9 @@ def test_mosfet_dry_and_paste_separate_after_the_die_and_package(mosfet):
     assert dry.rth_k_per_w > tim.rth_k_per_w * 2
     sep = separation(dry, tim)
     assert sep.r_k_per_w is not None
+    # near the junction the two records wiggle apart and together again (see separation())
+    assert sep.first_exceeds_r_k_per_w is not None
+    assert sep.first_exceeds_r_k_per_w <= sep.r_k_per_w
 
     a = dry_c.resample_log(20, t_min=1e-4, t_max=50.0)
     b = tim_c.resample_log(20, t_min=1e-4, t_max=50.0)
