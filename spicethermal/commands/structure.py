@@ -12,8 +12,9 @@ T3Ster ``.raw``) goes Zth(t) → time-constant spectrum (NID) → Foster ladder
 * one source: exactly ``{"cumulative": {"r_k_per_w": [...], "c_j_per_k": [...]}}``;
 * two sources: a JSON **list** of two such objects, in the order given, each with two more
   keys: ``"source"`` (the argument) and ``"separation"`` (the same comparison in both:
-  ``{"r_k_per_w", "c_j_per_k", "threshold_decades", "r_range_k_per_w",
-  "max_difference_decades", "labels"}``, ``r_k_per_w`` null when they do not separate).
+  ``{"r_k_per_w", "c_j_per_k", "first_exceeds_r_k_per_w", "threshold_decades",
+  "r_range_k_per_w", "max_difference_decades", "labels"}``, ``r_k_per_w`` null when they
+  do not separate).
 """
 
 from __future__ import annotations
