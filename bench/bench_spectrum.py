@@ -14,7 +14,9 @@ Run either way (prints the numbers)::
 2. **Accuracy** over ``N_SEEDS`` noise seeds (default 10) of the 4-layer ladder test, both
    methods: max |ΔΣR| at equal ΣC in % of Rth (resolved range, corners excluded within a
    factor 2, as in the test), and the relative ΣR error at the middle of each riser.
-3. **Real data**: fit error of the spectrum's ladder from 10 µs, and the separation point.
+3. **Differential structure function** on five distributed layers (4 sections each): the
+   layer's K = C/R read off the curve against the truth.
+4. **Real data**: fit error of the spectrum's ladder from 10 µs, and the separation point.
 """
 
 from __future__ import annotations
@@ -104,6 +106,38 @@ def accuracy(n_seeds: int = 10) -> dict[str, float]:
     return out
 
 
+#: Five distributed layers (R K/W, C J/K), 4 Cauer sections each: die, attach, base plate,
+#: interface, heat sink. Within a uniform layer K = dΣC/dΣR = C/R (= λ cρ A²).
+DISTRIBUTED = ((0.2, 0.004), (0.3, 0.002), (0.3, 0.3), (0.8, 0.1), (1.0, 30.0))
+
+
+def differential(n_seeds: int = 5) -> float:
+    """Layer K = C/R read off the differential structure function (median over the middle
+    half of each layer, resolved part) against the truth."""
+    r, c = [], []
+    for big_r, big_c in DISTRIBUTED:
+        r += [big_r / 4] * 4
+        c += [big_c / 4] * 4
+    true = Cauer(r, c).to_foster()
+    edges = np.cumsum([0.0] + [x for x, _ in DISTRIBUTED])
+    t = np.logspace(-6, 3, 361)
+    errs = np.zeros((n_seeds, len(DISTRIBUTED)))
+    for j, seed in enumerate(range(1, n_seeds + 1)):
+        z = true.zth(t) + np.random.default_rng(seed).normal(0, 1e-3 * true.rth, t.size)
+        sf = structure_function(time_constant_spectrum(t, z))
+        rm, k = sf.differential()
+        ok = sf.resolved()[1:]
+        for i, (big_r, big_c) in enumerate(DISTRIBUTED):
+            a, b = edges[i], edges[i + 1]
+            sel = ok & (rm > a + 0.25 * (b - a)) & (rm < b - 0.25 * (b - a))
+            errs[j, i] = np.median(k[sel]) / (big_c / big_r) - 1 if sel.any() else np.nan
+    print(f"differential structure function, 5 distributed layers, 0.1 % noise, {n_seeds} "
+          f"seeds: layer K = C/R (true " + ", ".join(f"{c / r:.3g}" for r, c in DISTRIBUTED)
+          + " W²s/K²) recovered within " + ", ".join(
+              f"{100 * np.nanmax(np.abs(errs[:, i])):.0f} %" for i in range(len(DISTRIBUTED))))
+    return float(np.nanmax(np.abs(errs)))
+
+
 def real_data() -> dict[str, float]:
     from spicethermal.commands.spectrum import load_curve
 
@@ -133,6 +167,7 @@ def real_data() -> dict[str, float]:
 def main(n_seeds: int = 10) -> None:
     speed()
     accuracy(n_seeds)
+    differential(max(1, n_seeds // 2))
     real_data()
 
 
@@ -141,6 +176,7 @@ if pytest is not None:
     def test_bench_spectrum():
         s = speed()
         a = accuracy(5)
+        differential(3)
         r = real_data()
         assert s["total_s"] < 2.0
         assert a["bayes"] < 0.02
