@@ -254,3 +254,23 @@ def test_compare_command_bad_files(model, bundle_dir, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 3 and "missing" in err[0] and "none.json" in err[1]
     assert "reference" in err[2]
+
+
+# ------------------------------------------------------------------------------ figures
+def test_table2_figures(model, bundle_dir, tmp_path):
+    from spicethermal.plots import fig_table2, plot_table2, plot_table2_heatmap
+
+    b = Bundle.read(bundle_dir)
+    lad = model.ladder
+    c = compare(ThermalModel(type(lad)(np.array(lad.r) * 1.05, lad.c)), b)
+    pwm = c.dataset("pwm")
+    bars = plot_table2(c)
+    heights = sorted(round(p.get_height(), 9) for p in bars.patches)
+    assert heights == sorted(round(p.residual_k, 9) for p in pwm.points)
+    cells = plot_table2_heatmap(c).texts
+    assert sorted(float(t.get_text()) for t in cells) == \
+        sorted(round(p.residual_k, 2) for p in pwm.points)
+    out = fig_table2(c, tmp_path / "t2.png")
+    assert out.stat().st_size > 10000
+    with pytest.raises(DataFormatError, match="pwm"):
+        plot_table2(c.dataset("cooling_1"))

@@ -209,3 +209,36 @@ def test_pwm_command_bad_model(tmp_path, capsys):
                  "--power", "0.1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "format" in err[0] and "no such file" in err[1]
+
+
+# ------------------------------------------------------------------------------ Fig. 8
+def test_fig8_curves(actuator):
+    from spicethermal.plots import FIG8_DUTIES, plot_r_duty
+    from spicethermal.pwm import r_duty_eq3, r_duty_exact
+
+    ax = plot_r_duty(actuator)
+    lines = ax.get_lines()
+    assert len(lines) == 2 * len(FIG8_DUTIES)
+    for k, d in enumerate(FIG8_DUTIES):
+        solid, dashed = lines[2 * k], lines[2 * k + 1]
+        t = solid.get_xdata()
+        assert solid.get_linestyle() == "-" and dashed.get_linestyle() == "--"
+        assert np.array_equal(solid.get_ydata(), r_duty_exact(actuator, t, d))
+        assert np.array_equal(dashed.get_ydata(), r_duty_eq3(actuator, t, d))
+        assert np.all(solid.get_ydata() <= dashed.get_ydata() + 1e-12)  # eq. 3 is conservative
+    assert t[0] < min(actuator.tau) and t[-1] > max(actuator.tau)
+
+
+def test_curves_command(tmp_path, actuator, capsys):
+    path = _model_file(tmp_path, actuator)
+    out = tmp_path / "fig8.png"
+    assert main(["curves", path, "-o", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10000
+    assert capsys.readouterr().out.strip() == str(out)
+    assert main(["curves", path, "-o", str(out), "--duty", "0.5", "--duty", "0"]) == 0
+    with pytest.raises(SystemExit) as exc:
+        main(["curves", path, "-o", str(out), "--duty", "1.5"])
+    assert exc.value.code == 2
+    assert main(["curves", str(tmp_path / "none.json"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "duty" in err[0] and "none.json" in err[1]
