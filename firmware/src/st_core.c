@@ -274,6 +274,7 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
     }
     if (p->proc != ST_PROC_CAL) {
         uint32_t i_ua = st_current_for_power(p->power_uw, bd->vd_nominal_uv);
+        hal_fixture_dac(0); /* the device is off the calibration hot plate */
         hal_release();
         hal_heater_dac(st_dac_for_current(i_ua, bd->i_full_ua, bd->dac_max));
         hal_heater_pwm(p->period_ns, p->on_ns);

@@ -407,13 +407,14 @@ class BenchClient:
     def __init__(self, url: str, raw_dir: Path | None = None, *, progress: bool = False,
                  nak_after_s: float = 0.5, silent_after_s: float = 5.0) -> None:
         self.url = url
+        self.port = None
         self.log = RawLog(raw_dir)
-        self.port = open_port(url)
-        self.link = Link(self.port, self.log, nak_after_s=nak_after_s,
-                         silent_after_s=silent_after_s, name=url)
         self.progress = Progress(progress, 1.0)
         self.on_status: Callable[[p.Status], None] | None = None
         try:
+            self.port = open_port(url)
+            self.link = Link(self.port, self.log, nak_after_s=nak_after_s,
+                             silent_after_s=silent_after_s, name=url)
             self.info = self.handshake()
         except BaseException:
             self.close()
@@ -427,7 +428,7 @@ class BenchClient:
 
     def close(self) -> None:
         try:
-            if getattr(self, "port", None) is not None and self.port.is_open:
+            if self.port is not None and self.port.is_open:
                 self.port.close()
         finally:
             self.log.close()

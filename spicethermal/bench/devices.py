@@ -125,7 +125,7 @@ def _actuator() -> Preset:
         pwm_power_w=0.094,
         effect_params={
             "temperature-coefficient": {"alpha_per_k": -2e-3, "t0_c": 25.0},
-            "phase-change": {"t_c": 64.7, "width_k": 1.5, "latent_j": 0.5, "node": 2},
+            "phase-change": {"t_c": 64.7, "width_k": 1.5, "latent_j": 1.0, "node": 1},
         },
     )
 

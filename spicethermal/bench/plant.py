@@ -155,6 +155,13 @@ class Plant:
         self.t_s += dt
         self._advance_fixture(dt)
 
+    def heat(self, duration_s: float, power_w: float) -> None:
+        """Advance ``duration_s`` at constant power in chunks of at most :attr:`max_chunk_s`
+        (so device effects follow the temperature)."""
+        n = max(1, math.ceil(duration_s / self.max_chunk_s))
+        for _ in range(n):
+            self.step(duration_s / n, power_w)
+
     def step_periods(self, periods: int, period_s: float, on_s: float, power_w: float) -> None:
         """Advance ``periods`` whole PWM periods, each an on-phase of ``on_s`` then off."""
         if periods <= 0:

@@ -133,7 +133,7 @@ class Serial(SerialBase):
         pass
 
     def close(self) -> None:
-        if self.is_open:
+        if self.is_open and getattr(self, "device", None) is not None:
             self.device.close()
         self.is_open = False
 

@@ -94,6 +94,8 @@ def firmware_library() -> ctypes.CDLL:
     lib.hh_poll.argtypes = [ctypes.c_void_p]
     lib.hh_busy.argtypes = [ctypes.c_void_p]
     lib.hh_busy.restype = ctypes.c_uint32
+    lib.hh_blocked.argtypes = [ctypes.c_void_p]
+    lib.hh_blocked.restype = ctypes.c_uint32
     lib.hh_set_version.argtypes = [ctypes.c_uint8] * 3
     return lib
 
@@ -201,6 +203,8 @@ class SimulatedDevice:
         """Run the device until it has transmitted something or waits for the host."""
         events = 0
         while self._state.tx_len == 0 and events < max_events:
+            if self._lib.hh_blocked(self._dev):
+                break  # the host must acknowledge first; its reads take no simulated time
             if self.adc_at is not None and (self.wake is None or self.adc_at <= self.wake):
                 self._convert()
             elif self.wake is not None:

@@ -82,6 +82,13 @@ void hh_poll(hh_device_t *d)
 
 uint32_t hh_busy(hh_device_t *d) { return st_core_busy(&d->core); }
 
+uint32_t hh_blocked(hh_device_t *d)
+{
+    const st_ring_t *r = &d->core.ring;
+    uint16_t used = (uint16_t)(r->next_seq - r->acked);
+    return d->core.f_count > 0 && used + 3u >= ST_RING_FRAMES;
+}
+
 void hh_set_version(uint8_t major, uint8_t minor, uint8_t patch)
 {
     st_fw_version[0] = major;

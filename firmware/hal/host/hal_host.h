@@ -53,6 +53,9 @@ void hh_rx(hh_device_t *d, const uint8_t *buf, uint32_t n);
 void hh_adc(hh_device_t *d, const uint16_t *code);
 void hh_poll(hh_device_t *d);
 uint32_t hh_busy(hh_device_t *d);
+/* 1 when samples wait for room in the transmit ring (the host has not acknowledged enough):
+ * the simulator then lets the host catch up before advancing simulated time. */
+uint32_t hh_blocked(hh_device_t *d);
 /* firmware version reported in INFO (tests fake an old firmware with it) */
 void hh_set_version(uint8_t major, uint8_t minor, uint8_t patch);
 
