@@ -312,7 +312,9 @@ def _grid(curve: ZthCurve, points_per_decade: int, pre_decades: float, post_deca
     k = np.arange(-n_pre, n_data + n_post)
     t = t0 * np.exp(k * dz)
     a = np.empty(k.size)
-    a[:n_pre] = max(a_data[0], 0.0) * np.sqrt(t[:n_pre] / t0)     # √t law before the data
+    # √t law before the data (held flat if the curve starts below zero, e.g. when the √t
+    # extrapolated Tj at the cut overshoots a given steady value: no spurious jump)
+    a[:n_pre] = a_data[0] * np.sqrt(t[:n_pre] / t0) if a_data[0] > 0 else a_data[0]
     a[n_pre:n_pre + n_data] = a_data
     a[n_pre + n_data:] = a_data[-1]                                  # steady state after
     return t, a, n_pre, n_pre + n_data - 1

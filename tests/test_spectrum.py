@@ -17,6 +17,7 @@ from spicethermal.spectrum import (
     log_derivative,
     time_constant_spectrum,
 )
+from spicethermal.synthetic import synthetic_cooling
 
 DATA = Path(__file__).parent.parent.parent / "shared" / "data" / "pyrth_mosfet"
 if not DATA.is_dir():  # the shared data live beside the repository
@@ -194,3 +195,26 @@ def test_pyrth_text_source_with_calibration_csv_and_power(tmp_path):
     assert curve.rth_k_per_w == pytest.approx(ladder.rth, rel=1e-3)
     offset = curve.rth_k_per_w - ladder.rth
     assert np.allclose(curve.zth_k_per_w, ladder.zth(curve.t_s) + offset, atol=1e-6)
+
+
+def test_bundle_source(tmp_path, capsys):
+    """A bundle directory with a cooling curve (electrical transient included, no steady
+    junction temperature: Tj at the cut is extrapolated by √t) is read through the
+    early-time correction; the spectrum holds the curve's Rth."""
+    from spicethermal.bundle import Bundle, CoolingTable
+    from spicethermal.cli import main
+    from spicethermal.commands.spectrum import load_curve
+
+    ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
+    t, tj = synthetic_cooling(ladder, 2.0, np.geomspace(1e-6, 20.0, 600), transient_s=3e-5)
+    bundle = Bundle(device="test", reference="ambient", ambient_c=25.0, cooling=(
+        CoolingTable(t, 2.0, tj_c=tj, tref_steady_c=25.0),))
+    path = bundle.write(tmp_path / "run1")
+    curve = load_curve(path)
+    assert curve.label.startswith("run1") and curve.early is not None and curve.early.detected
+    # √t is not this lumped ladder's early law: Tj at the cut comes out ~0.4 % high
+    assert curve.rth_k_per_w == pytest.approx(4.0, rel=0.03)
+    assert main(["spectrum", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rth_k_per_w"] == pytest.approx(curve.rth_k_per_w, rel=2e-3)
+    assert out["t_resolved_s"][0] == pytest.approx(curve.early.masked_s[1])

@@ -91,7 +91,7 @@ def load_curve(source: str | Path, *, curve: int = 0, calibration: str | Path | 
         raise DataFormatError(f"{path}: no such file or bundle directory")
     if path.is_dir():
         zc = _from_bundle(path, curve, None)[0]
-        return replace(zc, label=path.name) if zc.label in ("", "cooling_1.csv") else zc
+        return replace(zc, label=f"{path.name}/{zc.label}" if zc.label else path.name)
     suffix = path.suffix.lower()
     if suffix in (".txt", ".raw"):
         from ..importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3ster
