@@ -13,8 +13,8 @@ Contents
   :func:`fig_spectrum`; structure functions :func:`plot_cumulative_structure`,
   :func:`plot_differential_structure`, :func:`fig_structure` (separation marked).
 * Diagnosis — residuals per data set :func:`plot_dataset_residuals`, before/after an effect
-  :func:`fig_before_after`, candidates :func:`plot_candidates`, :func:`fig_candidates`;
-  all in :func:`diagnosis_figures`.
+  :func:`fig_before_after`, candidates :func:`plot_candidates`, :func:`fig_candidates`,
+  the paper's Table 2 :func:`fig_table2_diagnosis`; all in :func:`diagnosis_figures`.
 * Fig. 8 and Table 2 — duty-cycle impedance curves :func:`plot_r_duty`, :func:`fig8`; PWM
   residuals as grouped bars :func:`plot_table2` and heat map :func:`plot_table2_heatmap`, both in
   :func:`fig_table2`.
@@ -40,7 +40,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .calibration import Calibration
     from .compare import Comparison
     from .datasheet import Table1
-    from .diagnose import Diagnosis
+    from .diagnose import Diagnosis, TableAnalysis
     from .drive import DriveResult
     from .fit import FitResult
     from .ladder import Cauer, Foster
@@ -746,7 +746,46 @@ def diagnosis_figures(result: Diagnosis, out_dir: str | os.PathLike) -> list[Pat
                                   ("baseline", label)))
     if result.candidates:
         paths.append(fig_candidates(result, out / "diagnosis_candidates.png"))
+    table2 = result.extra.get("table2")
+    if table2 is not None:
+        paths.append(fig_table2_diagnosis(table2, out / "diagnosis_table2.png"))
     return paths
+
+
+def fig_table2_diagnosis(analysis: TableAnalysis, path: str | os.PathLike) -> Path:
+    """A measured-vs-simulated PWM table (the paper's Table 2) and the explanations tried:
+    (a) both columns against frequency per duty, with the mean rise D·P·Rth; (b) Δ = measured
+    − simulated (points) with the sample window's prediction (dashed) and the early-time
+    one (dotted)."""
+    a = analysis
+    fig = new_figure(9.0, 3.8)
+    ax1, ax2 = fig.subplots(1, 2)
+    km = a.mean_model["measured"][0]
+    for k, d in enumerate(sorted(set(a.duty.tolist()))):
+        sel = a.duty == d
+        order = np.argsort(a.freq_hz[sel])
+        f = a.freq_hz[sel][order]
+        color = f"C{k}"
+        ax1.plot(f, a.exp_k[sel][order], "o-", color=color, ms=4, label=f"measured, D = {d:.0%}")
+        ax1.plot(f, a.model_k[sel][order], "s--", color=color, ms=3, mfc="none",
+                 label="simulated")
+        ax1.axhline(km * d, color=color, lw=0.6, ls=":")
+        ax2.plot(f, a.delta_k[sel][order], "o", color=color, ms=5, label=f"Δ, D = {d:.0%}")
+        ax2.plot(f, a.paper_window_pred_k[sel][order], "--", color=color, lw=1.2)
+        ax2.plot(f, a.early_pred_k[sel][order], ":", color=color, lw=1.2)
+    for ax in (ax1, ax2):
+        ax.set_xscale("log")
+        ax.set_xlabel("PWM frequency (Hz)")
+        ax.grid(True, which="both", alpha=0.3)
+    ax1.set_ylabel("rise over the reference (K)")
+    ax1.set_title("(a) readings; dotted: D·P·Rth", fontsize=9, loc="left")
+    ax1.legend(fontsize=6, ncol=2)
+    ax2.axhline(0.0, color="0.5", lw=0.8)
+    ax2.set_ylabel("measured − simulated (K)")
+    ax2.set_title(f"(b) Δ; dashed: {a.window_s * 1e6:g} µs window, dotted: early time",
+                  fontsize=9, loc="left")
+    ax2.legend(fontsize=7)
+    return save_figure(fig, path)
 
 
 # ========================================== PWM: Fig. 8 and Table 2 (pwmsim.py, compare.py)
