@@ -102,8 +102,8 @@ def _brute_two_phase(foster: Foster, p_w: float, f_hz: float, hold: float, lim_k
     duties every 0.005.
     """
     period = 1 / f_hz
-    t = np.unique(np.concatenate([np.geomspace(period / 4, 30.0, 3000),
-                                  np.arange(0.1, 2.0, 1e-3)]))
+    t = np.unique(np.concatenate([np.geomspace(period / 4, 30.0, 2000),
+                                  np.arange(0.1, 2.0, 2e-3)]))
     duties = np.minimum(np.arange(hold, 1.0 + 1e-9, 0.005), 1.0)
     rip = np.array([steady_state(foster, p_w, f_hz, d).peak_k - d * p_w * foster.rth
                     for d in [*duties, hold]])
@@ -179,7 +179,7 @@ def test_ngspice_nonlinear_drive_respects_t_max(nonlinear_drive):
     from spicethermal.spice import NgspiceBatch
 
     r = nonlinear_drive
-    wave = NgspiceBatch().run(r.spice_bench(), ["V(TJ)", "V(X1.N1)"])
+    wave = NgspiceBatch().run(r.spice_bench(tmax_s=r.period_s / 20), ["V(TJ)", "V(X1.N1)"])
     assert np.max(wave["V(TJ)"]) <= r.t_max_c + 0.05
     assert np.max(wave["V(TJ)"]) > r.t_max_c - 0.5  # the boost really uses the headroom
     assert abs(wave["V(X1.N1)"][-1] - r.target_c) <= r.tol_k + 0.05
@@ -250,7 +250,7 @@ def test_ngspice_switched_drive_respects_t_max(cavity_drive):
     r = cavity_drive
     window = r.verification_window_s()
     assert window >= r.time_to_target_s
-    wave = NgspiceBatch().run(r.spice_bench(tstop_s=window, tmax_s=r.period_s / 20),
+    wave = NgspiceBatch().run(r.spice_bench(tstop_s=window, tmax_s=r.period_s / 100),
                               ["V(TJ)", "V(X1.N2)"])
     tj = wave["V(TJ)"]
     assert np.max(tj) <= r.t_max_c + 0.05
@@ -292,14 +292,14 @@ def test_schedule_is_whole_periods(cavity_drive):
 
 @pytest.mark.ngspice
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
-def test_cli_verify_runs_the_deck(demo, tmp_path, capsys):
-    path = demo.save(tmp_path / "act.json")
-    code = cli.main(["drive", str(path), "--t-max", "90", "--target", "60", "--p-max", "2",
-                     "--node", "2", "--verify", "--json"])
+def test_cli_verify_runs_the_deck(tmp_path, capsys):
+    path = ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])).save(tmp_path / "m.json")
+    code = cli.main(["drive", str(path), "--t-max", "70", "--target", "55", "--p-max", "1",
+                     "--verify", "--json"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     ng = doc["ngspice"]
-    assert ng["ngspice_peak_junction_c"] <= 90.05
+    assert ng["ngspice_peak_junction_c"] <= 70.05
     assert ng["ngspice_peak_junction_c"] == pytest.approx(ng["predicted_peak_junction_c"],
                                                           abs=0.01)
     assert doc["ripple_margin_k"] >= 0
