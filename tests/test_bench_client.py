@@ -273,3 +273,72 @@ def test_cli_bench_calibrate_and_errors(tmp_path, capsys):
     with pytest.raises(SystemExit) as info:
         main(["bench", "pwm", "--port", "sim://actuator", "-o", str(out), "--duties", "x"])
     assert info.value.code == 2
+
+
+def test_the_fitter_turns_the_bundle_back_into_the_plants_ladder(full_run):
+    from spicethermal.curves import ZthCurve
+    from spicethermal.fit import fit_model
+
+    truth = preset("actuator").foster
+    for curve in ZthCurve.from_bundle(Bundle.read(full_run)):
+        model, result = fit_model(curve)
+        assert model.rth == pytest.approx(truth.rth, rel=0.01), curve.label
+        assert result.order == truth.order
+        tau = np.sort(model.ladder.time_constants())
+        assert tau == pytest.approx(np.asarray(truth.tau), rel=0.15)
+
+
+def test_temperature_coefficient_shows_in_pwm_readings_as_thermal_model_predicts(tmp_path):
+    from spicethermal.bench.plant import Plant
+    from spicethermal.effects import Effect
+    from spicethermal.model import ThermalModel
+
+    out = bc.run_bench("sim://actuator?seed=1&noise=0.01&effects=temperature-coefficient,"
+                       "sample-window", tmp_path / "tc", actions=("calibrate", "pwm"),
+                       calibration_c=(25.0, 45.0, 65.0), pwm_freqs_hz=(25000.0,),
+                       pwm_duties=(0.2, 0.8))
+    b = Bundle.read(out)
+    dev = preset("actuator")
+    cauer = Plant(dev).cauer
+    name = "temperature-coefficient"
+    with_tc = ThermalModel(cauer, (Effect(name, dev.effect_params[name]),))
+    linear = ThermalModel(cauer)
+    for f, d, tj, tref, pw in zip(b.pwm.freq_hz, b.pwm.duty, b.pwm.tj_c, b.pwm.tref_c,
+                                  b.pwm.powers_w, strict=True):
+        model = tref + with_tc.pwm(pw, f, d, window_s=1e-4, tref_c=tref).reading_k
+        assert tj == pytest.approx(model, abs=0.08), (f, d)
+    lin = b.pwm.tref_c[-1] + linear.pwm(b.pwm.powers_w[-1], 25000.0, 0.8, window_s=1e-4,
+                                         tref_c=b.pwm.tref_c[-1]).reading_k
+    assert lin - b.pwm.tj_c[-1] > 0.15  # Rth falls with temperature: the bench reads cooler
+
+
+class LosesCommands(FrameMangler):
+    """Drops the first transmission of every command frame on its way to the device."""
+
+    def __init__(self, port) -> None:
+        super().__init__(port)
+        self.seen: set[bytes] = set()
+
+    def read(self, size: int = 1) -> bytes:
+        return self.port.read(size)
+
+    def write(self, data: bytes) -> int:
+        frame = p.decode_block(data[:-1])
+        if frame.type not in (p.Ack.TYPE, p.Nak.TYPE) and data not in self.seen:
+            self.seen.add(data)
+            self.mangled += 1
+            return len(data)  # lost on the wire
+        return self.port.write(data)
+
+
+def test_lost_commands_are_sent_again(clean_small, tmp_path, monkeypatch):
+    real_open = bc.open_port
+    opened = []
+    monkeypatch.setattr(bc, "open_port", lambda url, timeout_s=0.05: opened.append(
+        LosesCommands(real_open(url, timeout_s))) or opened[-1])
+    out = bc.run_bench("sim://actuator?seed=11", tmp_path / "lc",
+                       actions=("calibrate", "cooling", "pwm"), **SMALL)
+    link = json.loads((out / "bundle.json").read_text())["bench"]["link"]
+    assert link["command_resends"] == opened[0].mangled > 5
+    for name in CSVS:
+        assert (out / name).read_bytes() == (clean_small / name).read_bytes(), name

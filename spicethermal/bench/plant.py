@@ -70,7 +70,8 @@ class Plant:
         self.device_effects = tuple(
             Effect(name, preset.effect_params.get(name, {}))
             for name in DEVICE_EFFECTS if name in names)
-        self.max_chunk_s = 0.02 if self.device_effects else 0.1
+        self._rate_k_per_s = math.inf   # fastest node change of the last step (effects only)
+        self._cache: dict = {}
         self.theta = np.zeros(self.n)
         self.t_s = 0.0
         self.fixture_c: float | None = None      # hot plate temperature while it is on
@@ -114,21 +115,44 @@ class Plant:
         self.fixture_set_c = setpoint_c
 
     # -- stepping ----------------------------------------------------------------------
+    @property
+    def max_chunk_s(self) -> float:
+        """Longest step the driver should take: 0.1 s for a linear plant; with device
+        effects, short enough that no node moves more than ~0.02 K with frozen coefficients."""
+        if not self.device_effects:
+            return 0.1
+        return min(0.5, max(1e-3, 0.02 / max(self._rate_k_per_s, 1e-9)))
+
+    def drive_changed(self) -> None:
+        """The heater drive changed abruptly: restart with short steps (device effects)."""
+        self._rate_k_per_s = math.inf
+
+    def _track(self, before: NDArray, dt: float) -> None:
+        if self.device_effects:
+            self._rate_k_per_s = float(np.max(np.abs(self.theta - before))) / dt
+
     def _modal(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """(λ, W, W⁻¹, q) with θ = W z and dz/dt = λ z + q P, for the current coefficients."""
         if not self.device_effects:
             if self._modal_cache is None:
                 self._modal_cache = self._decompose(self.c0, self.g0)
             return self._modal_cache
-        tj = self.tj_c
+        temps = self.base_c + self.theta
+        key = tuple(np.round(temps / 0.01).astype(int))  # coefficients frozen per 10 mK
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
         scale = 1.0
         for e in self.device_effects:
-            scale *= e.resistance_scale(tj)
+            scale *= e.resistance_scale(float(temps[0]))
         c = self.c0.copy()
         for e in self.device_effects:
             for node in range(self.n):
-                c[node] += e.extra_capacitance(node, self.base_c + float(self.theta[node]))
-        return self._decompose(c, self.g0 / scale)
+                c[node] += e.extra_capacitance(node, float(temps[node]))
+        if len(self._cache) > 20000:
+            self._cache.clear()
+        hit = self._cache[key] = self._decompose(c, self.g0 / scale)
+        return hit
 
     @staticmethod
     def _decompose(c: NDArray, g: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -144,14 +168,18 @@ class Plant:
             self.fixture_c = self.fixture_set_c + (self.fixture_c - self.fixture_set_c) * math.exp(
                 -dt / FIXTURE_TAU_S)
 
-    def step(self, dt: float, power_w: float) -> None:
-        """Advance ``dt`` seconds at constant heater power."""
+    def step(self, dt: float, power_w: float, track: bool = True) -> None:
+        """Advance ``dt`` seconds at constant heater power (``track``: judge the step length
+        for device effects on this step; off for the phases inside a PWM period)."""
         if dt <= 0:
             return
         lam, w, w_inv, q = self._modal()
+        before = self.theta
         z = w_inv @ self.theta
         z = np.exp(lam * dt) * z + np.expm1(lam * dt) / lam * q * power_w
         self.theta = w @ z
+        if track:
+            self._track(before, dt)
         self.t_s += dt
         self._advance_fixture(dt)
 
@@ -172,7 +200,9 @@ class Plant:
         b = a_off * np.expm1(lam * on_s) / lam * q * power_w
         geometric = np.expm1(lam * period_s * periods) / np.expm1(lam * period_s)
         z = np.exp(lam * period_s * periods) * z + b * geometric
+        before = self.theta
         self.theta = w @ z
+        self._track(before, periods * period_s)
         self.t_s += periods * period_s
         self._advance_fixture(periods * period_s)
 

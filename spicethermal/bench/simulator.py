@@ -241,12 +241,15 @@ class SimulatedDevice:
             elif o.op == OP_PWM:
                 self.pwm = None if o.a == 0 or o.b == 0 else (self.t, o.a * 1e-9, o.b * 1e-9)
                 self.cut_at = None
+                self.plant.drive_changed()
             elif o.op == OP_CUT:
                 self.cut_at = self._cut_time(bool(o.a))
                 if self.pwm is not None:
                     self.last_cut = self.cut_at
+                self.plant.drive_changed()
             elif o.op == OP_RELEASE:
                 self.cut_at = None
+                self.plant.drive_changed()
             elif o.op == OP_ADC_AT:
                 self.adc_at, self.adc_kind = self._unwrap(o.a), OP_ADC_AT
             elif o.op == OP_ADC_AFTER_CUT:
@@ -305,7 +308,11 @@ class SimulatedDevice:
             if t_end - self.t <= eps:
                 self.t = plant.t_s = t_end
                 break
-            limit = min(t_end, self.t + plant.max_chunk_s)
+            chunk = plant.max_chunk_s
+            if self.pwm is not None and self.pwm[2] < self.pwm[1]:
+                chunk = max(chunk, 2 * self.pwm[1])  # whole periods, judged at their ends
+            limit = min(t_end, self.t + chunk)
+            track = True
             off = self.pwm is None or (self.cut_at is not None and self.cut_at <= self.t + eps)
             if off:
                 seg_end, power = limit, 0.0
@@ -326,13 +333,14 @@ class SimulatedDevice:
                         plant.step_periods(n, period, on, self._power())
                         self.t = plant.t_s = max(self.t, start + n * period)
                         continue
+                    track = False
                     if phase < on - tol:
                         seg_end, power = min(limit, start + on), self._power()
                     else:
                         seg_end, power = min(limit, start + period), 0.0
             if seg_end <= self.t:  # pragma: no cover - guards float corner cases
                 seg_end = min(t_end, self.t + max(eps, 1e-12))
-            plant.step(seg_end - self.t, power)
+            plant.step(seg_end - self.t, power, track)
             self.t = plant.t_s = seg_end
 
     def _convert(self) -> None:
