@@ -502,13 +502,14 @@ def _largest_duty(dyn: _Dynamics, z_sw: NDArray, j: NDArray, lim_k: float) -> fl
 
 def _greedy(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: float,
             x_hold: NDArray, tol_switch: float, growth: float, t_end: float
-            ) -> tuple[list[tuple[int, int, float]], float]:
+            ) -> tuple[list[tuple[int, int, float]], float, int]:
     """Bang-bang duty profile under the junction-peak and no-overshoot constraints.
 
     The junction constraint is exact for a linear model (switched state, every sampled
     period of the step); with device effects it is the mean plus the ripple at the step's end.
-    Returns steps ``(first_period, periods, duty)`` (the hold follows the last one) and the
-    largest junction peak rise met.
+    Returns steps ``(first_period, periods, duty)`` (the hold follows the last one), the
+    largest junction peak rise met, and the index of the step in which the node arrived
+    within ``tol_switch`` of the target (len(steps) if never).
     """
     period = dyn.period
     dgrid = np.linspace(0.0, 1.0, 2001)
@@ -520,6 +521,7 @@ def _greedy(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: fl
     k = 0
     steps: list[tuple[int, int, float]] = []
     worst = 0.0
+    arrival = -1
     while k * period < t_end:
         m = max(1, int(growth * k))
         h = m * period
@@ -551,13 +553,39 @@ def _greedy(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: fl
             worst = max(worst, float(x[0] + dyn.ripple(d, x[0])))
         steps.append((k, m, d))
         k += m
+        if arrival < 0 and x[node] >= tgt_k - tol_switch:
+            arrival = len(steps)
         # switch to the hold once it keeps the node in the band and the junction safe
         lam, v, vinv = dyn.modes(x)
         dz = (vinv @ (x - x_hold)) * np.exp(-np.outer(look, lam))
         if (np.max(np.abs(dz @ v[node])) <= tol_switch
                 and np.max(dz @ v[0]) + x_hold[0] + ripple_hold <= lim_k):
             break
-    return steps, worst
+    return steps, worst, (arrival if arrival >= 0 else len(steps))
+
+
+def _smooth(steps: list[tuple[int, int, float]], first: int, passes: int = 8
+            ) -> list[tuple[int, int, float]]:
+    """Damp the period-2 ringing of the greedy once the node has arrived (steps >= first).
+
+    Riding the target, a duty that is a local extremum between two partial-duty neighbours
+    is replaced, with them, by their time-weighted mean over the three steps (energy kept).
+    """
+    d = np.array([s[2] for s in steps])
+    n = np.array([s[1] for s in steps], dtype=float)
+    for _ in range(passes):
+        changed = False
+        for i in range(max(first, 0) + 1, len(d) - 1):
+            if d[i - 1] >= 1 or d[i + 1] >= 1 or d[i] >= 1:
+                continue
+            if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0:
+                w = n[i - 1:i + 2]
+                mean = float(w @ d[i - 1:i + 2] / w.sum())
+                d[i - 1:i + 2] = mean
+                changed = True
+        if not changed:
+            break
+    return [(k, m, float(x)) for (k, m, _), x in zip(steps, d, strict=True)]
 
 
 def _switched_peaks(dyn: _Dynamics, intervals: list[tuple[int, int, float]], hold_duty: float,
@@ -747,9 +775,9 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
     margin = switching
     growth = 0.01 if work.is_linear else 0.05
     for _ in range(6):
-        steps, worst = _greedy(dyn, node, lim_k - margin, tgt_k, hold_duty, x_hold,
-                               0.5 * tol_k, growth, horizon)
-        intervals = _compress(steps, duty_step)
+        steps, worst, arrival = _greedy(dyn, node, lim_k - margin, tgt_k, hold_duty, x_hold,
+                                        0.5 * tol_k, growth, horizon)
+        intervals = _compress(_smooth(steps, arrival), duty_step)
         if dyn.linear:
             peak_k, ex_t, ex_pk = _junction_peak(dyn, intervals, hold_duty, horizon)
         else:  # the averaged nonlinear simulation (mean + ripple) between the steps too
@@ -834,9 +862,10 @@ def _surrogate_margin(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol
     x_hold = sur.steady(sur.p * hold)
     margin = 0.0
     for _ in range(6):
-        steps, _ = _greedy(sur, node, lim_k - margin, tgt_k, hold, x_hold, 0.5 * tol_k,
-                           0.01, horizon)
-        peak, _, _ = _junction_peak(sur, _compress(steps, duty_step), hold, horizon)
+        steps, _, arrival = _greedy(sur, node, lim_k - margin, tgt_k, hold, x_hold,
+                                    0.5 * tol_k, 0.01, horizon)
+        peak, _, _ = _junction_peak(sur, _compress(_smooth(steps, arrival), duty_step), hold,
+                                    horizon)
         excess = peak - (lim_k - _SAFETY_K)
         if excess <= 0:
             break
