@@ -303,3 +303,17 @@ def test_cli_verify_runs_the_deck(tmp_path, capsys):
     assert ng["ngspice_peak_junction_c"] == pytest.approx(ng["predicted_peak_junction_c"],
                                                           abs=0.01)
     assert doc["ripple_margin_k"] >= 0
+
+
+def test_smoothing_keeps_energy_and_leaves_the_boost():
+    from spicethermal.drive import _smooth
+
+    steps = [(0, 10, 1.0), (10, 2, 0.9), (12, 2, 0.3), (14, 2, 0.8), (16, 3, 0.4), (19, 3, 0.6),
+             (22, 4, 0.5)]
+    out = _smooth(steps, first=1)
+    assert [s[:2] for s in out] == [s[:2] for s in steps]
+    energy = sum(n * d for _, n, d in steps)
+    assert sum(n * d for _, n, d in out) == pytest.approx(energy, rel=1e-12)
+    assert out[0] == steps[0] and out[1][2] != 0.9
+    d = np.array([s[2] for s in out[1:]])
+    assert np.ptp(d) < np.ptp([s[2] for s in steps[1:]]) / 2
