@@ -8,7 +8,7 @@
 #include "st_proto.h"
 
 #ifndef ST_RING_FRAMES
-#define ST_RING_FRAMES 32u /* power of two; the PIC build uses 8 */
+#define ST_RING_FRAMES 32u /* power of two; the PIC build uses 4 */
 #endif
 #define ST_WIRE_MAX (ST_COBS_MAX(ST_MAX_BODY) + 1u)
 

@@ -27,6 +27,8 @@ static volatile uint16_t t1_high;            /* Timer1 overflow count */
 static volatile uint8_t txq[TX_QUEUE];
 static volatile uint8_t tx_head, tx_count;
 static volatile uint8_t cut_pending;         /* cut at the next duty match */
+static volatile uint8_t cut_active;          /* output overridden off since cut_time */
+static volatile uint32_t cut_time;
 static volatile uint32_t cut_delay_us;       /* ADC trigger delay after the cut (0: none) */
 static volatile uint8_t adc_on_phase;
 static uint32_t pwm_period_ns, pwm_on_ns;
@@ -85,7 +87,20 @@ void hal_adc_at(uint32_t t_us)
     timer5_arm(t_us);
 }
 
-void hal_adc_after_cut(uint32_t delay_us) { cut_delay_us = delay_us ? delay_us : 1; }
+void hal_adc_after_cut(uint32_t delay_us)
+{
+    if (delay_us == 0) {
+        delay_us = 1;
+    }
+    di();
+    if (cut_active) {
+        ei();
+        hal_adc_at(cut_time + delay_us); /* the cut has happened already */
+        return;
+    }
+    cut_delay_us = delay_us; /* the ISR arms the conversion when the cut happens */
+    ei();
+}
 void hal_adc_on_phase(void) { adc_on_phase = 1; }
 
 void hal_heater_dac(uint16_t code)
@@ -111,6 +126,8 @@ void hal_heater_pwm(uint32_t period_ns, uint32_t on_ns)
     pwm_period_ns = period_ns;
     pwm_on_ns = on_ns;
     PTCON1 = 0x00; /* time base off */
+    cut_pending = 0;
+    cut_active = 0;
     if (period_ns == 0 || on_ns == 0) {
         OVDCONS = 0x00;
         OVDCOND = 0x00; /* all outputs overridden to inactive */
@@ -144,8 +161,10 @@ void hal_cut(uint8_t at_on_end)
     } else {
         OVDCONS = 0x00;
         OVDCOND = 0x00;
+        cut_time = hal_now_us();
+        cut_active = 1;
         if (cut_delay_us) {
-            hal_adc_at(hal_now_us() + cut_delay_us);
+            hal_adc_at(cut_time + cut_delay_us);
             cut_delay_us = 0;
         }
     }
@@ -154,6 +173,8 @@ void hal_cut(uint8_t at_on_end)
 void hal_release(void)
 {
     cut_pending = 0;
+    cut_active = 0;
+    cut_delay_us = 0;
     OVDCOND = 0xFF;
 }
 
@@ -195,8 +216,10 @@ void __interrupt(high_priority) isr_high(void)
             OVDCONS = 0x00;
             OVDCOND = 0x00;
             cut_pending = 0;
+            cut_time = hal_now_us();
+            cut_active = 1;
             if (cut_delay_us) {
-                hal_adc_at(hal_now_us() + cut_delay_us);
+                hal_adc_at(cut_time + cut_delay_us);
                 cut_delay_us = 0;
             }
         }
