@@ -67,6 +67,7 @@ DEFAULT_F_PWM_HZ = 1000.0
 DEFAULT_TOL_K = 0.5
 DEFAULT_DUTY_STEP = 0.005
 _SAFETY_K = 2e-3  # the exact peak is brought this far under t_max by the margin iteration
+_NONLINEAR_SAFETY_K = 0.05  # and the approximate one of a nonlinear model this far
 
 
 # ------------------------------------------------------------------------------ results
@@ -785,7 +786,8 @@ def optimize_drive(model: ThermalModel, t_max_c: float, target_c: float,
             grid = _time_grid(period, horizon, tuple(t for t, _ in sched), 2000)
             worst = max(worst, float(np.max(_predict(dyn, node, sched, grid)[2])))
             peak_k, ex_t, ex_pk = worst + switching, np.empty(0), np.empty(0)
-        excess = peak_k - (lim_k - _SAFETY_K)
+        safety = _SAFETY_K if dyn.linear else _NONLINEAR_SAFETY_K
+        excess = peak_k - (lim_k - safety)
         if excess <= 0:
             break
         margin += excess + _SAFETY_K

@@ -164,7 +164,7 @@ def test_nonlinear_model_honours_device_effects(nonlinear_drive):
                             node=1, two_phase=False)
     assert r.hold_duty != pytest.approx(linear.hold_duty, rel=1e-3)
     assert r.peak_method == "average + periodic ripple"
-    assert 85.0 - 0.1 < r.peak_junction_c <= 85.0
+    assert 85.0 - 0.15 < r.peak_junction_c <= 85.0 - 0.05
     assert r.speedup >= 3.0
     # the node (averaged nonlinear simulation) stays in the band after the time to target
     t = np.linspace(r.time_to_target_s * 1.01, 40.0, 400)
