@@ -38,11 +38,15 @@ static uint8_t ring_free(const st_core_t *c)
 
 static void send_ack(st_core_t *c, uint16_t seq, uint8_t type, uint8_t status)
 {
-    uint8_t b[4];
-    st_put_u16(b, seq);
-    b[2] = type;
-    b[3] = status;
-    push(c, ST_MSG_ACK, b, 4);
+    /* kept until there is room in the ring (the host acknowledges before commanding, so
+     * normally at once) */
+    st_put_u16(c->ack, seq);
+    c->ack[2] = type;
+    c->ack[3] = status;
+    c->ack_pending = 1;
+    if (st_ring_push(&c->ring, ST_MSG_ACK, c->ack, 4) == 0) {
+        c->ack_pending = 0;
+    }
 }
 
 static void send_info(st_core_t *c)
@@ -66,7 +70,7 @@ static void send_info(st_core_t *c)
 static void send_status(st_core_t *c, uint32_t now)
 {
     uint8_t b[10];
-    if (ring_free(c) < 4) {
+    if (ring_free(c) <= ST_RESERVE) {
         return; /* a heartbeat is worth nothing when the host is behind */
     }
     b[0] = c->p.proc;
@@ -91,7 +95,7 @@ static void send_done(st_core_t *c)
 static void drain_fifo(st_core_t *c)
 {
     const st_board_t *bd = hal_board();
-    while (c->f_count && ring_free(c) > 3) {
+    while (c->f_count && ring_free(c) > ST_RESERVE) {
         st_raw_t *s = &c->fifo[c->f_head];
         uint8_t b[ST_LEN_SAMPLE];
         uint8_t i;
@@ -504,6 +508,9 @@ void st_core_adc_done(st_core_t *c, const uint16_t code[ST_NCH])
 void st_core_poll(st_core_t *c)
 {
     uint8_t was = c->p.state;
+    if (c->ack_pending && st_ring_push(&c->ring, ST_MSG_ACK, c->ack, 4) == 0) {
+        c->ack_pending = 0;
+    }
     step(c);
     /* a step may complete immediately-available work; run until it settles */
     while (c->p.state != S_IDLE && c->p.state != was && !c->p.adc_armed) {
@@ -512,7 +519,7 @@ void st_core_poll(st_core_t *c)
     }
     drain_fifo(c);
     if (c->p.proc != ST_PROC_NONE && c->p.state == S_IDLE && c->f_count == 0 &&
-        ring_free(c) > 1) {
+        !c->ack_pending && ring_free(c) > 0) {
         send_done(c);
         c->p.proc = ST_PROC_NONE;
     }

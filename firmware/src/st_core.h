@@ -14,6 +14,8 @@
 #endif
 #define ST_CONTROL_TICK_MS 100u /* power regulation period while heating */
 #define ST_STATUS_MS 1000u      /* heartbeat period of STATUS frames during long waits */
+/* ring slots kept free of samples and heartbeats, for ACK and DONE */
+#define ST_RESERVE (ST_RING_FRAMES >= 16u ? 3u : 1u)
 
 typedef struct {
     uint8_t kind;
@@ -51,6 +53,8 @@ typedef struct {
     uint16_t f_dropped;
     st_proc_t p;
     uint8_t pending_sync; /* unsequenced SYNC owed to the host */
+    uint8_t ack_pending;  /* an ACK waiting for room in the ring */
+    uint8_t ack[4];
     uint8_t pending_err, pending_err_code;
     uint16_t pending_err_detail;
     uint8_t wire[ST_WIRE_MAX];
