@@ -84,7 +84,8 @@ def periods_needed(ladder: Foster, freq: float, duty: float, tol_k: float = TOL_
 
 def cold_start_time(lib: Path, freq: float, duty: float, periods: int,
                     source: str = "pwl") -> float:
-    """Wall time of an ngspice -b cold-start transient (no ``.ic``) over ``periods`` periods.
+    """Wall time of an ngspice -b cold-start transient over ``periods`` periods: every node at
+    the reference (``.ic``; without it the operating point would use the PWL's first value).
 
     ``source="pwl"`` is the PWL train the fast runs use; ``"pulse"`` a PULSE source
     (:meth:`Pulse.of`), cheaper per period on long runs (a PWL's corner search grows with its
@@ -97,8 +98,9 @@ def cold_start_time(lib: Path, freq: float, duty: float, periods: int,
         extra = {"pwl": pts}
     else:
         extra = {"pulse": Pulse.of(freq, duty)}
+    cold = [("TJ", 25.0), *((f"X1.N{k}", 25.0) for k in range(1, len(R_K_PER_W)))]
     text = render_bench(lib, SUBCKT, power_w=POWER_W, tstop_s=periods * period,
-                        tmax_s=period / 50, tref_c=25.0, title="cold start", **extra)
+                        tmax_s=period / 50, tref_c=25.0, title="cold start", ic=cold, **extra)
     t0 = time.perf_counter()
     NgspiceBatch(timeout_s=120).run(text, ["V(TJ)"])
     return time.perf_counter() - t0

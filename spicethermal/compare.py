@@ -9,7 +9,8 @@ paper-style Table 2 text, and per-data-set views for the diagnosis. Data sets:
   on-phase ends) plus the row's reference temperature. The engine is ``analytic`` (closed form;
   shooting for a model with device effects), ``ngspice`` or ``pyspice`` (the exported subcircuit
   from the periodic steady state, :mod:`spicethermal.pwmsim`); ``auto`` is analytic for linear
-  models and ngspice otherwise.
+  models and ngspice for models with a temperature coefficient
+  (:func:`~spicethermal.pwmsim.resolve_engine`).
 * ``cooling_1``, ``cooling_2``, ... — each point of each cooling curve (``at = {"t_s"}``): the
   model's cooling response from its steady state at the curve's power (self-consistent with the
   device effects), plus the reference temperature (``tref_c`` column, else ``tref_steady_c``,

@@ -47,6 +47,11 @@ if TYPE_CHECKING:  # pragma: no cover
 #: PWM engines of ``spicethermal pwm`` / ``compare``: the closed form (shooting when the model
 #: is nonlinear) and the two ngspice backends of :mod:`spicethermal.spice`.
 ENGINES = ("analytic", "ngspice", "pyspice")
+#: Device effects whose exported behavioural elements ngspice runs reliably from ``.ic``; ``auto``
+#: uses ngspice only for models limited to these (the phase-change element, a Gaussian
+#: capacitance written with DDT, stops ngspice with "timestep too small" on the actuator ladder,
+#: from a cold start as well as from the periodic steady state).
+SPICE_AUTO_EFFECTS = frozenset({"temperature-coefficient"})
 SUBCKT = "DUT"
 EDGE = 1e-4  # edge time as a fraction of the period (as spice.Pulse.of)
 
@@ -273,7 +278,7 @@ def pwm_state(model: ThermalModel, power_w: float, freq_hz: float, duty: float,
     """Periodic steady state by the named engine (``analytic``, ``ngspice``, ``pyspice``, ``auto``).
 
     ``analytic`` is :meth:`ThermalModel.pwm` (closed form, or shooting with device effects);
-    ``auto`` picks it for a linear model and ngspice otherwise.
+    ``auto`` picks it for a linear model and ngspice otherwise (see :func:`resolve_engine`).
 
     >>> from spicethermal.ladder import Foster
     >>> from spicethermal.model import ThermalModel
@@ -291,13 +296,17 @@ def pwm_state(model: ThermalModel, power_w: float, freq_hz: float, duty: float,
 def resolve_engine(engine: str, model: ThermalModel) -> str:
     """``auto`` → ``analytic`` for a linear model, ``ngspice`` with device effects.
 
+    Device effects outside :data:`SPICE_AUTO_EFFECTS` (phase change) stay ``analytic``
+    (shooting) under ``auto``; naming ``ngspice`` or ``pyspice`` still runs them there.
+
     >>> from spicethermal.ladder import Foster
     >>> from spicethermal.model import ThermalModel
     >>> resolve_engine("auto", ThermalModel(Foster.from_tau([1.0], [1.0])))
     'analytic'
     """
     if engine == "auto":
-        return "analytic" if model.is_linear else "ngspice"
+        names = {e.name for e in model.device_effects}
+        return "ngspice" if names and names <= SPICE_AUTO_EFFECTS else "analytic"
     if engine not in ENGINES:
         raise DataFormatError(f"engine {engine!r}: expected auto or one of {', '.join(ENGINES)}")
     return engine

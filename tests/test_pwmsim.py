@@ -71,6 +71,9 @@ def test_engine_choice_and_validation(actuator):
     tc = linear.with_effects([Effect.create("temperature-coefficient", alpha_per_k=-3e-3)])
     assert resolve_engine("auto", linear) == "analytic"
     assert resolve_engine("auto", tc) == "ngspice"
+    pc = tc.with_effects([*tc.effects, Effect.create("phase-change", t_c=40.0, latent_j=0.01)])
+    assert resolve_engine("auto", pc) == "analytic"  # ngspice cannot run that element reliably
+    assert resolve_engine("pyspice", pc) == "pyspice"
     assert pwm_state(linear, POWER_W, 1e3, 0.5, WINDOW_S) == \
         linear.pwm(POWER_W, 1e3, 0.5, WINDOW_S)
     with pytest.raises(DataFormatError, match="engine"):
