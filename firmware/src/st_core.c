@@ -326,7 +326,13 @@ static void handle(st_core_t *c, const st_frame_t *f)
     c->last_cmd_seq = f->seq;
     switch (f->type) {
     case ST_CMD_HELLO:
+        if (st_core_busy(c)) { /* a new session ends whatever the last one left running */
+            heater_off();
+            c->p.state = S_IDLE;
+            c->p.proc = ST_PROC_NONE;
+        }
         st_ring_init(&c->ring);
+        c->ack_pending = 0;
         c->sample_index = 0;
         c->f_count = 0;
         send_ack(c, f->seq, f->type, ST_OK);

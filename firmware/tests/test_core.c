@@ -354,6 +354,26 @@ static void test_core(void)
           steady);
     CHECK(contiguous, "sample indices contiguous");
     CHECK(!hh_busy(d), "idle after done");
+
+    /* a new HELLO ends a running procedure and starts a new session */
+    memset(pl, 0, 24);
+    st_put_u32(pl, 94000);
+    st_put_u32(pl + 4, 1000000);  /* 1 kHz */
+    st_put_u32(pl + 8, 500000);   /* 50 % */
+    st_put_u32(pl + 12, 60000);
+    st_put_u16(pl + 16, 100);
+    st_put_u16(pl + 18, 4);
+    st_put_u16(pl + 20, 100);
+    send(d, ST_CMD_PWM, 95, pl, 22);
+    CHECK(hh_busy(d), "pwm running");
+    pl[0] = 1;
+    send(d, ST_CMD_HELLO, 96, pl, 1);
+    fr.n = 0;
+    collect(d, &fr);
+    CHECK(!hh_busy(d), "hello aborted the procedure");
+    CHECK(fr.n >= 2 && fr.f[fr.n - 2].type == ST_MSG_ACK && fr.f[fr.n - 2].seq == 0 &&
+              fr.f[fr.n - 1].type == ST_MSG_INFO && fr.f[fr.n - 1].seq == 1,
+          "new session numbering");
     hh_free(d);
 }
 
