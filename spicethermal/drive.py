@@ -502,12 +502,14 @@ def _largest_duty(dyn: _Dynamics, z_sw: NDArray, j: NDArray, lim_k: float) -> fl
 
 
 def _greedy(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: float,
-            x_hold: NDArray, tol_switch: float, growth: float, t_end: float
+            x_hold: NDArray, tol_switch: float, growth: float, t_end: float, sustain: int = 5
             ) -> tuple[list[tuple[int, int, float]], float, int]:
     """Bang-bang duty profile under the junction-peak and no-overshoot constraints.
 
-    The junction constraint is exact for a linear model (switched state, every sampled
-    period of the step); with device effects it is the mean plus the ripple at the step's end.
+    The junction constraint is exact for a linear model (switched state, sampled periods of
+    the step), and a duty is accepted only if it could be kept ``sustain`` periods (this stops
+    the ride along the limit from chattering between duty 1 and a low duty); with device
+    effects it is the mean plus the ripple at the step's end.
     Returns steps ``(first_period, periods, duty)`` (the hold follows the last one), the
     largest junction peak rise met, and the index of the step in which the node arrived
     within ``tol_switch`` of the target (len(steps) if never).
@@ -533,8 +535,10 @@ def _greedy(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: fl
         # (1) junction peak: exact over sampled periods of the step (linear), else mean +
         # ripple at the step's end
         j = np.unique(np.round(np.linspace(0, m - 1, min(m, 8))))
-        if linear:  # the exact peak grows with the duty: coarse grid, then inside the bracket
-            d_j = _largest_duty(dyn, z_sw, j, lim_k)
+        if linear:  # exact; a duty must be sustainable for `sustain` periods
+            span = max(m, sustain)
+            d_j = _largest_duty(dyn, z_sw, np.unique(np.round(np.linspace(0, span - 1,
+                                                                         min(span, 8)))), lim_k)
         else:
             aj, bj = float(v[0] @ z_free), float(v[0] @ z_in)
             ok = aj + dgrid * bj + dyn.ripple(dgrid, aj) <= lim_k
