@@ -309,9 +309,10 @@ def _evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Comparis
     gain = f"{name} RMS {before:.3g} → {after:.3g} K"
     if e.name == "temperature-coefficient":
         pw, rth = fit.facts.get("powers_w", []), fit.facts.get("rth_k_per_w", [])
-        meas = ", ".join(f"{r:.4g} K/W at {q:g} W" for q, r in zip(pw, rth, strict=True))
+        meas = ", ".join(f"{r:.4g} K/W at {q:.3g} W" for q, r in zip(pw, rth, strict=True))
         return (f"Rth measured {meas}: the curves do not scale with power; "
-                f"R(T) = R0·(1 {p['alpha_per_k']:+.3g}/K·(T − {p['t0_c']:g} °C)) makes them "
+                f"R(T) = R0·(1 {'+' if p['alpha_per_k'] >= 0 else '−'} "
+                f"{abs(p['alpha_per_k']):.3g}/K·(T − {p['t0_c']:.4g} °C)) makes them "
                 f"fit ({gain})")
     if e.name == "phase-change":
         hot = [c.name for c in data.cooling if float(np.max(c.tj_c)) > p["t_c"] - p["width_k"]]
@@ -409,7 +410,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         try:
             fit = fit_effect(data, ladder, name, model.effects)
             cmp = comparison_of(data, fit.ladder, [*model.effects, fit.effect])
-        except (FitError, SimulationError) as exc:
+        except (FitError, SimulationError, DataFormatError) as exc:
             skipped[name] = f"fit failed: {exc}"
             continue
         bic = _criterion(cmp, noise, fit.n_params)

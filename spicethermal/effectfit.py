@@ -338,7 +338,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     if not sol.success:
         raise SimulationError(f"phase-change cooling integration failed: {sol.message}")
     out = np.empty(t.shape)
-    got = sol.y[0]
+    got = np.asarray(sol.y[0]) if len(sol.t) else np.zeros(0)
     out[order[:got.size]] = got
     if got.size < t.size:  # below the band the network is linear again: exact modal steps
         from scipy.linalg import eigh
@@ -563,7 +563,8 @@ def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[fl
         try:
             with np.errstate(over="raise", invalid="raise"):
                 r = fun(x)
-        except (SimulationError, FloatingPointError, DataFormatError, ValueError):
+        except (SimulationError, FloatingPointError, DataFormatError, ValueError,
+                np.linalg.LinAlgError):
             return np.full(size, 1e6)
         return r if np.all(np.abs(r) < 1e6) else np.full(size, 1e6)
 
@@ -574,11 +575,14 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
               fit_ladder: bool, x0: Sequence[float], lo: Sequence[float], hi: Sequence[float],
               build: Callable[[NDArray], list[Effect]], *,
               exclude: Mapping[str, float] | None = None,
-              max_nfev: int | None = None) -> tuple[Foster, list[Effect], Any]:
+              max_nfev: int | None = None,
+              diff_step: float | None = None) -> tuple[Foster, list[Effect], Any]:
     """Least squares of the readings of data sets ``names`` over the effect parameters
     ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
     ``log R`` and ``log τ`` (same order). Cooling points before ``exclude[name]`` s are left
-    out. Returns the ladder, the effects and scipy's result."""
+    out. ``diff_step`` is the relative finite-difference step (larger than the default for
+    forward models solved by an adaptive integrator). Returns the ladder, the effects and
+    scipy's result."""
     f = _foster(ladder)
     m = f.order if fit_ladder else 0
     sub = _subset(data, names)
@@ -600,7 +604,8 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     big = np.full(2 * m, np.inf)
     res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
                np.concatenate([-big, np.asarray(lo, float)]),
-               np.concatenate([big, np.asarray(hi, float)]), max_nfev=max_nfev)
+               np.concatenate([big, np.asarray(hi, float)]), max_nfev=max_nfev,
+               diff_step=diff_step)
     lad, xe = split(res.x)
     return lad, build(xe), res
 
@@ -682,8 +687,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     """Latent heat, band centre and width (at the junction node) from the cooling curves,
     with the ladder of the lowest-power curve held: the band is sought above that curve's
     temperatures (a band it crossed would be in its ladder), up to the hottest reading.
-    Starts: where the hottest curve's residual grows fastest in log time, and the
-    catalogue's 64.7 °C (methanol) when it lies in that range."""
+    Start: the best point of a grid of latent heats × centres (where the hottest curve's
+    residual grows fastest in log time, the catalogue's 64.7 °C for methanol when it lies in
+    that range, and three across it)."""
     if not data.cooling:
         raise FitError("phase-change needs cooling curves")
     names = [c.name for c in data.cooling]
@@ -709,14 +715,27 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     centres = [float(np.clip(_band_start(data, ref, base), t_lo + 0.02 * span,
                              t_hi - 0.02 * span))]
     default = CATALOGUE["phase-change"].params["t_c"].default
-    if t_lo < default < t_hi and abs(default - centres[0]) > 2.0:
+    if t_lo < default < t_hi:
         centres.append(default)
+    centres += list(np.linspace(t_lo + 0.15 * span, t_hi - 0.15 * span, 3))
     lo = [math.log(1e-6), t_lo, 0.2]
     hi = [math.log(10.0), t_hi, max(0.3, span / 4)]
-    starts = [joint_fit(data, names, ref, False, [math.log(1e-2), tc, min(1.5, hi[2] * 0.9)],
-                        lo, hi, build, max_nfev=6) for tc in centres]
-    first = min(starts, key=lambda r: r[2].cost)
-    best = joint_fit(data, names, ref, False, first[2].x, lo, hi, build, max_nfev=30)
+    width0 = float(np.clip(1.5, lo[2] * 1.01, hi[2] * 0.99))
+    sub = _subset(data, names)
+    meas = np.concatenate([data.measured(n) for n in names])
+
+    def cost(x: Sequence[float]) -> float:
+        try:
+            pred = predict(sub, ref, build(np.asarray(x, dtype=float)))
+        except SimulationError:
+            return math.inf
+        return float(np.sum((np.concatenate([pred[n] for n in names]) - meas) ** 2))
+
+    # coarse grid over (centre, latent heat), then least squares from the best point
+    grid = [(cost([math.log(fr), tc, width0]), [math.log(fr), tc, width0])
+            for tc in centres for fr in (1e-3, 1e-2, 3e-2, 1e-1, 3e-1)]
+    x0 = min(grid, key=lambda g: g[0])[1]
+    best = joint_fit(data, names, ref, False, x0, lo, hi, build, max_nfev=40, diff_step=1e-3)
     lad, effs, _ = best
     return EffectFit(effs[-1], lad, 3, {"t_range_c": (t_lo, t_hi)})
 
