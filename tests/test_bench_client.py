@@ -116,7 +116,7 @@ def test_ideal_hold_records_a_zero_window(tmp_path):
 def test_sub_actions_update_the_bundle(tmp_path):
     out = tmp_path / "b"
     bc.run_bench("sim://mur880e?seed=1", out, actions=("calibrate",),
-                 calibration_c=(25.0, 55.0, 85.0))
+                 calibration_c=(25.0, 50.0, 75.0))
     bc.run_bench("sim://mur880e?seed=1", out, actions=("cooling",), cooling_powers_w=(10.0,))
     b = Bundle.read(out)
     assert b.calibration.temp_c.size == 3 and len(b.cooling) == 1
@@ -342,3 +342,11 @@ def test_lost_commands_are_sent_again(clean_small, tmp_path, monkeypatch):
     assert link["command_resends"] == opened[0].mangled > 5
     for name in CSVS:
         assert (out / name).read_bytes() == (clean_small / name).read_bytes(), name
+
+
+def test_a_clipped_tsp_reading_stops_the_run(tmp_path):
+    # 85 degC is 60 K above the reference diode: beyond the amplifier's range
+    with pytest.raises(InstrumentError, match="out of the amplifier's range"):
+        bc.run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("calibrate",),
+                     calibration_c=(25.0, 85.0), calibration_settle_s=200.0)
+    assert not (tmp_path / "b").exists()

@@ -99,7 +99,7 @@ PLANS: dict[str, Plan] = {
     "actuator": Plan(description="thermopneumatic actuator, diode heater (paper, sections 2, 7)"),
     "mur880e": Plan(description="MUR880E power diode on a heat sink, junction to case "
                     "(paper, section 5)", reference="case",
-                    calibration_c=(25.0, 37.0, 49.0, 61.0, 73.0, 85.0), rth_power_w=10.0,
+                    calibration_c=(25.0, 35.0, 45.0, 55.0, 65.0, 75.0), rth_power_w=10.0,
                     cooling_powers_w=(10.0, 20.0), cooling_t_last_s=20.0, pwm_power_w=10.0,
                     settle_s=300.0, pwm_settle_s=120.0),
 }
@@ -469,6 +469,7 @@ class BenchClient:
         while True:
             m = self.link.receive()
             if isinstance(m, p.Sample):
+                _check_range(m, self.url)
                 if m.proc != proc:
                     raise InstrumentError(f"{self.url}: sample of procedure {m.proc} during "
                                           f"{p.PROC_NAMES[proc]}")
@@ -517,6 +518,25 @@ class BenchClient:
         return self._collect(p.Pwm(_uw(power_w), round(freq_hz * 1e3), round(duty * 1e6),
                                    _ms(settle_s), _us16(window_s), _u16(n, "n"),
                                    _u16(round(interval_s * 1e3), "interval_ms")), p.PROC_PWM)
+
+
+ADC_MAX_CODE = 1023
+
+
+def _check_range(s: p.Sample, url: str) -> None:
+    """A TSP reading at the end of the ADC range is clipped, hence wrong: stop, don't record.
+
+    Curve points within the first millisecond are exempt: the electrical transient after the
+    cut may drive the amplifier out of range there, and those points are masked anyway."""
+    if s.kind == p.KIND_POWER or (s.kind == p.KIND_CURVE and s.t_us < 1000):
+        return
+    if s.code_tsp in (0, ADC_MAX_CODE):
+        where = "above" if s.code_tsp == ADC_MAX_CODE else "below"
+        raise InstrumentError(
+            f"{url}: TSP reading out of the amplifier's range ({where} it; ADC code "
+            f"{s.code_tsp}) during {p.PROC_NAMES.get(s.proc, 'a procedure')}: the junction is "
+            f"too far from the reference diode's temperature; lower the power or the "
+            f"calibration temperature")
 
 
 def _uw(power_w: float) -> int:
