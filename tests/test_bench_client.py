@@ -350,3 +350,17 @@ def test_a_clipped_tsp_reading_stops_the_run(tmp_path):
         bc.run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("calibrate",),
                      calibration_c=(25.0, 85.0), calibration_settle_s=200.0)
     assert not (tmp_path / "b").exists()
+
+
+def test_mur880e_bench_gives_back_the_datasheet_impedance(tmp_path):
+    from spicethermal.curves import ZthCurve
+    from spicethermal.fit import fit_model
+
+    out = bc.run_bench("sim://mur880e?seed=2", tmp_path / "m", actions=("calibrate", "cooling"),
+                       calibration_c=(25.0, 50.0, 75.0), cooling_powers_w=(10.0,))
+    curve = ZthCurve.from_bundle(Bundle.read(out))[0]
+    model, _ = fit_model(curve)
+    assert model.rth == pytest.approx(1.51, rel=0.01)
+    t = np.array([1e-3, 1e-2, 1e-1, 1.0])  # the paper's Table 1, datasheet column
+    r = np.interp(np.log(t), np.log(curve.t_s), curve.zth_k_per_w) / 1.51
+    assert r == pytest.approx([0.18, 0.39, 0.60, 0.90], abs=0.012)
