@@ -25,10 +25,11 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
 * ``phase-change`` on a cooling curve: the nodal network with the band's heat capacity at its
   node, integrated by LSODA with an exact rank-one inverse of the capacity matrix until the
   node leaves the band, then exact modal steps (< 1 mK from the model's Radau integration);
-  curves that stay six band widths away from the band use the closed form. Under PWM the
-  mean is exact (a heat capacity does not change it) and, when the band is within reach, the
-  ripple is computed with the capacity frozen at the mean temperature
-  (:func:`pc_frozen_ladder`, quasi-static), else in closed form;
+  curves that stay :data:`BAND_REACH` band widths away from the band use the closed form.
+  Under PWM the mean is exact (a heat capacity does not change it) and, when the band is
+  within reach, the ripple is computed with the capacity frozen at the mean temperature
+  (:func:`pc_frozen_ladder`, quasi-static), else in closed form. The band's shape is the
+  catalogue's own (:meth:`~spicethermal.effects.Effect.extra_capacitance`);
 * measurement effects: ``sample-window`` (the PWM reading at the end of the window),
   ``electrical-transient`` (cooling readings off by ``A·e^{−5t/masked_s}``),
   ``tsp-nonlinearity`` (readings ``T + q (T − T_cal)²``; in the calibration data set the
@@ -48,7 +49,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -63,8 +64,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from .bundle import Bundle
     from .model import ThermalModel
 
-#: Phase-change bands further than this many widths from every temperature are ignored.
-BAND_REACH = 6.0
+#: Phase-change bands further than this many widths from every temperature are ignored (the
+#: band's capacity, :meth:`~spicethermal.effects.Effect.extra_capacitance`, is below 1e-6 of
+#: its peak there).
+BAND_REACH = 8.0
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
 TRANSIENT_RATE = 5.0
 
@@ -305,14 +308,12 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     p = effect.params
     node = int(p["node"])
     ce = cinv[:, node]
-    norm = p["latent_j"] / (p["width_k"] * math.sqrt(2 * math.pi))
     b = np.zeros(net.n)
     b[0] = power_w
     theta0 = np.linalg.solve(g, b)
 
     def minv(theta: NDArray, y: NDArray) -> NDArray:
-        z = (tref_c + theta[node] - p["t_c"]) / p["width_k"]
-        cx = norm * math.exp(-0.5 * z * z)
+        cx = effect.extra_capacitance(node, tref_c + float(theta[node]))
         cy = cinv @ y
         return cy - cx * ce * cy[node] / (1 + cx * ce[node])
 
@@ -369,10 +370,7 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float,
     b = np.zeros(net.n)
     b[0] = mean_power_w
     node = int(effect.params["node"])
-    p = effect.params
-    z = (tref_c + float(np.linalg.solve(g, b)[node]) - p["t_c"]) / p["width_k"]
-    cm[node, node] += p["latent_j"] * math.exp(-0.5 * z * z) / (p["width_k"] *
-                                                                math.sqrt(2 * math.pi))
+    cm[node, node] += effect.extra_capacitance(node, tref_c + float(np.linalg.solve(g, b)[node]))
     lam, v = eigh(g, cm)
     return Foster.from_tau(v[0, :] ** 2 / lam, 1 / lam)
 
@@ -580,9 +578,10 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     """Least squares of the readings of data sets ``names`` over the effect parameters
     ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
     ``log R`` and ``log τ`` (same order). Cooling points before ``exclude[name]`` s are left
-    out. ``diff_step`` is the relative finite-difference step (larger than the default for
-    forward models solved by an adaptive integrator). Returns the ladder, the effects and
-    scipy's result."""
+    out. When the ladder is fitted, each curve's steady reading just before the cut is a data
+    point too (it pins Rth). ``diff_step`` is the relative finite-difference step (larger than
+    the default for forward models solved by an adaptive integrator). Returns the ladder, the
+    effects and scipy's result."""
     f = _foster(ladder)
     m = f.order if fit_ladder else 0
     sub = _subset(data, names)
@@ -595,10 +594,18 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
             return f, x
         return Foster.from_tau(np.exp(x[:m]), np.exp(x[m:2 * m])), x[2 * m:]
 
+    steady = [c for c in sub.cooling if c.tj_steady_c is not None] if m else []
+
     def fun(x: NDArray) -> NDArray:
         lad, xe = split(x)
-        pred = predict(sub, lad, build(xe))
-        return np.concatenate([pred[n][keep[n]] - meas[n] for n in names])
+        effects = build(xe)
+        pred = predict(sub, lad, effects)
+        parts = [pred[n][keep[n]] - meas[n] for n in names]
+        tsp = _effects_map(effects).get("tsp-nonlinearity")
+        for c in steady:  # the reading just before the cut pins the ladder's Rth
+            top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
+            parts.append(tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
+        return np.concatenate(parts)
 
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
     big = np.full(2 * m, np.inf)
@@ -689,7 +696,8 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     temperatures (a band it crossed would be in its ladder), up to the hottest reading.
     Start: the best point of a grid of latent heats × centres (where the hottest curve's
     residual grows fastest in log time, the catalogue's 64.7 °C for methanol when it lies in
-    that range, and three across it)."""
+    that range, and three across it). When no band fits better than ``ladder`` without one,
+    the result has no latent heat and keeps ``ladder``."""
     if not data.cooling:
         raise FitError("phase-change needs cooling curves")
     names = [c.name for c in data.cooling]
@@ -735,8 +743,15 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     grid = [(cost([math.log(fr), tc, width0]), [math.log(fr), tc, width0])
             for tc in centres for fr in (1e-3, 1e-2, 3e-2, 1e-1, 3e-1)]
     x0 = min(grid, key=lambda g: g[0])[1]
-    best = joint_fit(data, names, ref, False, x0, lo, hi, build, max_nfev=40, diff_step=1e-3)
-    lad, effs, _ = best
+    lad, effs, res = joint_fit(data, names, ref, False, x0, lo, hi, build, max_nfev=40,
+                               diff_step=1e-3)
+    pred = predict(sub, ladder, base)
+    held = 0.5 * float(np.sum((np.concatenate([pred[n] for n in names]) - meas) ** 2))
+    if res.cost >= held:  # no band does better than the given ladder without one
+        p = effs[-1].params
+        return EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
+                                       width_k=p["width_k"], node=0), _foster(ladder), 3,
+                         {"t_range_c": (t_lo, t_hi), "no_gain": True})
     return EffectFit(effs[-1], lad, 3, {"t_range_c": (t_lo, t_hi)})
 
 

@@ -147,3 +147,24 @@ def test_fit_effect_then_compare_shows_the_error_fall(tmp_path, capsys):
     assert main(["compare", better, str(bundle), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["rms_k"] == pytest.approx(after.rms_k)
     assert np.isfinite(after.max_abs_k)
+
+
+def test_residuals_agree_with_compare_for_measurement_effects():
+    """The diagnosis' fast evaluator and ``compare`` (analytic engine) give the same residuals
+    for a linear ladder with every measurement effect."""
+    from spicethermal.diagnose import comparison_of
+    from spicethermal.effectfit import BundleData
+    from spicethermal.effects import Effect
+    from spicethermal.scenarios import actuator
+
+    b = scenario_bundle("clean", seed=2)
+    effects = (Effect.create("sample-window", window_s=8e-5),
+               Effect.create("tsp-nonlinearity", quad_k_per_k2=3e-4, t_cal_c=30.0),
+               Effect.create("electrical-transient", amplitude_k=-2.0, masked_s=2e-4))
+    model = ThermalModel(actuator(), effects)
+    ours = comparison_of(BundleData.from_bundle(b), model.ladder, model.effects)
+    theirs = compare(model, b, engine="analytic")
+    for name in theirs.datasets:
+        assert np.allclose(ours.dataset(name).residuals_k, theirs.dataset(name).residuals_k,
+                           rtol=0, atol=1e-9)
+    assert "calibration" in ours.datasets  # which compare does not cover
