@@ -28,6 +28,10 @@ nothing is missing.
 
 The pooled RMS (``rms_k``; ``improvement = baseline rms / candidate rms``) weighs every point
 equally, as ``spicethermal compare`` does, with the calibration points added.
+
+A table of measured vs simulated PWM readings (the paper's Table 2, :func:`diagnose_table`)
+goes through the same rule with the simulated column as the baseline; its noise is the
+scatter of one measured reading beyond an offset per frequency (see :class:`TableAnalysis`).
 """
 
 from __future__ import annotations
@@ -62,8 +66,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from .ladder import Cauer
     from .model import ThermalModel
 
-__all__ = ["DIAGNOSIS_FORMAT", "Candidate", "Diagnosis", "comparison_of", "diagnose",
-           "fit_with_effects", "localise", "noise_estimates"]
+__all__ = ["DIAGNOSIS_FORMAT", "Candidate", "Diagnosis", "TableAnalysis", "analyse_table",
+           "comparison_of", "diagnose", "diagnose_table", "fit_with_effects", "localise",
+           "noise_estimates", "write_report"]
 
 DIAGNOSIS_FORMAT = "spicethermal-diagnosis/1"
 #: An effect must lower the pooled RMS at least this many times.
@@ -197,7 +202,8 @@ class Candidate:
 
     def to_json(self) -> dict[str, Any]:
         return {"effect": self.effect.name, "params": dict(self.effect.params),
-                "rms_k": self.rms_k, "improvement": self.improvement,
+                "rms_k": self.rms_k,
+                "improvement": self.improvement if math.isfinite(self.improvement) else None,
                 "evidence": self.evidence}
 
 
@@ -764,7 +770,7 @@ def _with_findings(a: TableAnalysis) -> TableAnalysis:
     return replace(a, findings=out)
 
 
-def cands_rms(cands: Sequence[Candidate], name: str) -> float:
+def _cands_rms(cands: Sequence[Candidate], name: str) -> float:
     """RMS (K) of the named candidate."""
     return next(c.rms_k for c in cands if c.effect.name == name)
 
@@ -825,7 +831,7 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
     if effect is None:
         reason = (f"neither explanation the paper gives fits the numbers: the "
                   f"{a.window_s * 1e6:g} µs sample window lowers the RMS only "
-                  f"{base.rms_k / cands_rms(cands, 'sample-window'):.2f}× and predicts no "
+                  f"{base.rms_k / _cands_rms(cands, 'sample-window'):.2f}× and predicts no "
                   f"positive Δ and no Δ growing with frequency, early-time extrapolation moves "
                   f"the readings by at most {abs(early_amp):.2f} K; they support instead a "
                   f"simulated column that is not a constant-power periodic steady state "

@@ -68,6 +68,9 @@ if TYPE_CHECKING:  # pragma: no cover
 #: band's capacity, :meth:`~spicethermal.effects.Effect.extra_capacitance`, is below 1e-6 of
 #: its peak there).
 BAND_REACH = 8.0
+#: Iterations allowed to a least-squares fit that includes the ladder (each iteration costs
+#: 2·order + k evaluations); enough for the catalogued effects, a bound on hopeless fits.
+MAX_NFEV_WITH_LADDER = 40
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
 TRANSIENT_RATE = 5.0
 
@@ -607,6 +610,8 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
             parts.append(tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
         return np.concatenate(parts)
 
+    if max_nfev is None and m:
+        max_nfev = MAX_NFEV_WITH_LADDER
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
     big = np.full(2 * m, np.inf)
     res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),

@@ -168,3 +168,10 @@ def test_residuals_agree_with_compare_for_measurement_effects():
         assert np.allclose(ours.dataset(name).residuals_k, theirs.dataset(name).residuals_k,
                            rtol=0, atol=1e-9)
     assert "calibration" in ours.datasets  # which compare does not cover
+
+
+def test_noise_free_clean_bundle_needs_nothing():
+    d = diagnose(scenario_bundle("clean", noise_k=0.0), effects=["temperature-coefficient",
+                                                                 "sample-window"])
+    assert d.verdict_effect is None and d.baseline.rms_k < 1e-4
+    json.dumps(d.to_json(), allow_nan=False)
