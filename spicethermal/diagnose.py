@@ -10,11 +10,11 @@ them. The result (:class:`Diagnosis`) prints as a short report and serialises to
 Criterion (stated)
 ------------------
 Residuals ``r = measured − model`` in kelvin. Each data set ``d`` gets a noise estimate
-``σ_d`` that no model choice can bias: the scatter of consecutive baseline residuals,
-``σ_d = 1.4826 · MAD(Δr) / √2`` (smooth misfits cancel in the differences), at least
-:data:`NOISE_FLOOR_K`. A model's criterion is ``BIC = Σ_d RSS_d / σ_d² + k ln N`` with ``k``
-the number of effect parameters fitted and ``N`` the number of points. An effect is *found*
-when the best candidate (lowest BIC)
+``σ_d`` that no model choice can bias: the scatter of consecutive baseline residuals (smooth
+misfits cancel in the differences; the largest 10 % are trimmed, see
+:func:`noise_estimates`), at least :data:`NOISE_FLOOR_K`. A model's criterion is
+``BIC = Σ_d RSS_d / σ_d² + k ln N`` with ``k`` the number of effect parameters fitted and
+``N`` the number of points. An effect is *found* when the best candidate (lowest BIC)
 
 1. lowers the BIC by at least :data:`MIN_BIC_DROP` (strong evidence on Kass & Raftery's scale),
 2. lowers the pooled RMS by at least :data:`MIN_IMPROVEMENT` ×, and
@@ -79,6 +79,8 @@ MIN_BIC_DROP = 10.0
 EXPLAINED_RATIO = 2.0
 #: Noise estimates are at least this (K): the resolution of any real bench.
 NOISE_FLOOR_K = 0.005
+#: Fraction of the largest consecutive residual differences left out of the noise estimate.
+NOISE_TRIM = 0.1
 #: How many worst points the document lists.
 WORST_POINTS = 5
 
@@ -103,20 +105,36 @@ def noise_estimates(comparison: Comparison) -> dict[str, float]:
     """Noise standard deviation (K) of every data set from consecutive residual differences
     (see the module docstring), at least :data:`NOISE_FLOOR_K`.
 
-    >>> c = Comparison(tuple(ComparisonPoint("x", {"t_s": i}, 0.1 * (-1) ** i, 0.0)
-    ...                      for i in range(9)))
-    >>> round(noise_estimates(c)["x"], 4)
-    0.2097
+    The differences ``Δr`` of white noise σ have variance ``2σ²``; the largest
+    :data:`NOISE_TRIM` of them are left out (an electrical transient or a jump between PWM
+    duty blocks is not noise) and the trimmed mean square is corrected for the trimming
+    (Gaussian), ``σ² = mean(Δr²) / (2 c)``, ``c = 1 − 2 q φ(q) / p`` for the kept fraction
+    ``p`` and ``q = Φ⁻¹((1 + p)/2)``.
+
+    >>> noise = np.random.default_rng(1).normal(0.0, 0.05, 400)
+    >>> trend = np.linspace(0.0, 3.0, 400)  # a smooth misfit does not count as noise
+    >>> c = Comparison(tuple(ComparisonPoint("x", {"t_s": i + 1.0}, float(x), 0.0)
+    ...                      for i, x in enumerate(noise + trend)))
+    >>> round(noise_estimates(c)["x"], 2)
+    0.05
     """
+    from scipy.stats import norm
+
     out = {}
     for name, sub in comparison.by_dataset().items():
         r = sub.residuals_k
         if r.size < 3:
             out[name] = max(float(np.std(r)), NOISE_FLOOR_K)
             continue
-        d = np.diff(r)
-        mad = float(np.median(np.abs(d - np.median(d))))
-        out[name] = max(1.4826 * mad / math.sqrt(2), NOISE_FLOOR_K)
+        d = np.sort(np.abs(np.diff(r)))
+        keep = max(2, int(math.floor((1 - NOISE_TRIM) * d.size)))
+        frac = keep / d.size
+        c = 1.0
+        if frac < 1:
+            q = float(norm.ppf(0.5 * (1 + frac)))
+            c = 1 - 2 * q * float(norm.pdf(q)) / frac
+        sigma = math.sqrt(float(np.mean(d[:keep] ** 2)) / (2 * c))
+        out[name] = max(sigma, NOISE_FLOOR_K)
     return out
 
 

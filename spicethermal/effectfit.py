@@ -520,7 +520,13 @@ def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
     """The linear ladder the diagnosis starts from: :func:`reference_ladder` (order chosen by
     BIC on the lowest-power curve), then refitted jointly to every cooling curve's readings
     outside their detected transients (same order), so that the effects are compared with
-    the best linear model of all the curves rather than of one."""
+    the best linear model of all the curves rather than of one.
+
+    >>> from spicethermal.scenarios import scenario_bundle
+    >>> lad = baseline_ladder(BundleData.from_bundle(scenario_bundle("clean", seed=0)))
+    >>> lad.order, round(lad.rth)
+    (4, 146)
+    """
     ladder = reference_ladder(data, order)
     if len(data.cooling) < 2:
         return ladder
@@ -837,6 +843,14 @@ def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
     """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``.
 
     Raises :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
+
+    Examples
+    --------
+    >>> from spicethermal.scenarios import scenario_bundle
+    >>> data = BundleData.from_bundle(scenario_bundle("temperature-coefficient", seed=0))
+    >>> fit = fit_effect(data, baseline_ladder(data), "temperature-coefficient")
+    >>> round(fit.effect.params["alpha_per_k"], 4), fit.n_params
+    (-0.003, 1)
     """
     if name not in FITTERS:
         from .effects import spec
