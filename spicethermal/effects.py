@@ -8,9 +8,27 @@ Device physics, in terms of absolute temperatures (°C):
 
 * ``temperature-coefficient``: every resistance of the ladder scales with the junction
   temperature, ``R(T) = R0 · (1 + alpha_per_k · (Tj − t0_c))`` (clipped at 5 % of R0).
-* ``phase-change``: latent heat ``latent_j`` spread over a Gaussian band centred at ``t_c``
-  with standard deviation ``width_k`` adds ``latent_j · g(T)`` of heat capacity from node
-  ``node`` (index into the ladder, 0 = junction) to the reference.
+* ``phase-change``: latent heat ``latent_j`` absorbed across a band centred at ``t_c`` adds
+  heat capacity from node ``node`` (index into the ladder, 0 = junction) to the reference.
+  The band is logistic with standard deviation ``width_k``: the heat absorbed up to T is
+  ``latent_j / (1 + exp(−(T − t_c)/s))`` with ``s = width_k·√3/π``, and the extra capacity is
+  its derivative. (A logistic band rather than a Gaussian one: SPICE has no erf, and writing
+  the element as ``ddt`` of this charge keeps ngspice stable where ``C(V)·ddt(V)`` is not.)
+
+Measurement models (applied to a model temperature ``T`` to get what the bench reads):
+
+* ``sample-window``: the PWM reading is the junction temperature at the end of a power-off
+  window of ``window_s`` that starts when an on-phase ends (``ThermalModel.pwm(window_s=)``);
+* ``electrical-transient``: a cooling reading at ``t`` after the cut is off by
+  ``amplitude_k · exp(−5 t / masked_s)`` (the fix is masking and √t extrapolation,
+  :mod:`spicethermal.curves`);
+* ``tsp-nonlinearity``: readings through a linear calibration are ``T + q (T − t_cal_c)²``
+  (``q = quad_k_per_k2``); the calibration's own residuals bow accordingly.
+
+Fast exact forward models of every effect, the fit of each effect's parameters from a bundle
+and ``fit_with_effects`` live in :mod:`spicethermal.effectfit`; the ranking of candidate
+effects in :mod:`spicethermal.diagnose`; the SPICE export of device effects in
+:mod:`spicethermal.spice`.
 """
 
 from __future__ import annotations
@@ -154,10 +172,27 @@ class Effect:
         p = self.params
         return max(0.05, 1.0 + p["alpha_per_k"] * (tj_c - p["t0_c"]))
 
-    def extra_capacitance(self, node: int, t_c: float) -> float:
-        """Extra heat capacity (J/K) at ``node`` and temperature ``t_c`` (0 if not applicable)."""
+    def latent_heat(self, node: int, t_c: float) -> float:
+        """Latent heat (J) absorbed at ``node`` on the way up to ``t_c`` (0 if not applicable)."""
         if self.name != "phase-change" or node != int(self.params["node"]):
             return 0.0
-        p = self.params
-        z = (t_c - p["t_c"]) / p["width_k"]
-        return p["latent_j"] * math.exp(-0.5 * z * z) / (p["width_k"] * math.sqrt(2 * math.pi))
+        z = (t_c - self.params["t_c"]) / self.logistic_scale_k
+        return self.params["latent_j"] * 0.5 * (1.0 + math.tanh(0.5 * z))
+
+    @property
+    def logistic_scale_k(self) -> float:
+        """Scale ``s`` of the logistic phase-change band, ``width_k·√3/π``."""
+        return self.params["width_k"] * math.sqrt(3.0) / math.pi
+
+    def extra_capacitance(self, node: int, t_c: float) -> float:
+        """Extra heat capacity (J/K) at ``node`` and temperature ``t_c`` (0 if not applicable).
+
+        >>> e = Effect.create("phase-change", t_c=64.7, width_k=2.0, latent_j=1.0, node=0)
+        >>> round(e.extra_capacitance(0, 64.7) * 4 * e.logistic_scale_k, 12)
+        1.0
+        """
+        if self.name != "phase-change" or node != int(self.params["node"]):
+            return 0.0
+        s = self.logistic_scale_k
+        z = (t_c - self.params["t_c"]) / s
+        return self.params["latent_j"] / (4.0 * s * math.cosh(0.5 * z) ** 2)

@@ -51,7 +51,6 @@ ENGINES = ("analytic", "ngspice", "pyspice")
 #: uses ngspice only for models limited to these (the phase-change element, a Gaussian
 #: capacitance written with DDT, stops ngspice with "timestep too small" on the actuator ladder,
 #: from a cold start as well as from the periodic steady state).
-SPICE_AUTO_EFFECTS = frozenset({"temperature-coefficient"})
 SUBCKT = "DUT"
 EDGE = 1e-4  # edge time as a fraction of the period (as spice.Pulse.of)
 
@@ -185,24 +184,25 @@ class SpicePwm:
     def initial_conditions(self, power_w: float, freq_hz: float,
                            duty: float) -> list[tuple[str, float]]:
         """``.ic`` node temperatures (°C) at the start of an on-phase, periodic steady state."""
-        from .spice import internal_nodes
+        from .spice import initial_conditions, reference_drive
 
         theta = self._model.pwm_initial_state(power_w, freq_hz, duty, self.tref_c)
-        names = ["TJ" if n == "TJ" else f"X1.{n}" for n in internal_nodes(self._model)]
-        return [(n, self.tref_c + float(th)) for n, th in zip(names, theta, strict=True)]
+        return initial_conditions(self._model, theta, reference_drive(self._model,
+                                                                      self.tref_c)[0])
 
     def netlist(self, lib_path: str | Path, power_w: float, freq_hz: float, duty: float,
                 window_s: float = 0.0) -> tuple[str, float]:
         """The test bench for one operating point and its reading time."""
-        from .spice import render_bench
+        from .spice import reference_drive, render_bench
 
         pts, t_read = pwm_waveform(power_w, freq_hz, duty, self.periods, window_s)
+        bench_tref, toffset = reference_drive(self._model, self.tref_c)
         period = 1.0 / freq_hz
         tmax = period / self.points_per_period
         if window_s > 0:
             tmax = min(tmax, max(window_s, EDGE * period) / 10)
         text = render_bench(lib_path, SUBCKT, power_w=power_w, tstop_s=t_read, tmax_s=tmax,
-                            tref_c=self.tref_c, pwl=pts,
+                            tref_c=bench_tref, toffset_c=toffset, pwl=pts,
                             ic=self.initial_conditions(power_w, freq_hz, duty),
                             title="spicethermal PWM periodic steady state",
                             description=f"{freq_hz:g} Hz, duty {duty:g}, {power_w:g} W, "
@@ -213,7 +213,7 @@ class SpicePwm:
     def run(self, power_w: float, freq_hz: float, duty: float,
             window_s: float = 0.0) -> PwmRun:
         """Simulate one operating point; raise :class:`SimulationError` if it is not periodic."""
-        from .spice import simulator
+        from .spice import reference_drive, simulator
 
         check_drive(freq_hz, duty, power_w, window_s)
         with tempfile.TemporaryDirectory(prefix="spicethermal-pwm-") as tmp:
@@ -222,7 +222,8 @@ class SpicePwm:
             text, t_read = self.netlist(lib, power_w, freq_hz, duty, window_s)
             waves = simulator(self.engine).run(text, ["V(TJ)"], self.dialect)
         t = np.asarray(waves.t_s, dtype=float)
-        rise = np.asarray(waves["V(TJ)"], dtype=float) - self.tref_c
+        rise = np.asarray(waves["V(TJ)"], dtype=float) - reference_drive(self._model,
+                                                                         self.tref_c)[0]
         keep = np.concatenate([[True], np.diff(t) > 0])  # ngspice may repeat a time point
         t, rise = t[keep], rise[keep]
         if t.size < 3 or not np.all(np.isfinite(rise)) or t[-1] < t_read * (1 - 1e-9):
@@ -296,17 +297,13 @@ def pwm_state(model: ThermalModel, power_w: float, freq_hz: float, duty: float,
 def resolve_engine(engine: str, model: ThermalModel) -> str:
     """``auto`` → ``analytic`` for a linear model, ``ngspice`` with device effects.
 
-    Device effects outside :data:`SPICE_AUTO_EFFECTS` (phase change) stay ``analytic``
-    (shooting) under ``auto``; naming ``ngspice`` or ``pyspice`` still runs them there.
-
     >>> from spicethermal.ladder import Foster
     >>> from spicethermal.model import ThermalModel
     >>> resolve_engine("auto", ThermalModel(Foster.from_tau([1.0], [1.0])))
     'analytic'
     """
     if engine == "auto":
-        names = {e.name for e in model.device_effects}
-        return "ngspice" if names and names <= SPICE_AUTO_EFFECTS else "analytic"
+        return "ngspice" if model.device_effects else "analytic"
     if engine not in ENGINES:
         raise DataFormatError(f"engine {engine!r}: expected auto or one of {', '.join(ENGINES)}")
     return engine

@@ -138,6 +138,23 @@ def initial_conditions(model: ThermalModel, theta_k: Sequence[float], tref_c: fl
     return [(n, float(tref_c + v)) for n, v in zip(names, theta_k, strict=True)]
 
 
+def reference_drive(model: ThermalModel, tref_c: float) -> tuple[float, float | None]:
+    """How a test bench puts the model at reference temperature ``tref_c``.
+
+    Returns ``(volts on TREF, TOFFSET or None)``. A linear model takes the temperature on
+    ``TREF`` itself. A model with device effects gets ``TREF`` grounded and the temperature as
+    its ``TOFFSET`` parameter: ngspice's truncation-error control stalls ("timestep too small")
+    at tight tolerances when every node sits at a large DC offset, so node voltages are kept
+    as rises and only the behavioural expressions add the offset.
+
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> reference_drive(ThermalModel(Foster.from_tau([1], [1])), 25.0)
+    (25.0, None)
+    """
+    return (0.0, float(tref_c)) if model.device_effects else (float(tref_c), None)
+
+
 def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | None = None,
                name: str = "THERMAL", filename: str = "model.lib") -> str:
     """The subcircuit ``.SUBCKT NAME TJ TREF`` of ``model`` as text.
@@ -164,9 +181,8 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
     for e in model.device_effects:
         if e.name == "phase-change":
             p = e.params
-            amp = p["latent_j"] / (p["width_k"] * np.sqrt(2 * np.pi))
-            pcs.append({"node": nodes[int(p["node"])], "amp": amp, "t_c": p["t_c"],
-                        "width_k": p["width_k"]})
+            pcs.append({"node": nodes[int(p["node"])], "latent_j": p["latent_j"],
+                        "t_c": p["t_c"], "scale_k": e.logistic_scale_k})
     ctx = {
         "name": name, "dialect": dialect, "topology": model.ladder.topology,
         "order": model.ladder.order, "version": __version__, "rth": model.rth,
@@ -205,7 +221,7 @@ class Pulse:
 def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tstop_s: float,
                  tmax_s: float, tref_c: float = 0.0, pulse: Pulse | None = None,
                  ic: Sequence[tuple[str, float]] = (), rise_s: float | None = None,
-                 pwl: Sequence[tuple[float, float]] = (),
+                 pwl: Sequence[tuple[float, float]] = (), toffset_c: float | None = None,
                  reltol: float = 1e-4, trtol: float = 0.5,
                  title: str = "spicethermal test bench",
                  description: str = "") -> str:
@@ -220,6 +236,8 @@ def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tsto
     PWM periods followed by a power-off sample window. The default tolerances (``reltol=1e-4``,
     ``trtol=0.5``) keep ladder responses within 3e-4 of Rth over 8 decades of time and let
     ngspice start behavioural (device-effect) models; tighter trtol can stall them.
+    ``toffset_c`` passes ``PARAMS: TOFFSET=`` to a subcircuit with device effects (see
+    :func:`reference_drive`).
     """
     rise_s = max(1e-9, 1e-5 * tmax_s) if rise_s is None else rise_s
     from . import __version__
@@ -228,7 +246,8 @@ def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tsto
     return environment().get_template("bench/transient.cir.j2").render(
         title=sanitize_comment(title), description=sanitize_comment(description),
         version=__version__, lib_path=str(lib_path), name=name, tref_c=tref_c,
-        power_w=power_w, pulse=pulse, rise_s=rise_s, ic=list(ic), pwl=list(pwl), tstop_s=tstop_s,
+        power_w=power_w, pulse=pulse, rise_s=rise_s, ic=list(ic), pwl=list(pwl),
+        toffset_c=toffset_c, tstop_s=tstop_s,
         tstep_s=tmax_s, tmax_s=tmax_s, reltol=reltol, trtol=trtol)
 
 

@@ -72,7 +72,7 @@ def test_engine_choice_and_validation(actuator):
     assert resolve_engine("auto", linear) == "analytic"
     assert resolve_engine("auto", tc) == "ngspice"
     pc = tc.with_effects([*tc.effects, Effect.create("phase-change", t_c=40.0, latent_j=0.01)])
-    assert resolve_engine("auto", pc) == "analytic"  # ngspice cannot run that element reliably
+    assert resolve_engine("auto", pc) == "ngspice"
     assert resolve_engine("pyspice", pc) == "pyspice"
     assert pwm_state(linear, POWER_W, 1e3, 0.5, WINDOW_S) == \
         linear.pwm(POWER_W, 1e3, 0.5, WINDOW_S)
@@ -245,3 +245,15 @@ def test_curves_command(tmp_path, actuator, capsys):
     assert main(["curves", str(tmp_path / "none.json"), "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "duty" in err[0] and "none.json" in err[1]
+
+
+@pytest.mark.ngspice
+@pytest.mark.parametrize("topology", ["foster", "cauer"])
+def test_phase_change_in_ngspice_matches_shooting(actuator, topology):
+    # the band sits where the periodic orbit of node 1 lives: the element works hardest here
+    model = ThermalModel(actuator, (Effect.create("phase-change", t_c=33.0, width_k=2.0,
+                                                  latent_j=0.02, node=1),)).with_topology(topology)
+    spice_state = SpicePwm(model, topology=topology).state(POWER_W, 1e3, 0.5, WINDOW_S)
+    exact = model.pwm(POWER_W, 1e3, 0.5, WINDOW_S)
+    assert spice_state.peak_k == pytest.approx(exact.peak_k, abs=0.02)
+    assert spice_state.reading_k == pytest.approx(exact.reading_k, abs=0.02)

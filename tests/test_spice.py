@@ -92,12 +92,14 @@ def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology):
         Effect.create("phase-change", t_c=40.0, width_k=2.0, latent_j=0.02, node=1),
     )).with_topology(topology)
     lib = spice.export(model, tmp_path / "m.lib", dialect, topology, "NL")
-    net = spice.render_bench(lib, "NL", power_w=0.3, tstop_s=4.0, tmax_s=4e-3, tref_c=25.0)
+    tref, toffset = spice.reference_drive(model, 25.0)
+    net = spice.render_bench(lib, "NL", power_w=0.3, tstop_s=4.0, tmax_s=4e-3, tref_c=tref,
+                             toffset_c=toffset)
     w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
     t = w.t_s[w.t_s > 1e-3]
     rise = 4e-8  # the bench's default ramp, 1e-5 of the maximum step
     py = model.simulate(t, Schedule((0.0, rise / 2), (0.0, 0.3)), tref_c=25.0).tj_k + 25.0
-    sim = w["V(TJ)"][w.t_s > 1e-3]
+    sim = w["V(TJ)"][w.t_s > 1e-3] + 25.0
     assert np.max(np.abs(sim - py)) < 0.03  # K, of a rise of about 25 K
     lin = ThermalModel(model.ladder).simulate(t, Schedule.step(0.3)).tj_k + 25.0
     assert np.max(np.abs(lin - py)) > 1.0  # the effects matter at this strength
