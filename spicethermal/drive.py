@@ -275,21 +275,33 @@ class DriveResult:
         """A self-contained ngspice deck: the model's subcircuit, the drive's sources, ``.tran``.
 
         ``TREF`` sits at the ambient temperature, so ``V(TJ)`` is the junction in °C and
-        ``V(X1.Nk)`` Cauer node k. ``tstop_s`` defaults to :meth:`verification_window_s`,
+        ``V(X1.Nk)`` Cauer node k; with device effects ``TREF`` is grounded and the ambient
+        passed as ``TOFFSET`` (:func:`spicethermal.spice.reference_drive`), so add
+        :attr:`bench_offset_c` to the voltages. ``tstop_s`` defaults to
+        :meth:`verification_window_s`,
         ``tmax_s`` (the maximum step) to 1/100 period (1/20 leaves errors of ~0.01 K).
         """
         from . import __version__
-        from .spice import environment, render_lib, sanitize_comment
+        from .spice import environment, reference_drive, render_lib, sanitize_comment
 
         tstop = self.verification_window_s() if tstop_s is None else float(tstop_s)
         tmax = self.period_s / 100 if tmax_s is None else float(tmax_s)
         return environment().get_template("bench/drive.cir.j2").render(
             version=__version__, lib=render_lib(self.model, "ngspice", name=name),
-            name=name, tref_c=self.ambient_c, sources=self.spice_sources(),
+            name=name, tref_c=self.ambient_c - self.bench_offset_c,
+            toffset_c=reference_drive(self.model, self.ambient_c)[1],
+            sources=self.spice_sources(),
             description=sanitize_comment(
                 f"node {self.node} to {self.target_c:g} degC, Tj peak <= {self.t_max_c:g} "
                 f"degC, {self.f_pwm_hz:g} Hz, P_max {self.p_max_w:g} W"),
             tstop_s=tstop, tstep_s=tmax, tmax_s=tmax, reltol=reltol)
+
+    @property
+    def bench_offset_c(self) -> float:
+        """What to add to the voltages of :meth:`spice_bench` to read °C."""
+        from .spice import reference_drive
+
+        return self.ambient_c - reference_drive(self.model, self.ambient_c)[0]
 
     def verification_window_s(self, max_periods: int = 4000) -> float:
         """Span worth simulating switched: past the exact peak and the time to target."""

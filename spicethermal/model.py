@@ -283,18 +283,28 @@ class ThermalModel:
         return Trajectory(t, theta)
 
     def steady_nodes(self, power_w: float, tref_c: float = 25.0) -> NDArray:
-        """Node rises under constant ``power_w`` (solved self-consistently with the effects)."""
+        """Node rises under constant ``power_w`` (solved self-consistently with the effects).
+
+        Solves ``G(θ)·θ = e0·P`` by a hybrid Newton method from the linear solution; a strong
+        negative temperature coefficient makes plain fixed-point iteration oscillate.
+        """
+        from scipy.optimize import root
+
         net = self._network()
         b = np.zeros(net.n)
         b[0] = power_w
         theta = np.linalg.solve(net.conductance(), b)
-        for _ in range(200):
-            _, g = self._matrices(theta, tref_c, net)
-            new = np.linalg.solve(g, b)
-            if np.max(np.abs(new - theta)) < 1e-12 * (1 + np.max(np.abs(new))):
-                return new
-            theta = new
-        raise SimulationError("steady state did not converge (temperature coefficient too strong?)")
+        if self.is_linear:
+            return theta
+
+        def residual(x: NDArray) -> NDArray:
+            return self._matrices(x, tref_c, net)[1] @ x - b
+
+        sol = root(residual, theta, method="hybr", tol=1e-13)
+        if not sol.success or np.max(np.abs(residual(sol.x))) > 1e-9 * max(power_w, 1e-30):
+            raise SimulationError(f"steady state at {power_w:g} W did not converge "
+                                  f"({sol.message}); is the temperature coefficient too strong?")
+        return sol.x
 
     def pwm(self, power_w: float, freq_hz: float, duty: float, window_s: float = 0.0,
             tref_c: float = 25.0, tol_k: float = 1e-6) -> PwmState:

@@ -98,7 +98,7 @@ def _verify(result) -> dict[str, float]:
 
     window = result.verification_window_s()
     wave = NgspiceBatch().run(result.spice_bench(tstop_s=window), ["V(TJ)"])
-    tj = wave["V(TJ)"]
+    tj = wave["V(TJ)"] + result.bench_offset_c
     out = {"window_s": window, "ngspice_peak_junction_c": float(np.max(tj)),
            "ngspice_peak_at_s": float(wave.t_s[int(np.argmax(tj))])}
     tr = result.trace
