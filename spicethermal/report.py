@@ -179,7 +179,8 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
     s.table(["where", "at", "residual (K)"],
             [[w["dataset"], _at(w["at"]), _signed(w["residual_k"])]
              for w in diagnosis.to_json()["baseline"]["worst"]],
-            f"Worst misfits of the linear ladder (RMS {diagnosis.to_json()['baseline']['rms_k']:.2f} K)")
+            "Worst misfits of the linear ladder "
+            f"(RMS {diagnosis.to_json()['baseline']['rms_k']:.2f} K)")
     s.table(["candidate effect", "fitted parameters", "RMS (K)", "improvement", "evidence"],
             [[c["effect"], ", ".join(f"{k} = {_g(v, 3)}" for k, v in c["params"].items()),
               f"{c['rms_k']:.3f}", f"{c['improvement']:.1f}×", c["evidence"]]
@@ -193,8 +194,9 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
         s.table(["data set", "RMS before (K)", "RMS after (K)"],
                 [[name, f"{cb.rms_k:.3f}", f"{after.by_dataset()[name].rms_k:.3f}"]
                  for name, cb in before.by_dataset().items()])
-    s.figure(figs / "diagnosis_before_after.png", out,
-             "Residuals before (linear ladder) and after (with the effect)")
+    s.figure(figs / "effect_before_after.png", out,
+             "Residuals of every data set: the linear ladder (left) and the model with the "
+             "effect added (right)")
     for path in diagnosis_figures or ():
         s.figure(path, out, Path(path).stem.replace("_", " "))
     secs.append(s)
