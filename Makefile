@@ -15,10 +15,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 ngspice:
-	@if ! command -v ngspice >/dev/null 2>&1 || ! ldconfig -p | grep -q libngspice.so.0; then \
-	  echo "installing ngspice and libngspice0 (apt)"; \
+	@if ! command -v ngspice >/dev/null 2>&1 || ! ldconfig -p | grep -q libngspice.so.0 || ! command -v chromium >/dev/null 2>&1; then \
+	  echo "installing ngspice, libngspice0 and chromium (apt)"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
-	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq ngspice libngspice0; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq ngspice libngspice0 chromium; \
 	fi
 
 firmware:
