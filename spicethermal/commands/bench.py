@@ -10,7 +10,9 @@ URL is any pyserial URL (``/dev/ttyUSB0``, ``socket://host:port``) or the simula
 from __future__ import annotations
 
 import argparse
-import math
+
+from ._types import listed, number
+from ._types import positive as _positive
 
 NAME = "bench"
 HELP = "measure on the bench or the simulated bench (sim://actuator, sim://mur880e) into a bundle"
@@ -24,34 +26,10 @@ ACTION_HELP = {
 }
 
 
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"{text!r} must be a positive number")
-    return v
 
 
-def _positives(text: str) -> tuple[float, ...]:
-    parts = [x for x in text.split(",") if x.strip()]
-    if not parts:
-        raise argparse.ArgumentTypeError("expected a comma-separated list of numbers")
-    return tuple(_positive(x) for x in parts)
 
 
-def _temperatures(text: str) -> tuple[float, ...]:
-    out = []
-    for x in text.split(","):
-        try:
-            v = float(x)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{x!r} is not a number") from None
-        if not math.isfinite(v):
-            raise argparse.ArgumentTypeError(f"{x!r} is not finite")
-        out.append(v)
-    return tuple(out)
 
 
 def _common(p: argparse.ArgumentParser, action: str) -> None:
@@ -65,22 +43,22 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
     p.add_argument("--window-s", type=_positive, dest="window_s", metavar="S",
                    help="sample window, s (default 1e-4, the paper's 100 us)")
     if action in ("run", "calibrate"):
-        p.add_argument("--setpoints", type=_temperatures, dest="calibration_c", metavar="C,..",
+        p.add_argument("--setpoints", type=listed(number), dest="calibration_c", metavar="C,..",
                        help="calibration temperatures, degC")
     if action in ("run", "rth"):
         p.add_argument("--rth-power", type=_positive, dest="rth_power_w", metavar="W",
                        help="power of the Rth measurement, W")
     if action in ("run", "cooling"):
-        p.add_argument("--powers", type=_positives, dest="cooling_powers_w", metavar="W,..",
+        p.add_argument("--powers", type=listed(_positive), dest="cooling_powers_w", metavar="W,..",
                        help="powers of the cooling curves, W")
         p.add_argument("--t-last", type=_positive, dest="cooling_t_last_s", metavar="S",
                        help="last cooling sample, s after the cut")
     if action in ("run", "pwm"):
         p.add_argument("--pwm-power", type=_positive, dest="pwm_power_w", metavar="W",
                        help="pulse power of the PWM runs, W")
-        p.add_argument("--freqs", type=_positives, dest="pwm_freqs_hz", metavar="HZ,..",
+        p.add_argument("--freqs", type=listed(_positive), dest="pwm_freqs_hz", metavar="HZ,..",
                        help="PWM frequencies, Hz")
-        p.add_argument("--duties", type=_positives, dest="pwm_duties", metavar="D,..",
+        p.add_argument("--duties", type=listed(_positive), dest="pwm_duties", metavar="D,..",
                        help="PWM duty cycles, 0..1")
 
 

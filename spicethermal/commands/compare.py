@@ -9,22 +9,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 
 from ..pwmsim import ENGINES
+from ._types import nonnegative as _window
 
 NAME = "compare"
 HELP = "measured vs model over every data set of a bundle (the paper's Table 2)"
 
 
-def _window(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"{text!r} must be a finite number >= 0")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -8,20 +8,13 @@ the paper's eq. 3, ``D + (1 − D) r(t)`` (dashed), and the exact periodic-stead
 from __future__ import annotations
 
 import argparse
-import math
+
+from ._types import duty as _duty
 
 NAME = "curves"
 HELP = "duty-cycle impedance curves r_D(t), eq. 3 and exact (the paper's Fig. 8) as a PNG"
 
 
-def _duty(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(value) and 0 <= value <= 1):
-        raise argparse.ArgumentTypeError(f"{text!r} must lie in [0, 1]")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -13,29 +13,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 
 from ..errors import DataFormatError
+from ._types import index as _node
+from ._types import number as _number
+from ._types import positive as _positive
 
 NAME = "drive"
 HELP = "safe fast drive: the PWM schedule that actuates fastest with the junction peak <= t-max"
 
 
-def _number(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
-    return value
 
 
-def _positive(text: str) -> float:
-    value = _number(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
-    return value
 
 
 def _duty(text: str) -> float:
@@ -45,14 +34,6 @@ def _duty(text: str) -> float:
     return value
 
 
-def _node(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a node number (0 = junction)") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0 (0 = junction)")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

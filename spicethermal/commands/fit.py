@@ -16,6 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import DataFormatError
+from ._types import count as _count
+from ._types import positive as _positive
 
 NAME = "fit"
 HELP = "fit an RC ladder (automatic order, ΣR = Rth) to a Zth curve and write a model file"
@@ -30,24 +32,8 @@ def _order(text: str) -> int | str:
         raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer or 'auto'") from None
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
-    return value
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r} must be positive and finite")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

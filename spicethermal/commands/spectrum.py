@@ -20,6 +20,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import DataFormatError
+from ._types import count as _count
+from ._types import positive as _positive
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..curves import ZthCurve
@@ -28,24 +30,8 @@ NAME = "spectrum"
 HELP = "time-constant spectrum of a Zth curve by deconvolution (NID, as T3Ster and PyRth)"
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r} must be positive and finite")
-    return value
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
-    return value
 
 
 def add_source_arguments(parser: argparse.ArgumentParser) -> None:
