@@ -34,8 +34,8 @@ test: setup firmware
 lint: setup
 	$(BIN)/ruff check spicethermal tests bench
 
-bench: setup firmware
-	$(BIN)/python -m pytest -q -m benchmark -p no:randomly bench
+bench: setup firmware   # accuracy and speed studies: minutes, not part of `make test`
+	@for f in bench/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
 
 clean:
 	rm -rf out build dist
