@@ -287,14 +287,16 @@ def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
 
 
 def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
-                    t_s: ArrayLike) -> NDArray:
-    """Junction rise (K) after ``power_w`` is cut, with the ``phase-change`` heat capacity.
+                    t_s: ArrayLike, tc: Effect | None = None) -> NDArray:
+    """Junction rise (K) after ``power_w`` is cut, with the ``phase-change`` heat capacity
+    (and, if given, the ``temperature-coefficient`` effect ``tc`` as well).
 
     The nodal network (the one :class:`~spicethermal.model.ThermalModel` and the SPICE export
-    use) with the band's capacity at its node, ``M(θ) dθ/dt = −G θ``, integrated by LSODA
-    with an exact rank-one inverse of ``M`` and its Jacobian (agrees with the model's Radau
-    integration to < 1 mK, 10× faster); closed form when the curve stays more than
-    :data:`BAND_REACH` widths away from the band.
+    use) with the band's capacity at its node, ``M(θ) dθ/dt = −G θ / s(Tj)``, integrated by
+    LSODA with an exact rank-one inverse of ``M`` (agrees with the model's Radau integration
+    to < 1 mK, 10× faster); without ``tc`` the network is linear again once the node has left
+    the band, and exact modal steps finish the curve; closed form when the curve stays more
+    than :data:`BAND_REACH` widths away from the band (and there is no ``tc``).
     """
     from scipy.integrate import solve_ivp
 
@@ -302,8 +304,13 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
 
     f = _foster(ladder)
     t = np.asarray(t_s, dtype=float)
-    rise0 = power_w * f.rth
+    alpha = 0.0 if tc is None else tc.params["alpha_per_k"]
+    t0 = 0.0 if tc is None else tc.params["t0_c"]
+    s_ss = tc_steady_scale(f.rth, alpha, t0, tref_c, power_w) if tc is not None else 1.0
+    rise0 = power_w * f.rth * s_ss
     if not _band_reached(effect, tref_c, tref_c + rise0):
+        if tc is not None:
+            return tc_cooling_rise(ladder, alpha, t0, tref_c, power_w, t)
         return power_w * f.cooling(t)
     net = Network.of(ladder)
     g = net.conductance()
@@ -313,7 +320,10 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     ce = cinv[:, node]
     b = np.zeros(net.n)
     b[0] = power_w
-    theta0 = np.linalg.solve(g, b)
+    theta0 = np.linalg.solve(g, b) * s_ss
+
+    def scale(theta: NDArray) -> float:
+        return max(0.05, 1.0 + alpha * (tref_c + float(theta[0]) - t0))
 
     def minv(theta: NDArray, y: NDArray) -> NDArray:
         cx = effect.extra_capacitance(node, tref_c + float(theta[node]))
@@ -321,10 +331,10 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
         return cy - cx * ce * cy[node] / (1 + cx * ce[node])
 
     def rhs(_t: float, theta: NDArray) -> NDArray:
-        return minv(theta, -g @ theta)
+        return minv(theta, -g @ theta / scale(theta))
 
-    def jac(_t: float, theta: NDArray) -> NDArray:
-        return np.column_stack([minv(theta, -g[:, k]) for k in range(net.n)])
+    def jac(_t: float, theta: NDArray) -> NDArray:  # the resistance's own slope left out
+        return np.column_stack([minv(theta, -g[:, k] / scale(theta)) for k in range(net.n)])
 
     t_end = float(t.max()) if t.size else 0.0
     if t_end <= 0:
@@ -338,7 +348,8 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     left_band.terminal = True  # type: ignore[attr-defined]
     left_band.direction = -1  # type: ignore[attr-defined]
     sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
-                    rtol=1e-7, atol=1e-6, first_step=min(f.tau) / 1000, events=left_band)
+                    rtol=1e-7, atol=1e-6, first_step=min(f.tau) / 1000,
+                    events=left_band if tc is None else None)
     if not sol.success:
         raise SimulationError(f"phase-change cooling integration failed: {sol.message}")
     out = np.empty(t.shape)
@@ -409,27 +420,17 @@ def transient_offset(t_s: ArrayLike, effect: Effect | None) -> NDArray:
     return p["amplitude_k"] * np.exp(-TRANSIENT_RATE * t / p["masked_s"])
 
 
-def _model(ladder: Foster | Cauer, effects: Sequence[Effect]) -> ThermalModel:
-    from .model import ThermalModel
-
-    return ThermalModel(ladder, tuple(effects))
-
-
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
                    effects: Sequence[Effect]) -> NDArray:
     """True junction temperature (°C) along a cooling curve under the device effects."""
     fx = _effects_map(effects)
     tc, pc = fx.get("temperature-coefficient"), fx.get("phase-change")
     tref = curve.tref_steady_c
-    if tc is not None and pc is not None:
-        from .compare import cooling_rise_k
-
-        rise = cooling_rise_k(_model(ladder, [tc, pc]), curve.power_w, curve.t_s, tref)
+    if pc is not None:
+        rise = pc_cooling_rise(ladder, pc, tref, curve.power_w, curve.t_s, tc)
     elif tc is not None:
         rise = tc_cooling_rise(ladder, tc.params["alpha_per_k"], tc.params["t0_c"], tref,
                                curve.power_w, curve.t_s)
-    elif pc is not None:
-        rise = pc_cooling_rise(ladder, pc, tref, curve.power_w, curve.t_s)
     else:
         rise = curve.power_w * ladder.cooling(curve.t_s)
     return curve.tref_c + rise

@@ -99,6 +99,19 @@ def test_pc_cooling_matches_the_models_integration(actuator):
     assert np.array_equal(cold, 0.12 * actuator.cooling(t))
 
 
+def test_pc_with_tc_matches_the_models_integration(actuator):
+    pc = HIDDEN["phase-change"]
+    tc = Effect.create("temperature-coefficient", alpha_per_k=-3e-3)
+    t = np.geomspace(1e-5, 100, 25)
+    from spicethermal.compare import cooling_rise_k
+
+    exact = cooling_rise_k(ThermalModel(actuator, (tc, pc)), 0.35, t, 25.0)
+    fast = pc_cooling_rise(actuator, pc, 25.0, 0.35, t, tc)
+    assert np.max(np.abs(fast - exact)) < 2e-3
+    alone = tc_cooling_rise(actuator, -3e-3, 25.0, 25.0, 0.35, t)
+    assert np.max(np.abs(fast - alone)) > 1.0
+
+
 def test_pc_frozen_ladder_keeps_rth_and_slows_the_junction(actuator):
     eff = Effect.create("phase-change", latent_j=0.05, t_c=40.0, width_k=2.0)
     lad = pc_frozen_ladder(actuator, eff, 25.0, 0.1)  # mean node rise 14.6 K: in the band
