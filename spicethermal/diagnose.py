@@ -847,11 +847,13 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
     where = tuple(localise(base, noise))
     effect, reason = _verdict(base, noise, bic0, cands, where)
     if effect is None:
+        early_gain = base.rms_k / _cands_rms(cands, "electrical-transient")
         reason = (f"neither explanation the paper gives fits the numbers: the "
                   f"{a.window_s * 1e6:g} µs sample window lowers the RMS only "
                   f"{base.rms_k / _cands_rms(cands, 'sample-window'):.2f}× and predicts no "
-                  f"positive Δ and no Δ growing with frequency, early-time extrapolation moves "
-                  f"the readings by at most {abs(early_amp):.2f} K; they support instead a "
+                  f"positive Δ and no Δ growing with frequency; an error of the extrapolated "
+                  f"early time, at its best (up to {abs(early_amp):.2f} K, one sign, shrinking "
+                  f"with frequency), only {early_gain:.2f}×; they support instead a "
                   f"simulated column that is not a constant-power periodic steady state "
                   f"({'rises with frequency, ' if 'rises' in a.findings['simulated'] else ''}"
                   f"best ladder fit RMS {a.ladder_rms_k:.2f} K; Δ follows its departure from "
