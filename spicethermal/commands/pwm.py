@@ -11,43 +11,28 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 
 from ..pwmsim import ENGINES
+from ._types import duty, nonnegative, number, positive
 
 NAME = "pwm"
 HELP = "periodic steady state under PWM: peak, mean, valley and the bench reading"
 
 
-def _number(text: str, low: float | None = None, open_low: bool = False,
-            high: float | None = None) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
-    if low is not None and (value <= low if open_low else value < low):
-        raise argparse.ArgumentTypeError(f"{text!r} must be {'>' if open_low else '>='} {low:g}")
-    if high is not None and value > high:
-        raise argparse.ArgumentTypeError(f"{text!r} must be <= {high:g}")
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
     parser.add_argument("--freq", required=True, metavar="HZ",
-                        type=lambda s: _number(s, 0, open_low=True), help="PWM frequency, Hz")
+                        type=positive, help="PWM frequency, Hz")
     parser.add_argument("--duty", required=True, metavar="D",
-                        type=lambda s: _number(s, 0, high=1), help="duty cycle, 0..1")
-    parser.add_argument("--power", required=True, metavar="W", type=lambda s: _number(s, 0),
+                        type=duty, help="duty cycle, 0..1")
+    parser.add_argument("--power", required=True, metavar="W", type=nonnegative,
                         help="power during the on-phase, W")
-    parser.add_argument("--window", default=0.0, metavar="S", type=lambda s: _number(s, 0),
+    parser.add_argument("--window", default=0.0, metavar="S", type=nonnegative,
                         help="power-off sample window before the reading, s (default 0: the "
                              "reading is the peak)")
     parser.add_argument("--engine", choices=ENGINES, default="analytic",
                         help="closed form/shooting (default) or ngspice (binary or PySpice)")
-    parser.add_argument("--tref", default=25.0, metavar="DEGC", type=_number,
+    parser.add_argument("--tref", default=25.0, metavar="DEGC", type=number,
                         help="reference temperature, degC (matters for device effects; "
                              "default 25)")
     parser.add_argument("--json", action="store_true",
