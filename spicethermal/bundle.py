@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import DataFormatError, where
+from .files import read_json
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -640,13 +641,9 @@ class Bundle:
             raise DataFormatError(f"{path}: not a bundle directory (no such directory)")
         manifest = path / MANIFEST
         label = str(manifest)
-        try:
-            doc = json.loads(manifest.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise DataFormatError(f"{path}: not a bundle (no {MANIFEST})") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            line = getattr(exc, "lineno", None)
-            raise DataFormatError(f"{where(label, line)}not valid JSON ({exc})") from None
+        if not manifest.exists():
+            raise DataFormatError(f"{path}: not a bundle (no {MANIFEST})")
+        doc = read_json(manifest)
         if not isinstance(doc, dict):
             raise DataFormatError(f"{label}: must hold a JSON object")
         fmt = doc.get("format")

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
+
+from .errors import DataFormatError, where
 
 
 @contextmanager
@@ -53,3 +56,16 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
     with atomic_open(path, "wb") as handle:
         handle.write(data)
     return Path(path)
+
+
+def read_json(path: str | os.PathLike, missing: str = "no such file") -> Any:
+    """Parse a JSON file; a missing or malformed file is a one-line :class:`DataFormatError`
+    naming the file (and the line), ``missing`` saying what a missing file means."""
+    path = Path(path)
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise DataFormatError(f"{path}: {missing}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        line = getattr(exc, "lineno", None)
+        raise DataFormatError(f"{where(path, line)}not valid JSON ({exc})") from None

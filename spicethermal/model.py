@@ -21,7 +21,7 @@ import numpy as np
 
 from .effects import DEVICE, Effect
 from .errors import DataFormatError, SimulationError
-from .files import atomic_write_text
+from .files import atomic_write_text, read_json
 from .ladder import Cauer, Foster
 from .pwm import PwmState, check_drive, steady_state
 
@@ -407,14 +407,7 @@ class ThermalModel:
     @classmethod
     def load(cls, path: str | Path) -> ThermalModel:
         """Read a ``spicethermal-model/1`` JSON file."""
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise DataFormatError(f"{path}: no such file") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DataFormatError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(data, str(path))
+        return cls.from_dict(read_json(path), str(path))
 
 
 def _linear_response(net: Network, x0: NDArray, schedule: Schedule, t: NDArray) -> NDArray:
