@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import DataFormatError, where
-from .files import read_json
+from .files import read_json, read_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -130,15 +130,7 @@ def read_columns(path: str | os.PathLike, required: Sequence[str | tuple[str, ..
     """
     path = Path(path)
     name = label if label is not None else str(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise DataFormatError(f"{name}: file not found") from None
-    except UnicodeDecodeError:
-        raise DataFormatError(f"{name}: not a text (UTF-8) CSV file") from None
-    except IsADirectoryError:
-        raise DataFormatError(f"{name}: is a directory, expected a CSV file") from None
-    return parse_columns(text, required, optional, label=name)
+    return parse_columns(read_text(path, name, "CSV file"), required, optional, label=name)
 
 
 def parse_columns(text: str, required: Sequence[str | tuple[str, ...]] = (),

@@ -69,3 +69,18 @@ def read_json(path: str | os.PathLike, missing: str = "no such file") -> Any:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         line = getattr(exc, "lineno", None)
         raise DataFormatError(f"{where(path, line)}not valid JSON ({exc})") from None
+
+
+def read_text(path: str | os.PathLike, label: object = None, kind: str = "text file") -> str:
+    """Read a UTF-8 text file (a BOM is dropped); a missing, binary or directory path is a
+    one-line :class:`DataFormatError` naming ``label`` (default the path) and ``kind``."""
+    path = Path(path)
+    name = label if label is not None else path
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise DataFormatError(f"{name}: file not found") from None
+    except UnicodeDecodeError:
+        raise DataFormatError(f"{name}: not a {kind} (UTF-8)") from None
+    except IsADirectoryError:
+        raise DataFormatError(f"{name}: is a directory, expected a {kind}") from None

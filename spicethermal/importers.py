@@ -30,6 +30,7 @@ import numpy as np
 
 from .bundle import Bundle, CalibrationTable, CoolingTable, _number
 from .errors import DataFormatError, where
+from .files import read_text
 
 #: Calibration points of the PyRth MOSFET files, (Tj degC, Usens V): about -2.32 mV/K.
 PYRTH_MOSFET_CALIBRATION: tuple[tuple[float, float], ...] = (
@@ -39,17 +40,6 @@ PYRTH_MOSFET_CALIBRATION: tuple[tuple[float, float], ...] = (
 END_SAMPLES = 5
 
 T3STER_ADC_LEVELS = 4095.0
-
-
-def _text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8", errors="strict")
-    except FileNotFoundError:
-        raise DataFormatError(f"{path}: file not found") from None
-    except UnicodeDecodeError:
-        raise DataFormatError(f"{path}: not a text file") from None
-    except IsADirectoryError:
-        raise DataFormatError(f"{path}: is a directory") from None
 
 
 def _calibration_table(calibration: CalibrationTable | Sequence[Sequence[float]],
@@ -120,7 +110,7 @@ def read_pyrth(path: str | os.PathLike,
     """
     path = Path(path)
     label = str(path)
-    lines = _text(path).splitlines()
+    lines = read_text(path).splitlines()
     start = next((i for i, line in enumerate(lines) if line.strip() == "DATA"), None)
     if start is None:
         raise DataFormatError(f"{label}: no DATA line; not a PyRth transient file")
@@ -143,7 +133,7 @@ def read_pyrth(path: str | os.PathLike,
 
 def _t3ster_power(path: Path) -> float:
     section = ""
-    for lineno, raw in enumerate(_text(path).splitlines(), start=1):
+    for lineno, raw in enumerate(read_text(path).splitlines(), start=1):
         line = raw.split(";", 1)[0].strip()
         if line.startswith("[") and line.endswith("]"):
             section = line[1:-1].lower()
@@ -158,7 +148,7 @@ def _t3ster_power(path: Path) -> float:
 
 
 def _t3ster_calibration(path: Path) -> CalibrationTable:
-    body = [(i, line.strip()) for i, line in enumerate(_text(path).splitlines(), start=1)
+    body = [(i, line.strip()) for i, line in enumerate(read_text(path).splitlines(), start=1)
             if line.strip() and not line.strip().startswith("#")]
     temp, volt, rows = _two_columns(body, str(path), ("temp_c", "v_tsp_v"))
     return CalibrationTable(temp, volt, file="calibration.csv")
@@ -183,7 +173,7 @@ def read_t3ster(raw: str | os.PathLike, pwr: str | os.PathLike | None = None,
     tco = Path(tco)
     header: list[tuple[int, str]] = []
     body: list[tuple[int, str]] = []
-    for lineno, line in enumerate(_text(raw).splitlines(), start=1):
+    for lineno, line in enumerate(read_text(raw).splitlines(), start=1):
         s = line.strip()
         if not s:
             continue
