@@ -17,7 +17,7 @@ from spicethermal.diagnose import diagnose, diagnose_table
 from spicethermal.scenarios import SCENARIOS, expected_effect, scenario_bundle
 
 ROOT = Path(__file__).resolve().parent.parent
-TABLE2 = ROOT.parent / "shared" / "data" / "actuator_table2.csv"
+TABLE2 = ROOT / "spicethermal" / "data" / "actuator_table2.csv"
 
 
 def study(seeds: range, noise_k: float) -> dict[str, dict]:

@@ -39,7 +39,7 @@ from spicethermal.spectrum import time_constant_spectrum
 from spicethermal.structure import StructureFunction, separation, structure_function
 from spicethermal.synthetic import synthetic_cooling
 
-DATA = Path("/work/shared/data/pyrth_mosfet")
+DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
 LAYERS = Cauer([0.1, 0.3, 0.5, 1.0], [0.001, 0.1, 1.0, 30.0])
 
 

@@ -809,10 +809,8 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
 
     Examples
     --------
-    >>> from pathlib import Path
-    >>> p = Path(__file__).resolve().parents[2] / "shared" / "data" / "actuator_table2.csv"
-    >>> d = diagnose_table(p) if p.exists() else None
-    >>> d is None or d.verdict_effect is None
+    >>> from spicethermal.data import path
+    >>> diagnose_table(path("actuator_table2.csv")).verdict_effect is None
     True
     """
     from .model import ThermalModel

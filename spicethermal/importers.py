@@ -103,9 +103,9 @@ def read_pyrth(path: str | os.PathLike,
 
     Examples
     --------
-    >>> from pathlib import Path
-    >>> b = read_pyrth(Path("/work/shared/data/pyrth_mosfet/MOSFET_dry.txt"))  # doctest: +SKIP
-    >>> round(b.calibration_fit().k_factor_mv_per_k, 2)  # doctest: +SKIP
+    >>> from spicethermal.data import path
+    >>> b = read_pyrth(path("pyrth_mosfet/MOSFET_dry.txt"))
+    >>> round(b.calibration_fit().k_factor_mv_per_k, 2)
     -2.32
     """
     path = Path(path)

@@ -10,7 +10,8 @@ import pytest
 from spicethermal.ladder import Foster
 
 ROOT = Path(__file__).resolve().parent.parent
-SHARED = ROOT.parent / "shared"
+#: Data shipped in the repository (paper tables, real MOSFET transients, with their sources).
+DATA = ROOT / "spicethermal" / "data"
 NETLISTS = ROOT / "netlists"
 
 #: The paper-like actuator ladder used across tests: Rth = 146 K/W, taus from 100 µs to 30 s.

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import SHARED
+from conftest import DATA
 
 from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
 from spicethermal.cli import main
@@ -185,7 +185,7 @@ def test_comparison_document_and_table():
 
 def test_paper_table2_layout(actuator):
     """The paper's measured column through our table: 6 frequencies × 3 duties."""
-    with open(SHARED / "data" / "actuator_table2.csv") as fh:
+    with open(DATA / "actuator_table2.csv") as fh:
         rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     table = PwmTable([float(r["freq_hz"]) for r in rows], [float(r["duty"]) for r in rows],
                      [float(r["tj_exp_c"]) for r in rows], power_w=POWER_W,

@@ -14,11 +14,7 @@ from spicethermal.importers import read_pyrth, read_t3ster
 from spicethermal.ladder import Foster
 from spicethermal.synthetic import mur880e_foster, synthetic_cooling
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-PYRTH = DATA / "pyrth_mosfet"
-# the repository may be checked out elsewhere: fall back to the team's shared data
-if not PYRTH.exists():
-    PYRTH = Path("/work/shared/data/pyrth_mosfet")
+PYRTH = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
 
 LADDER = Foster.from_tau([0.2, 0.8, 1.5, 2.5], [1e-4, 3e-3, 0.1, 2.0])
 T = np.geomspace(1e-6, 30.0, 400)
@@ -197,7 +193,6 @@ def test_bad_times_name_the_row() -> None:
                               label="run 7")
 
 
-@pytest.mark.skipif(not PYRTH.exists(), reason="shared PyRth data not present")
 def test_pyrth_mosfet_transients() -> None:
     dry = read_pyrth(PYRTH / "MOSFET_dry.txt")
     tim = read_pyrth(PYRTH / "MOSFET_tim.txt")
@@ -216,7 +211,6 @@ def test_pyrth_mosfet_transients() -> None:
     assert zt.at(1e-3) == pytest.approx(zd.at(1e-3), rel=0.1)
 
 
-@pytest.mark.skipif(not PYRTH.exists(), reason="shared PyRth data not present")
 def test_t3ster_record(tmp_path: Path) -> None:
     b = read_t3ster(PYRTH / "t3ster" / "T25_I-m5m-I-h600m_100s.raw")
     assert b.cooling[0].power_w == pytest.approx(1.754057)

@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import SHARED
+from conftest import DATA
 
 from spicethermal.bundle import format_columns
 from spicethermal.cli import main
@@ -16,8 +16,7 @@ from spicethermal.diagnose import DIAGNOSIS_FORMAT, diagnose_table
 from spicethermal.pwm import steady_state
 from spicethermal.scenarios import DUTIES, FREQS_HZ, actuator
 
-TABLE2 = SHARED / "data" / "actuator_table2.csv"
-pytestmark = pytest.mark.skipif(not TABLE2.exists(), reason="shared data not available")
+TABLE2 = DATA / "actuator_table2.csv"
 
 
 @pytest.fixture(scope="module")

@@ -19,9 +19,7 @@ from spicethermal.spectrum import (
 )
 from spicethermal.synthetic import synthetic_cooling
 
-DATA = Path(__file__).parent.parent.parent / "shared" / "data" / "pyrth_mosfet"
-if not DATA.is_dir():  # the shared data live beside the repository
-    DATA = Path("/work/shared/data/pyrth_mosfet")
+DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
 
 
 # ------------------------------------------------------------------------ closed forms

@@ -19,9 +19,7 @@ from spicethermal.structure import (
     structure_function,
 )
 
-DATA = Path(__file__).parent.parent.parent / "shared" / "data" / "pyrth_mosfet"
-if not DATA.is_dir():  # the shared data live beside the repository
-    DATA = Path("/work/shared/data/pyrth_mosfet")
+DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
 
 #: The known heat path of the recovery test: die, die attach, base plate, heat sink
 #: (r in K/W, c in J/K); its Foster time constants are 0.1 ms, 27 ms, 0.53 s and 31 s.

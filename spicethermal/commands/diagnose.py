@@ -7,7 +7,7 @@ one that is missing (or says that none is and where the misfit is). ``--json`` p
 after residual figures.
 
 SOURCE may also be a table of PWM readings with a measured and a simulated column (columns
-``freq_hz, duty, tj_exp_c, tj_model_c``, as ``shared/data/actuator_table2.csv`` holds the
+``freq_hz, duty, tj_exp_c, tj_model_c``, as ``spicethermal/data/actuator_table2.csv`` holds the
 paper's Table 2): the two columns are then compared and the explanations the paper gives
 (the 100 µs sample window, early-time extrapolation) are tested against the numbers
 (``--rth``, ``--power``, ``--window``, ``--ambient``).

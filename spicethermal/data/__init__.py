@@ -1,6 +1,42 @@
-"""Data sets shipped with spicethermal (read with :mod:`importlib.resources`).
+"""Data sets shipped with spicethermal; :func:`path` gives the location of one of them.
 
 * ``mur880e_table1.csv`` — the paper's Table 1: MUR880E normalized junction-to-case thermal
   impedance r(t) at 10 us ... 1 s, datasheet and measured (Rthjc = 1.51 K/W). Loaded by
   :func:`spicethermal.datasheet.mur880e`.
+* ``actuator_table2.csv`` — the paper's Table 2: measured vs PSPICE-simulated junction
+  temperature of the thermopneumatic actuator under PWM (18 points).
+* ``pyrth_mosfet/`` — real cooling transients of a power MOSFET mounted dry and with a thermal
+  interface material, and one T3Ster export, from the PyRth project (MIT licence, see
+  ``pyrth_mosfet/README.md`` and ``pyrth_mosfet/LICENSE.txt``).
 """
+
+from __future__ import annotations
+
+from pathlib import Path
+
+_HERE = Path(__file__).resolve().parent
+
+
+def path(name: str) -> Path:
+    """Location of a shipped data file.
+
+    Parameters
+    ----------
+    name : str
+        Path relative to the data folder, e.g. ``"actuator_table2.csv"`` or
+        ``"pyrth_mosfet/MOSFET_dry.txt"``.
+
+    Returns
+    -------
+    Path
+        The file's absolute path.
+
+    Examples
+    --------
+    >>> path("actuator_table2.csv").name
+    'actuator_table2.csv'
+    """
+    p = (_HERE / name).resolve()
+    if _HERE not in p.parents or not p.is_file():
+        raise FileNotFoundError(f"no shipped data file {name!r}")
+    return p
