@@ -265,7 +265,7 @@ class ThermalModel:
         --------
         >>> m = ThermalModel(Foster.from_tau([2.0], [1.0]))
         >>> tr = m.simulate([1.0], Schedule.step(1.0))
-        >>> round(float(tr.tj_k[0]), 9) == round(2 * (1 - np.exp(-1)), 9)
+        >>> bool(round(float(tr.tj_k[0]), 9) == round(2 * (1 - np.exp(-1)), 9))
         True
         """
         t = np.asarray(t_s, dtype=float).ravel()
