@@ -1,29 +1,88 @@
 """spicethermal: thermal measurements of heated devices to RC ladder models for SPICE.
 
-``import spicethermal`` stays light: numpy only. Plotting, SPICE, serial and templates are
-imported when used.
+The objects and functions a user calls are listed in ``__all__`` and loaded lazily:
+``import spicethermal`` stays light (numpy only); plotting, SPICE, serial and templates are
+imported when first used.
+
+Examples
+--------
+>>> import spicethermal as st
+>>> ladder = st.Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0])
+>>> round(ladder.rth, 6)
+146.0
+>>> round(st.steady_state(ladder, 0.094, 1e3, 0.5).mean_k, 3)   # 94 mW, 1 kHz, 50 %
+6.862
 """
 
 from __future__ import annotations
 
+import importlib
+from typing import Any
+
 __version__ = "0.1.0"
 
-from .errors import (  # noqa: E402
-    DataFormatError,
-    FitError,
-    InstrumentError,
-    SimulationError,
-    SpiceThermalError,
-)
-from .ladder import Cauer, Foster  # noqa: E402
+#: public name -> module that defines it (relative to the package)
+_API: dict[str, str] = {
+    # curves and ladders
+    "ZthCurve": "curves",
+    "Foster": "ladder",
+    "Cauer": "ladder",
+    # models and simulation
+    "ThermalModel": "model",
+    "Schedule": "model",
+    "steady_state": "pwm",
+    "pwm_state": "pwmsim",
+    "simulator": "spice",
+    # measurements
+    "Bundle": "bundle",
+    "Calibration": "calibration",
+    "read_pyrth": "importers",
+    "read_t3ster": "importers",
+    "read_zth_points": "datasheet",
+    "read_foster_table": "datasheet",
+    # fitting, comparison, diagnosis
+    "fit_foster": "fit",
+    "fit_model": "fit",
+    "FitResult": "fit",
+    "compare": "compare",
+    "Comparison": "compare",
+    "diagnose": "diagnose",
+    "diagnose_table": "diagnose",
+    "Diagnosis": "diagnose",
+    "table1": "datasheet",
+    "time_constant_spectrum": "spectrum",
+    "structure_function": "structure",
+    # SPICE
+    "render_lib": "spice",
+    "export": "spice",
+    # effects
+    "Effect": "effects",
+    "known_effects": "effects",
+    # drive
+    "optimize_drive": "drive",
+    # errors
+    "SpiceThermalError": "errors",
+    "DataFormatError": "errors",
+    "FitError": "errors",
+    "InstrumentError": "errors",
+    "SimulationError": "errors",
+}
 
-__all__ = [
-    "Cauer",
-    "DataFormatError",
-    "FitError",
-    "Foster",
-    "InstrumentError",
-    "SimulationError",
-    "SpiceThermalError",
-    "__version__",
-]
+#: names whose attribute in the defining module differs from the public name
+_ALIASES: dict[str, str] = {"known_effects": "known_names"}
+
+__all__ = sorted(_API) + ["__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public object on first use (PEP 562)."""
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module 'spicethermal' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), _ALIASES.get(name, name))
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
