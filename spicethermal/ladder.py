@@ -35,15 +35,17 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
 
-def _validated(name: str, values: ArrayLike, n: int | None = None) -> tuple[float, ...]:
+def _validated(name: str, values: ArrayLike, n: int | None = None,
+               allow_zero: bool = False) -> tuple[float, ...]:
     arr = np.asarray(values, dtype=float).ravel()
     if arr.size == 0:
         raise DataFormatError(f"{name}: a ladder needs at least one stage")
     if n is not None and arr.size != n:
         raise DataFormatError(f"{name}: expected {n} values, got {arr.size}")
     for i, v in enumerate(arr):
-        if not np.isfinite(v) or v <= 0:
-            raise DataFormatError(f"{name}[{i}] = {v!r}: must be positive and finite")
+        if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+            raise DataFormatError(f"{name}[{i}] = {v!r}: must be "
+                                  f"{'non-negative' if allow_zero else 'positive'} and finite")
     return tuple(float(v) for v in arr)
 
 
@@ -170,9 +172,10 @@ class Foster(_Ladder):
 
 @dataclass(frozen=True, init=False)
 class Cauer(_Ladder):
-    """Cauer network: ``c_i`` from node i to the reference, ``r_i`` from node i to node i+1.
+    """Cauer network: ``c_i`` from node i to the thermal ground, ``r_i`` from node i to node i+1.
 
-    Node 0 is the junction; the last resistor ends at the reference.
+    Node 0 is the junction; the last resistor ends at the reference. A capacitance may be zero
+    (a node without heat capacity, as some vendors' ladders have), but not all of them.
 
     >>> c = Foster.from_tau([1.0], [2.0]).to_cauer()
     >>> c.r, c.c
@@ -180,6 +183,35 @@ class Cauer(_Ladder):
     """
 
     topology: ClassVar[str] = "cauer"
+
+    def __init__(self, r: ArrayLike, c: ArrayLike) -> None:
+        rr = _validated("r_k_per_w", r)
+        cc = _validated("c_j_per_k", c, len(rr), allow_zero=True)
+        if not any(cc):
+            raise DataFormatError("c_j_per_k: a Cauer ladder needs a non-zero capacitance")
+        object.__setattr__(self, "r", rr)
+        object.__setattr__(self, "c", cc)
+
+    def with_capacitances(self) -> Cauer:
+        """The same ladder without zero capacitances (itself when it has none).
+
+        A node without capacity inside the ladder joins its two resistors in series (exact).
+        One at the junction is a resistance that responds at once; it gets a capacitance whose
+        time constant is 1e-9 of the ladder's fastest ``r·c`` (Zth changes only below that).
+
+        >>> Cauer([1.0, 2.0, 3.0], [1.0, 0.0, 2.0]).with_capacitances()
+        Cauer(r=(3.0, 3.0), c=(1.0, 2.0))
+        """
+        if all(self.c):
+            return self
+        r, c = list(self.r), list(self.c)
+        for i in range(len(c) - 1, 0, -1):
+            if c[i] == 0:
+                r[i - 1] += r.pop(i)
+                c.pop(i)
+        if c[0] == 0:
+            c[0] = 1e-9 * min(ri * ci for ri, ci in zip(r[1:], c[1:], strict=True)) / r[0]
+        return Cauer(r, c)
 
     @classmethod
     def from_foster(cls, foster: Foster) -> Cauer:
@@ -342,7 +374,8 @@ def _dps_for(n: int) -> int:
 def _cached_foster(cauer: Cauer) -> Foster:
     cached = cauer.__dict__.get("_foster_cache")
     if cached is None:
-        cached = Foster.from_tau(*_cauer_to_foster(cauer.r, cauer.c))
+        full = cauer.with_capacitances()
+        cached = Foster.from_tau(*_cauer_to_foster(full.r, full.c))
         object.__setattr__(cauer, "_foster_cache", cached)
     return cached
 

@@ -11,8 +11,9 @@ current state), which needs a handful of periods instead of the thousands a cold
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING
@@ -28,7 +29,9 @@ from .pwm import PwmState, check_drive, steady_state
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-MODEL_FORMAT = "spicethermal-model/1"
+MODEL_FORMAT = "spicethermal-model/2"
+#: Model-file formats :meth:`ThermalModel.from_dict` reads (see docs/model-format.md).
+MODEL_FORMATS_READ = ("spicethermal-model/1", MODEL_FORMAT)
 REFERENCES = ("ambient", "case")
 
 
@@ -51,6 +54,8 @@ class Network:
             rs = tuple((i, i + 1, r) for i, r in enumerate(ladder.r))
             cs = tuple((i, i + 1, c) for i, c in enumerate(ladder.c))
         else:
+            ladder = ladder.with_capacitances()
+            n = ladder.order
             rs = tuple((i, i + 1, r) for i, r in enumerate(ladder.r))
             cs = tuple((i, n, c) for i, c in enumerate(ladder.c))
         return cls(n, rs, cs)
@@ -156,10 +161,16 @@ class ThermalModel:
     effects: tuple[Effect, ...] = ()
     reference: str = "ambient"
     provenance: Mapping = field(default_factory=dict)
+    #: Heat capacity (J/K) of the reference node itself (a vendor's case capacitance): inert
+    #: with an ideal reference, exported to the thermal ground when coupled.
+    case_c_j_per_k: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.ladder, Foster | Cauer):
             raise DataFormatError("model: ladder must be a Foster or Cauer network")
+        if not (math.isfinite(self.case_c_j_per_k) and self.case_c_j_per_k >= 0):
+            raise DataFormatError(f"model: case_c_j_per_k = {self.case_c_j_per_k!r} must be "
+                                  "finite and >= 0")
         if self.reference not in REFERENCES:
             raise DataFormatError(f"model: reference {self.reference!r} must be one of "
                                   f"{', '.join(REFERENCES)}")
@@ -192,7 +203,7 @@ class ThermalModel:
         return next((e for e in self.effects if e.name == name), None)
 
     def with_effects(self, effects: Sequence[Effect]) -> ThermalModel:
-        return ThermalModel(self.ladder, tuple(effects), self.reference, self.provenance)
+        return replace(self, effects=tuple(effects))
 
     def with_topology(self, topology: str) -> ThermalModel:
         """The same model with its ladder converted (exactly) to ``foster`` or ``cauer``."""
@@ -204,7 +215,7 @@ class ThermalModel:
             ladder = self.ladder.to_cauer()  # type: ignore[union-attr]
         else:
             raise DataFormatError(f"topology {topology!r}: expected foster or cauer")
-        return ThermalModel(ladder, self.effects, self.reference, self.provenance)
+        return replace(self, ladder=ladder)
 
     # -- nonlinear network ----------------------------------------------------------------
     def _network(self) -> Network:
@@ -356,7 +367,14 @@ class ThermalModel:
 
     # -- files ---------------------------------------------------------------------------
     def to_dict(self) -> dict:
-        return {
+        """The ``spicethermal-model/2`` document (docs/model-format.md, schema in
+        ``spicethermal/data/model.schema.json``).
+
+        >>> d = ThermalModel(Cauer([1.0, 2.0], [0.0, 3.0]), reference="case").to_dict()
+        >>> d["format"], d["stages"][0], d["reference"]
+        ('spicethermal-model/2', {'r_k_per_w': 1.0, 'c_j_per_k': 0.0}, 'case')
+        """
+        out = {
             "format": MODEL_FORMAT,
             "topology": self.ladder.topology,
             "stages": [{"r_k_per_w": r, "c_j_per_k": c}
@@ -366,14 +384,25 @@ class ThermalModel:
             "effects": [e.to_dict() for e in self.effects],
             "provenance": _jsonable(self.provenance),
         }
+        if self.case_c_j_per_k:
+            out["case_c_j_per_k"] = self.case_c_j_per_k
+        return out
 
     @classmethod
     def from_dict(cls, data: Mapping, source: str = "model") -> ThermalModel:
+        """Read a ``spicethermal-model/2`` (or ``/1``) document; errors name ``source`` and
+        the key.
+
+        >>> m = ThermalModel.from_dict({"format": "spicethermal-model/1", "topology": "foster",
+        ...     "stages": [{"r_k_per_w": 2.0, "c_j_per_k": 0.5}]})
+        >>> m.rth, m.reference
+        (2.0, 'ambient')
+        """
         if not isinstance(data, Mapping):
             raise DataFormatError(f"{source}: not a JSON object")
-        if data.get("format") != MODEL_FORMAT:
-            raise DataFormatError(
-                f"{source}: format {data.get('format')!r} is not {MODEL_FORMAT!r}")
+        if data.get("format") not in MODEL_FORMATS_READ:
+            raise DataFormatError(f"{source}: format {data.get('format')!r} is not one of "
+                                  f"{', '.join(MODEL_FORMATS_READ)}")
         topology = data.get("topology")
         kinds = {"foster": Foster, "cauer": Cauer}
         if topology not in kinds:
@@ -394,19 +423,25 @@ class ThermalModel:
         effects = data.get("effects", [])
         if not isinstance(effects, list):
             raise DataFormatError(f"{source}: 'effects' must be a list")
+        case_c = data.get("case_c_j_per_k", 0.0)
+        if isinstance(case_c, bool) or not isinstance(case_c, int | float):
+            raise DataFormatError(f"{source}: case_c_j_per_k must be a number")
+        provenance = data.get("provenance", {}) or {}
+        if not isinstance(provenance, Mapping):
+            raise DataFormatError(f"{source}: 'provenance' must be an object")
         try:
             return cls(ladder, tuple(Effect.from_dict(e) for e in effects),
-                       data.get("reference", "ambient"), data.get("provenance", {}) or {})
+                       data.get("reference", "ambient"), provenance, float(case_c))
         except DataFormatError as exc:
             raise DataFormatError(f"{source}: {exc}") from None
 
     def save(self, path: str | Path) -> Path:
-        """Write the ``spicethermal-model/1`` JSON file atomically."""
+        """Write the ``spicethermal-model/2`` JSON file atomically."""
         return atomic_write_text(path, json.dumps(self.to_dict(), indent=2) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> ThermalModel:
-        """Read a ``spicethermal-model/1`` JSON file."""
+        """Read a ``spicethermal-model/2`` (or ``/1``) JSON file."""
         return cls.from_dict(read_json(path), str(path))
 
 

@@ -29,14 +29,24 @@ from .files import atomic_write_text
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
+    from .ladder import Cauer, Foster
     from .model import ThermalModel
 
 DIALECTS = ("ngspice", "pspice", "ltspice")
 TOPOLOGIES = ("foster", "cauer")
+#: Temperature conventions of an exported subcircuit (see :func:`render_lib`).
+TEMPERATURES = ("absolute", "rise")
 COMPAT_MODE = {"ngspice": None, "pspice": "ps", "ltspice": "lt"}
-_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+#: Stages whose resistance is below this fraction of Rth are merged before export.
+NEGLIGIBLE = 1e-9
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
+_PIN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
+_INTERNAL = re.compile(r"(N|PCQ|PCS)[0-9]+", re.I)
 _RESERVED = {"end", "ends", "subckt", "control", "endc", "include", "lib", "param", "model",
-             "tran", "ac", "dc", "op", "options", "option", "global", "func", "ic", "nodeset"}
+             "tran", "ac", "dc", "op", "options", "option", "global", "func", "ic", "nodeset",
+             "gnd", "0"}
+_ROLES = {"junction": "junction", "j": "junction", "case": "reference",
+          "reference": "reference", "ref": "reference", "ambient": "ambient", "amb": "ambient"}
 
 
 # ------------------------------------------------------------------------------ templates
@@ -69,16 +79,145 @@ def fmt(x: float) -> str:
 
 
 def check_name(name: str) -> str:
-    """Validate a subcircuit name: a letter, then letters, digits, ``_``; not a SPICE keyword.
+    """Validate a subcircuit name as vendors spell part numbers: a letter or digit, then up to
+    63 letters, digits, ``_``, ``-`` or ``.``; not a SPICE keyword.
 
-    >>> check_name("ACTUATOR_1")
-    'ACTUATOR_1'
+    >>> check_name("SPD22N08S2L-50"), check_name("2N7002")
+    ('SPD22N08S2L-50', '2N7002')
     """
     if not isinstance(name, str) or not _NAME.fullmatch(name) or name.lower() in _RESERVED:
         raise DataFormatError(
-            f"subcircuit name {name!r} is not allowed: use a letter followed by up to 63 "
-            "letters, digits or underscores, not a SPICE keyword")
+            f"subcircuit name {name!r} is not allowed: use a letter or digit followed by up to "
+            "63 letters, digits, '_', '-' or '.', not a SPICE keyword")
     return name
+
+
+def default_name(model: ThermalModel, filename: str | os.PathLike = "") -> str:
+    """A subcircuit name from the model's device (provenance ``device``) or the file's stem.
+
+    Characters a name may not hold become ``_``; ``THERMAL_MODEL`` when nothing is left.
+
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> default_name(ThermalModel(Foster.from_tau([1], [1]), provenance={"device": "my diode"}))
+    'my_diode'
+    >>> default_name(ThermalModel(Foster.from_tau([1], [1])), "out/IPB019N08N3.lib")
+    'IPB019N08N3'
+    """
+    text = str(model.provenance.get("device") or Path(filename).stem or "")
+    name = re.sub(r"[^A-Za-z0-9_.\-]+", "_", text).strip("_.-")[:64]
+    try:
+        return check_name(name)
+    except DataFormatError:
+        return "THERMAL_MODEL"
+
+
+@dataclass(frozen=True)
+class Pins:
+    """Pin names of an exported subcircuit and their order on its ``.SUBCKT`` line.
+
+    ``junction`` takes the heat (a current in), ``reference`` is the case or ambient the Zth
+    was measured to, ``ambient`` (optional, Cauer only) the thermal ground the capacitors
+    connect to instead of node 0.
+
+    >>> Pins.parse("case=TC,junction=TJ").names
+    ('TC', 'TJ')
+    >>> Pins.parse("Tj,Tcase,Tamb").ambient
+    'Tamb'
+    """
+
+    junction: str = "TJ"
+    reference: str = "TREF"
+    ambient: str | None = None
+    order: tuple[str, ...] = ("junction", "reference")
+
+    @classmethod
+    def parse(cls, text: str) -> Pins:
+        """``--pins`` text: 2 or 3 comma-separated names, junction, reference[, ambient] in
+        that order, or each as ``role=NAME`` (roles junction, case|reference, ambient) in the
+        order they take on the ``.SUBCKT`` line."""
+        items = [x.strip() for x in str(text).split(",")]
+        if len(items) not in (2, 3) or not all(items):
+            raise DataFormatError(f"--pins {text!r}: give 2 or 3 comma-separated pin names "
+                                  "(junction, reference[, ambient]), e.g. TJ,TCASE")
+        names: dict[str, str] = {}
+        order = []
+        for k, item in enumerate(items):
+            role, _, name = item.rpartition("=")
+            role = _ROLES.get(role.strip().lower()) if role else \
+                ("junction", "reference", "ambient")[k]
+            if role is None or role in names:
+                raise DataFormatError(f"--pins {text!r}: item {item!r}: role must be junction, "
+                                      "case, reference or ambient, each once")
+            names[role] = name.strip()
+            order.append(role)
+        if "junction" not in names or "reference" not in names:
+            raise DataFormatError(f"--pins {text!r}: a junction and a reference pin are needed")
+        return cls(names["junction"], names["reference"], names.get("ambient"), tuple(order))
+
+    def __post_init__(self) -> None:
+        seen = set()
+        for name in self.names:
+            if (not isinstance(name, str) or not _PIN.fullmatch(name)
+                    or name.lower() in _RESERVED or _INTERNAL.fullmatch(name)):
+                raise DataFormatError(
+                    f"pin name {name!r} is not allowed: use a letter followed by up to 31 "
+                    "letters, digits or underscores, not a SPICE keyword, 0, GND or an inner "
+                    "node name (N1, ...)")
+            if name.lower() in seen:
+                raise DataFormatError(f"pin name {name!r} appears twice")
+            seen.add(name.lower())
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The pin names in ``.SUBCKT`` order."""
+        return tuple(getattr(self, role) for role in self.order)
+
+    @property
+    def ground(self) -> str:
+        """Where a Cauer ladder's capacitors connect: the ambient pin, else node 0."""
+        return self.ambient or "0"
+
+
+def simulator_ready(ladder: Foster | Cauer) -> tuple[Foster | Cauer, list[str]]:
+    """The ladder without stages that make a simulator fail, and what was changed.
+
+    A stage whose resistance is below :data:`NEGLIGIBLE` of Rth (an exact conversion can
+    produce R = 1e-22 K/W with C = 1e16 J/K: "timestep too small") is merged: a Foster stage
+    into the stage of nearest time constant (its R added, that τ kept), a Cauer resistor by
+    joining its two nodes (their capacitances added). Zth changes by less than the merged R.
+
+    >>> from spicethermal.ladder import Foster
+    >>> lad, notes = simulator_ready(Foster.from_tau([1.0, 2.4e-22, 2.0], [1e-3, 2e-6, 1.0]))
+    >>> lad.order, notes[0].startswith("1 stage")
+    (2, True)
+    """
+    from .ladder import Cauer, Foster
+
+    tiny = NEGLIGIBLE * ladder.rth
+    r = list(ladder.r)
+    merged = 0.0
+    count = 0
+    if isinstance(ladder, Foster):
+        tau = list(ladder.tau)
+        while len(r) > 1 and min(r) < tiny:
+            i = int(np.argmin(r))
+            j = min((k for k in range(len(r)) if k != i),
+                    key=lambda k: abs(np.log(tau[k] / tau[i])))
+            r[j] += r[i]
+            merged, count = merged + r.pop(i), count + 1
+            tau.pop(i)
+        out: Foster | Cauer = Foster.from_tau(r, tau) if count else ladder
+    else:
+        c = list(ladder.c)
+        for i in range(len(r) - 2, -1, -1):
+            if r[i] < tiny:
+                merged, count = merged + r.pop(i), count + 1
+                c[i] += c.pop(i + 1)
+        out = Cauer(r, c) if count else ladder
+    notes = [f"{count} stage{'s' if count > 1 else ''} with R < {NEGLIGIBLE:g} Rth merged into "
+             f"a neighbour (Zth changes by < {merged:.3g} K/W)"] if count else []
+    return out, notes
 
 
 def sanitize_comment(text: object, limit: int = 200) -> str:
@@ -101,14 +240,13 @@ def _provenance_lines(provenance: Mapping) -> list[str]:
     return lines[:20]
 
 
-def _stages(model: ThermalModel) -> list[dict]:
-    lad = model.ladder
-    n = lad.order
-    node = ["TJ", *[f"N{k}" for k in range(1, n)], "TREF"]
+def _stages(ladder: Foster | Cauer, pins: Pins) -> list[dict]:
+    n = ladder.order
+    node = [pins.junction, *[f"N{k}" for k in range(1, n)], pins.reference]
     out = []
-    for k, (r, c) in enumerate(zip(lad.r, lad.c, strict=True)):
+    for k, (r, c) in enumerate(zip(ladder.r, ladder.c, strict=True)):
         a, b = node[k], node[k + 1]
-        ca, cb = (a, b) if lad.topology == "foster" else (a, "TREF")
+        ca, cb = (a, b) if ladder.topology == "foster" else (a, pins.ground)
         out.append({"k": k + 1, "a": a, "b": b, "ca": ca, "cb": cb, "r": r, "c": c})
     return out
 
@@ -139,7 +277,7 @@ def initial_conditions(model: ThermalModel, theta_k: Sequence[float], tref_c: fl
 
 
 def reference_drive(model: ThermalModel, tref_c: float) -> tuple[float, float | None]:
-    """How a test bench puts the model at reference temperature ``tref_c``.
+    """How a test bench puts a ``temperature="rise"`` subcircuit at reference ``tref_c``.
 
     Returns ``(volts on TREF, TOFFSET or None)``. A linear model takes the temperature on
     ``TREF`` itself. A model with device effects gets ``TREF`` grounded and the temperature as
@@ -155,9 +293,58 @@ def reference_drive(model: ThermalModel, tref_c: float) -> tuple[float, float | 
     return (0.0, float(tref_c)) if model.device_effects else (float(tref_c), None)
 
 
+_REFERENCE_LABEL = {"case": "junction-to-case", "ambient": "junction-to-ambient"}
+
+
+def _facts(model: ThermalModel) -> list[str]:
+    """Header lines: where the data came from, how well the ladder fits, and over what time."""
+    prov = model.provenance
+    lines = []
+    fit = prov.get("fit")
+    if isinstance(fit, Mapping) and isinstance(fit.get("rms_k_per_w"), int | float):
+        rms = float(fit["rms_k_per_w"])
+        lines.append(f"Fit error: rms {rms:.3g} K/W ({100 * rms / model.rth:.3g} % of Rth) "
+                     f"over {fit.get('n_points', '?')} points")
+    span = prov.get("valid_t_s")
+    if isinstance(span, list | tuple) and len(span) == 2:
+        lines.append(f"Valid from {float(span[0]):.3g} s to {float(span[1]):.3g} s (the data's "
+                     "time range; outside it the ladder extrapolates)")
+    return [sanitize_comment(x) for x in lines]
+
+
 def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | None = None,
-               name: str = "THERMAL", filename: str = "model.lib") -> str:
-    """The subcircuit ``.SUBCKT NAME TJ TREF`` of ``model`` as text.
+               name: str | None = None, filename: str = "model.lib", *,
+               pins: Pins | None = None, temperature: str = "rise") -> str:
+    """The subcircuit of ``model`` as text.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model to write.
+    dialect : str
+        ``ngspice``, ``pspice`` or ``ltspice``.
+    topology : str, optional
+        ``foster`` or ``cauer`` (default the model's own; converted exactly). A Cauer
+        ladder's capacitors connect to node 0, the thermal ground (or the ambient pin): it
+        stays right when its reference pin is coupled to a heatsink model. A Foster ladder is
+        valid only with an ideal reference.
+    name : str, optional
+        Subcircuit name (default :func:`default_name`).
+    filename : str
+        File name quoted in the usage lines of the header.
+    pins : Pins, optional
+        Pin names and order (default ``TJ TREF``).
+    temperature : str
+        ``absolute``: node voltages are temperatures in degC; the user drives the reference
+        (or ambient) pin; device effects read them as they are. ``rise``: node voltages are
+        rises over node 0, which stands for the ambient; device effects add the subcircuit
+        parameter ``TOFFSET`` (the ambient in degC, default 25). A linear ladder's elements are
+        the same in both; only the header and the effects' expressions differ.
+
+    Returns
+    -------
+    str
+        The ``.lib`` text.
 
     Examples
     --------
@@ -173,33 +360,50 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
         raise DataFormatError(f"dialect {dialect!r}: expected one of {', '.join(DIALECTS)}")
     if topology is not None and topology not in TOPOLOGIES:
         raise DataFormatError(f"topology {topology!r}: expected one of {', '.join(TOPOLOGIES)}")
-    check_name(name)
+    if temperature not in TEMPERATURES:
+        raise DataFormatError(f"temperature {temperature!r}: expected one of "
+                              f"{', '.join(TEMPERATURES)}")
+    pins = pins or Pins()
+    name = check_name(default_name(model, filename) if name is None else name)
     model = model.with_topology(topology or model.ladder.topology)
+    if pins.ambient and model.ladder.topology == "foster":
+        raise DataFormatError("--pins: an ambient pin (thermal ground) needs --topology cauer; "
+                              "a Foster ladder has no node for it")
+    ladder, notes = simulator_ready(model.ladder)
     tc = model.effect("temperature-coefficient")
     pcs = []
-    nodes = internal_nodes(model)
+    nodes = [pins.junction, *internal_nodes(model)[1:]]
     for e in model.device_effects:
         if e.name == "phase-change":
             p = e.params
             pcs.append({"node": nodes[int(p["node"])], "latent_j": p["latent_j"],
                         "t_c": p["t_c"], "scale_k": e.logistic_scale_k})
     ctx = {
-        "name": name, "dialect": dialect, "topology": model.ladder.topology,
-        "order": model.ladder.order, "version": __version__, "rth": model.rth,
-        "reference": model.reference, "filename": sanitize_comment(filename, 80),
-        "taus": [f"{t:.4g}" for t in model.ladder.time_constants()],
-        "provenance": _provenance_lines(model.provenance),
+        "name": name, "dialect": dialect, "topology": ladder.topology,
+        "order": ladder.order, "version": __version__, "rth": model.rth,
+        "reference": model.reference, "reference_label": _REFERENCE_LABEL[model.reference],
+        "filename": sanitize_comment(filename, 80), "pins": pins, "temperature": temperature,
+        "offset": "+TOFFSET" if temperature == "rise" else "",
+        "usage_nodes": [{"junction": "TJ", "reference": "TREF",
+                         "ambient": "TAMB" if temperature == "absolute" else "0"}[role]
+                        for role in pins.order],
+        "taus": [f"{t:.4g}" for t in ladder.time_constants()],
+        "provenance": _provenance_lines(model.provenance), "facts": _facts(model),
+        "notes": notes, "case_c": model.case_c_j_per_k if ladder.topology == "cauer" else 0.0,
         "effects": [e for e in model.device_effects],
-        "stages": _stages(model), "tc": dict(tc.params) if tc else None, "pc": pcs,
+        "stages": _stages(ladder, pins), "tc": dict(tc.params) if tc else None, "pc": pcs,
     }
     return environment().get_template(f"lib/{dialect}.lib.j2").render(**ctx)
 
 
 def export(model: ThermalModel, path: str | os.PathLike, dialect: str = "ngspice",
-           topology: str | None = None, name: str = "THERMAL") -> Path:
-    """Write the subcircuit file atomically and return its path."""
+           topology: str | None = None, name: str | None = None, *, pins: Pins | None = None,
+           temperature: str = "rise") -> Path:
+    """Write the subcircuit file atomically and return its path (see :func:`render_lib`)."""
     path = Path(path)
-    return atomic_write_text(path, render_lib(model, dialect, topology, name, path.name))
+    text = render_lib(model, dialect, topology, name, path.name, pins=pins,
+                      temperature=temperature)
+    return atomic_write_text(path, text)
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,7 @@ def test_foster_stages_sorted_and_immutable():
 @pytest.mark.parametrize("r, c, where", [
     ([1.0, -1.0], [1.0, 1.0], "r_k_per_w[1]"),
     ([1.0, float("nan")], [1.0, 1.0], "r_k_per_w[1]"),
-    ([1.0, 1.0], [1.0, 0.0], "c_j_per_k[1]"),
+    ([1.0, 1.0], [1.0, -1.0], "c_j_per_k[1]"),
     ([1.0, 1.0], [1.0, float("inf")], "c_j_per_k[1]"),
     ([], [], "at least one stage"),
     ([1.0, 1.0], [1.0], "expected 2 values"),

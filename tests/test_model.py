@@ -84,7 +84,7 @@ def test_model_file_round_trip(tmp_path, actuator):
                      {"source": "unit test", "order": 4})
     path = m.save(tmp_path / "m.json")
     data = json.loads(path.read_text())
-    assert data["format"] == "spicethermal-model/1" and data["topology"] == "foster"
+    assert data["format"] == "spicethermal-model/2" and data["topology"] == "foster"
     assert data["rth_k_per_w"] == pytest.approx(146.0)
     assert ThermalModel.load(path) == m
 
