@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -359,7 +359,7 @@ class KFactor:
     k_v_per_k: float
     v_ref_v: float
     t_ref_c: float
-    label: str = "calibration"
+    label: str = field(default="calibration", compare=False)
 
     def __post_init__(self) -> None:
         for name in ("k_v_per_k", "v_ref_v", "t_ref_c"):

@@ -101,8 +101,8 @@ def _cooling_bundle(t: np.ndarray, v: np.ndarray, rows: np.ndarray, label: str,
     tref = float(cal.temperature(v_end))
     cooling = CoolingTable(t, power_w, v_tsp_v=v, tref_steady_c=tref, file=label, rows=rows,
                            extra={"tref_steady_from": f"mean of the last {END_SAMPLES} samples"})
-    bundle = Bundle(device=device, reference="ambient", calibration=calibration,
-                    cooling=(cooling,), extra={"source": source})
+    bundle = Bundle(device=device, reference="ambient", ambient_c=tref_c,
+                    calibration=calibration, cooling=(cooling,), extra={"source": source})
     # checked above under the source's name; written as a plain file name
     return bundle.with_(cooling=(replace(cooling, file="cooling_1.csv"),), source=label)
 

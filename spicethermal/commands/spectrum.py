@@ -37,7 +37,7 @@ HELP = "time-constant spectrum of a Zth curve by deconvolution (NID, as T3Ster a
 
 def add_spectrum_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``spectrum`` and ``structure``: how to read SOURCE and deconvolve."""
-    add_source_arguments(parser, rth=False)
+    add_source_arguments(parser)
     parser.add_argument("--method", choices=("bayes", "nnls"), default="bayes",
                         help="deconvolution: Bayesian iteration (default) or NNLS + Tikhonov "
                              "(L-curve)")
@@ -60,8 +60,7 @@ def spectrum_options(args: argparse.Namespace) -> dict[str, Any]:
 def load_curve(args: argparse.Namespace, source: str) -> ZthCurve:
     """The Zth curve of ``source`` read with the shared options (:mod:`spicethermal.sources`);
     what was assumed goes to stderr, the early-time correction too."""
-    curve = read_source_args(args, source, rth=False).curve(args.curve,
-                                                            early_window_s=args.early_window)
+    curve = read_source_args(args, source).curve(args.curve, early_window_s=args.early_window)
     if curve.early is not None:
         print(f"{curve.label}: early time: {curve.early}", file=sys.stderr)
     return curve
