@@ -139,14 +139,16 @@ def differential(n_seeds: int = 5) -> float:
 
 
 def real_data() -> dict[str, float]:
-    from spicethermal.commands.spectrum import load_curve
+    from spicethermal.sources import read_source
 
     if not DATA.is_dir():  # pragma: no cover
         print("real data: not found")
         return {}
     sfs, out = {}, {}
     for name in ("dry", "tim"):
-        (curve, t_read) = _timed(load_curve, DATA / f"MOSFET_{name}.txt")
+        (curve, t_read) = _timed(lambda p: read_source(p, calibration=DATA / "calibration.csv",
+                                                       tref_c=25.0).curve(),
+                                 DATA / f"MOSFET_{name}.txt")
         (spec, t_spec) = _timed(time_constant_spectrum, curve)
         (sf, t_sf) = _timed(structure_function, spec)
         keep = curve.t_s >= 1e-5

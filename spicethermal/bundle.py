@@ -1,4 +1,4 @@
-"""Measurement bundles in the ``spicethermal-bundle/1`` format (DESIGN.md), read and written.
+"""Measurement bundles (``spicethermal-bundle/2``, ``docs/bundle-format.md``), read and written.
 
 A bundle is a directory with ``bundle.json`` and CSV files (a header row, SI units in the
 column names, ``#`` comments allowed). :class:`Bundle` is its immutable in-memory form; each
@@ -32,15 +32,21 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .calibration import KFactor
 from .errors import DataFormatError, where
 from .files import read_json, read_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from .calibration import Calibration
+    from .calibration import Calibration, Converter
 
-FORMAT = "spicethermal-bundle/1"
+FORMAT = "spicethermal-bundle/2"
+#: Versions read; a bundle is written with the lowest one that holds it (a /1 reader still
+#: reads every bundle whose calibration is a table). /2 adds calibration kinds.
+FORMATS = ("spicethermal-bundle/1", FORMAT)
+#: Calibration kinds of ``bundle.json`` (``docs/bundle-format.md``).
+CALIBRATION_KINDS = ("table", "k-factor", "polynomial")
 MANIFEST = "bundle.json"
 ABSOLUTE_ZERO_C = -273.15
 
@@ -191,7 +197,12 @@ def parse_columns(text: str, required: Sequence[str | tuple[str, ...]] = (),
     return Columns(label, {c: _frozen(v) for c, v in values.items()}, rows)
 
 
-def _number(text: str, file: str, row: int, column: str) -> float:
+def parse_number(text: str, file: str, row: int, column: str) -> float:
+    """One CSV field as a finite float; the message names file, row and column.
+
+    >>> parse_number("1e-3", "a.csv", 2, "t_s")
+    0.001
+    """
     if not text:
         raise DataFormatError(f"{where(file, row, column)}empty field, expected a number")
     if not _NUMBER.match(text):
@@ -202,6 +213,9 @@ def _number(text: str, file: str, row: int, column: str) -> float:
     if not math.isfinite(value):
         raise DataFormatError(f"{where(file, row, column)}{text} is not a finite number")
     return value
+
+
+_number = parse_number  # the name the readers here use
 
 
 def _check_units(file: str, header_line: int, header: Sequence[str], expected: str) -> None:
@@ -345,13 +359,19 @@ def _set(obj: object, **values: Any) -> None:
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class CalibrationTable:
-    """TSP calibration points: ``temp_c`` (degC) and ``v_tsp_v`` (V), one row per point."""
+    """TSP calibration points: ``temp_c`` (degC) and ``v_tsp_v`` (V), one row per point.
+
+    Kind ``table`` (a polynomial is fitted here, :meth:`fit`) or, with ``coefficients`` (V per
+    degC^k, ascending), kind ``polynomial``: a fit made elsewhere, the points kept for its
+    residuals. The other kind, a K-factor, is :class:`~spicethermal.calibration.KFactor`.
+    """
 
     temp_c: NDArray
     v_tsp_v: NDArray
     file: str | None = None
     rows: NDArray | None = field(default=None, repr=False)
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    coefficients: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         f = self.file or "calibration.csv"
@@ -361,15 +381,30 @@ class CalibrationTable:
         if t.size < 2:
             raise DataFormatError(f"{where(f)}a calibration needs at least 2 points")
         _set(self, temp_c=t, v_tsp_v=v)
+        if self.coefficients is not None:
+            _set(self, coefficients=self.fit().coefficients)
+
+    @property
+    def kind(self) -> str:
+        """``"table"`` or ``"polynomial"`` (``docs/bundle-format.md``)."""
+        return "table" if self.coefficients is None else "polynomial"
 
     def columns(self) -> dict[str, NDArray]:
         return {"temp_c": self.temp_c, "v_tsp_v": self.v_tsp_v}
 
+    def manifest(self) -> dict[str, Any]:
+        if self.coefficients is None:
+            return {}
+        return {"kind": self.kind, "coefficients_v": list(self.coefficients)}
+
     def fit(self, degree: int | str = "auto") -> Calibration:
-        """The fitted :class:`~spicethermal.calibration.Calibration` (``"auto"``: linear
-        unless its linearity test fails, then quadratic)."""
+        """The :class:`~spicethermal.calibration.Calibration`: fitted to the points
+        (``"auto"``: linear unless its linearity test fails, then quadratic), or the given
+        polynomial (``degree`` is then ignored)."""
         from .calibration import Calibration
 
+        if self.coefficients is not None:
+            return Calibration.from_coefficients(self.coefficients, self.temp_c, self.v_tsp_v)
         return Calibration.fit(self.temp_c, self.v_tsp_v, degree=degree)
 
 
@@ -534,7 +569,7 @@ class ZthTable:
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Bundle:
-    """A measurement bundle (``spicethermal-bundle/1``); every section is optional.
+    """A measurement bundle (``spicethermal-bundle/2``, or /1); every section is optional.
 
     Build it from tables (as the bench does), read it with :meth:`read`, write it with
     :meth:`write`. Unknown keys of ``bundle.json`` are kept in ``extra`` (and in each
@@ -548,7 +583,7 @@ class Bundle:
     device: str = ""
     reference: str = "ambient"
     ambient_c: float | None = None
-    calibration: CalibrationTable | None = None
+    calibration: CalibrationTable | KFactor | None = None
     cooling: tuple[CoolingTable, ...] = ()
     pwm: PwmTable | None = None
     zth: tuple[ZthTable, ...] = ()
@@ -580,10 +615,13 @@ class Bundle:
             raise DataFormatError(f"{MANIFEST}: two sections use the file {sorted(dups)[0]}")
 
     # -- helpers for users of the bundle -------------------------------------------------
-    def calibration_fit(self, degree: int | str = "auto") -> Calibration:
-        """The fitted TSP calibration (raises if the bundle has none)."""
+    def calibration_fit(self, degree: int | str = "auto") -> Converter:
+        """The TSP converter of any calibration kind: the fitted or given polynomial of a
+        table, or the K-factor itself (raises if the bundle has none)."""
         if self.calibration is None:
             raise DataFormatError(f"{self._where()}the bundle has no calibration")
+        if isinstance(self.calibration, KFactor):
+            return self.calibration
         return self.calibration.fit(degree)
 
     def cooling_tj_c(self, index: int = 0) -> NDArray:
@@ -608,7 +646,7 @@ class Bundle:
 
     def _named_tables(self) -> list[tuple[str, Any]]:
         out: list[tuple[str, Any]] = []
-        if self.calibration is not None:
+        if isinstance(self.calibration, CalibrationTable):
             out.append((self.calibration.file or "calibration.csv", self.calibration))
         for i, c in enumerate(self.cooling, start=1):
             out.append((c.file or f"cooling_{i}.csv", c))
@@ -639,8 +677,9 @@ class Bundle:
         if not isinstance(doc, dict):
             raise DataFormatError(f"{label}: must hold a JSON object")
         fmt = doc.get("format")
-        if fmt != FORMAT:
-            raise DataFormatError(f"{label}, key format: {fmt!r}, expected {FORMAT!r}")
+        if fmt not in FORMATS:
+            raise DataFormatError(f"{label}, key format: {fmt!r}, expected "
+                                  f"{' or '.join(map(repr, FORMATS))}")
 
         def section(key: str) -> dict:
             value = doc.get(key)
@@ -686,11 +725,8 @@ class Bundle:
 
         calibration = None
         if doc.get("calibration") is not None:
-            entry = section("calibration")
-            name, cols = table(entry, "calibration", ["temp_c", "v_tsp_v"])
-            calibration = wrap(lambda: CalibrationTable(
-                cols["temp_c"], cols["v_tsp_v"], file=name, rows=cols.rows,
-                extra=known(entry, ())), name)
+            calibration = _read_calibration(section("calibration"), fmt, label, table, wrap,
+                                             known)
 
         cooling = []
         if doc.get("cooling") is not None:
@@ -762,13 +798,18 @@ class Bundle:
     # -- writing -------------------------------------------------------------------------
     def manifest(self) -> dict[str, Any]:
         """The ``bundle.json`` document (file names as :meth:`write` uses them)."""
-        doc: dict[str, Any] = {"format": FORMAT, "device": self.device,
+        v1 = isinstance(self.calibration, CalibrationTable | None) and (
+            self.calibration is None or self.calibration.kind == "table")
+        doc: dict[str, Any] = {"format": FORMATS[0] if v1 else FORMAT, "device": self.device,
                                "reference": self.reference}
         if self.ambient_c is not None:
             doc["ambient_c"] = self.ambient_c
         named = dict((id(t), n) for n, t in self._named_tables())
-        if self.calibration is not None:
-            doc["calibration"] = {"file": named[id(self.calibration)], **self.calibration.extra}
+        if isinstance(self.calibration, KFactor):
+            doc["calibration"] = self.calibration.manifest()
+        elif self.calibration is not None:
+            doc["calibration"] = {"file": named[id(self.calibration)],
+                                  **self.calibration.manifest(), **self.calibration.extra}
         if self.cooling:
             doc["cooling"] = [{"file": named[id(c)], **c.manifest(), **c.extra}
                               for c in self.cooling]
@@ -827,3 +868,44 @@ class Bundle:
     def with_(self, **changes: Any) -> Bundle:
         """A copy with some fields replaced (the bundle itself is immutable)."""
         return replace(self, **changes)
+
+
+def _read_calibration(entry: dict, fmt: str, label: str, table, wrap, known
+                      ) -> CalibrationTable | KFactor:
+    """The ``calibration`` section of ``bundle.json``, any kind (``docs/bundle-format.md``)."""
+    kind = entry.get("kind", "table")
+    key = f"{label}, key calibration"
+    if "kind" in entry and fmt == FORMATS[0]:
+        raise DataFormatError(f"{key}.kind: calibration kinds need format {FORMAT!r}")
+    if kind not in CALIBRATION_KINDS:
+        raise DataFormatError(f"{key}.kind: {kind!r}, expected one of "
+                              f"{', '.join(CALIBRATION_KINDS)}")
+    if kind == "k-factor":
+        extra = sorted(set(entry) - {"kind", "k_mv_per_k", "k_v_per_k", "v_ref_v", "t_ref_c"})
+        if extra:
+            raise DataFormatError(f"{key}.{extra[0]}: not a key of a k-factor calibration")
+        given = [k for k in ("k_mv_per_k", "k_v_per_k") if k in entry]
+        if len(given) != 1:
+            raise DataFormatError(f"{key}: a k-factor calibration needs exactly one of "
+                                  f"k_mv_per_k or k_v_per_k")
+        for name in ("v_ref_v", "t_ref_c"):
+            if name not in entry:
+                raise DataFormatError(f"{key}.{name}: missing (a K-factor needs the voltage at "
+                                      f"a reference temperature)")
+        k = _scalar(entry[given[0]], f"{key}.{given[0]}", optional=False)
+        v = _scalar(entry["v_ref_v"], f"{key}.v_ref_v", optional=False)
+        t = _scalar(entry["t_ref_c"], f"{key}.t_ref_c", temperature=True, optional=False)
+        if k == 0:
+            raise DataFormatError(f"{key}.{given[0]}: zero, the TSP does not depend on T")
+        return KFactor(k * (1e-3 if given[0] == "k_mv_per_k" else 1.0), v, t, key)
+    name, cols = table(entry, "calibration", ["temp_c", "v_tsp_v"])
+    coefficients = None
+    if kind == "polynomial":
+        coefficients = entry.get("coefficients_v")
+        if not isinstance(coefficients, list) or any(
+                isinstance(c, bool) or not isinstance(c, int | float) for c in coefficients):
+            raise DataFormatError(f"{key}.coefficients_v: a polynomial calibration needs a "
+                                  f"list of numbers (V per degC^k, ascending)")
+    return wrap(lambda: CalibrationTable(
+        cols["temp_c"], cols["v_tsp_v"], file=name, rows=cols.rows,
+        extra=known(entry, ("kind", "coefficients_v")), coefficients=coefficients), name)

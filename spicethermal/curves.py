@@ -278,7 +278,10 @@ class ZthCurve:
         rth = (tj_max - steady_ref) / p
         if not rth > 0:
             raise DataFormatError(f"{name}: Tj at the cut ({tj_max:.4g} degC) is not above the "
-                                  f"reference ({steady_ref:.4g} degC): no Rth")
+                                  f"reference ({steady_ref:.4g} degC): no Rth (raw v_tsp_v "
+                                  f"through a calibration taken at another sense current or "
+                                  f"offset? use a k-factor calibration anchored at the "
+                                  f"reference, docs/bundle-format.md)")
         zth = (tj_max - theta) / p
         return cls(t, zth, rth, power_w=p, label=label, early=early, tj_max_c=float(tj_max),
                    tref_steady_c=float(steady_ref))

@@ -163,7 +163,8 @@ class BundleData:
                           np.asarray(p.powers_w, float), tref, np.asarray(p.tj_c, float),
                           float(p.sample_window_s))
         cal = None
-        if bundle.calibration is not None and np.unique(bundle.calibration.temp_c).size >= 3:
+        points = getattr(bundle.calibration, "temp_c", None)  # a K-factor has no points
+        if points is not None and np.unique(points).size >= 3:
             line = bundle.calibration.fit(1)
             cal = CalData(np.asarray(bundle.calibration.temp_c, float),
                           np.asarray(line.temperature(bundle.calibration.v_tsp_v), float))

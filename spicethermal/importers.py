@@ -3,19 +3,29 @@
 * :func:`read_pyrth` — the PyRth text format (``MOSFET_dry.txt``): a ``DATA`` line, a header
   line, then two columns, time (s) and sensor voltage (V). The file holds no calibration and
   no power: pass them (the MOSFET files' calibration points are
-  :data:`PYRTH_MOSFET_CALIBRATION`; PyRth's nominal power is 1 W).
+  :data:`PYRTH_MOSFET_CALIBRATION`, shipped as ``pyrth_mosfet/calibration.csv``; PyRth's
+  nominal power is 1 W). There is no default calibration: another device's would be wrong.
 * :func:`read_t3ster` — the legacy export of a Simcenter T3Ster: ``.raw`` (time response
   record: ``time_us adc_count`` rows after a ``#`` header that gives the ADC step ``lsb`` (V,
   7th header line) and the offset voltage ``uref`` (V, 9th), so that
   ``V = uref + (count - 4095/2) · lsb``), ``.pwr`` (``Power=`` in its ``[power]`` section, the
   heating power step in W) and ``.tco`` (temperature/voltage calibration rows after ``#``
-  comments).
+  comments; the 6th and 7th header lines hold the instrument's fitted line ``V = a0 + a1 T``,
+  kept as a ``polynomial`` calibration with the rows as its residuals).
 
 Both are cooling transients recorded from the trigger: leading samples taken before the
 switch (PyRth: the first run of identical values; T3Ster: time 0) are dropped, the times are
 kept as recorded. The reference temperature is taken as the junction temperature at the end
 of the record (``tref_steady_c``, the mean of the last 5 samples): the device is assumed back
 at its reference by then, so Rth is the rise recorded over the whole transient.
+
+The calibration may be a table or polynomial (converted as it stands) or a
+:class:`~spicethermal.calibration.KFactor`. Given ``tref_c``, the temperature of the device at
+the end of the record, any of them is re-anchored there (its slope kept, its level moved:
+:func:`~spicethermal.calibration.anchored`): the sensor voltage of a transient often sits
+tens of mV away from the oven calibration's (another sense current, an amplifier offset), so
+that the table alone puts a device at room temperature near 2 degC (the PyRth MOSFET files:
+0.608 V at the end of the record, where the table reads 0.558 V at 23.4 degC).
 """
 
 from __future__ import annotations
@@ -28,7 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .bundle import Bundle, CalibrationTable, CoolingTable, _number
+from .bundle import Bundle, CalibrationTable, CoolingTable, parse_number
+from .calibration import KFactor, anchored
 from .errors import DataFormatError, where
 from .files import read_text
 
@@ -42,9 +53,17 @@ END_SAMPLES = 5
 T3STER_ADC_LEVELS = 4095.0
 
 
-def _calibration_table(calibration: CalibrationTable | Sequence[Sequence[float]],
-                       label: str) -> CalibrationTable:
-    if isinstance(calibration, CalibrationTable):
+#: What the importers accept as a calibration.
+CalibrationLike = CalibrationTable | KFactor | Sequence[Sequence[float]]
+
+
+def _calibration_table(calibration: CalibrationLike | None, label: str
+                       ) -> CalibrationTable | KFactor:
+    if calibration is None:
+        raise DataFormatError(f"{label}: the file holds no calibration: give one (--calibration "
+                              f"CSV with temp_c, v_tsp_v, or --k-factor MV_PER_K with --tref "
+                              f"DEGC)")
+    if isinstance(calibration, CalibrationTable | KFactor):
         return calibration
     try:
         pts = np.asarray(calibration, dtype=float)
@@ -63,8 +82,8 @@ def _two_columns(lines: Sequence[tuple[int, str]], label: str, names: tuple[str,
         if len(fields) != 2:
             raise DataFormatError(f"{where(label, lineno)}{len(fields)} fields, expected 2 "
                                   f"({names[0]}, {names[1]})")
-        a.append(_number(fields[0], label, lineno, names[0]))
-        b.append(_number(fields[1], label, lineno, names[1]))
+        a.append(parse_number(fields[0], label, lineno, names[0]))
+        b.append(parse_number(fields[1], label, lineno, names[1]))
         rows.append(lineno)
     if not rows:
         raise DataFormatError(f"{where(label)}no data rows")
@@ -72,29 +91,35 @@ def _two_columns(lines: Sequence[tuple[int, str]], label: str, names: tuple[str,
 
 
 def _cooling_bundle(t: np.ndarray, v: np.ndarray, rows: np.ndarray, label: str,
-                    calibration: CalibrationTable, power_w: float, device: str,
-                    source: dict) -> Bundle:
-    cal = calibration.fit("auto")
-    tref = float(np.mean(cal.temperature(v[-END_SAMPLES:])))
+                    calibration: CalibrationTable | KFactor, power_w: float, device: str,
+                    source: dict, tref_c: float | None = None) -> Bundle:
+    cal = calibration if isinstance(calibration, KFactor) else calibration.fit("auto")
+    v_end = float(np.mean(v[-END_SAMPLES:]))
+    if tref_c is not None:
+        calibration = cal = anchored(cal, v_end, tref_c)
+        source = {**source, "anchored": f"{v_end:.6g} V (end of record) = {tref_c:g} degC"}
+    tref = float(cal.temperature(v_end))
     cooling = CoolingTable(t, power_w, v_tsp_v=v, tref_steady_c=tref, file=label, rows=rows,
                            extra={"tref_steady_from": f"mean of the last {END_SAMPLES} samples"})
-    bundle = Bundle(device=device, reference="ambient", calibration=calibration,
-                    cooling=(cooling,), extra={"source": source})
+    bundle = Bundle(device=device, reference="ambient", ambient_c=tref_c,
+                    calibration=calibration, cooling=(cooling,), extra={"source": source})
     # checked above under the source's name; written as a plain file name
     return bundle.with_(cooling=(replace(cooling, file="cooling_1.csv"),), source=label)
 
 
-def read_pyrth(path: str | os.PathLike,
-               calibration: CalibrationTable | Sequence[Sequence[float]] =
-               PYRTH_MOSFET_CALIBRATION,
-               power_w: float = 1.0, device: str | None = None) -> Bundle:
+def read_pyrth(path: str | os.PathLike, calibration: CalibrationLike | None = None,
+               power_w: float = 1.0, device: str | None = None,
+               tref_c: float | None = None) -> Bundle:
     """Read a PyRth transient text file (``DATA`` line, header, ``time voltage`` rows).
 
     Parameters
     ----------
     path : the ``.txt`` file.
-    calibration : (temp_c, v_tsp_v) pairs or a :class:`CalibrationTable`.
+    calibration : (temp_c, v_tsp_v) pairs, a :class:`CalibrationTable` or a
+        :class:`~spicethermal.calibration.KFactor`; required (the file has none).
     power_w : the heating power step, W (PyRth's files do not store it; 1 W nominal).
+    tref_c : temperature of the device at the end of the record; re-anchors the calibration
+        there (module docstring). Default: the calibration's own reading.
 
     Returns
     -------
@@ -104,9 +129,10 @@ def read_pyrth(path: str | os.PathLike,
     Examples
     --------
     >>> from spicethermal.data import path
-    >>> b = read_pyrth(path("pyrth_mosfet/MOSFET_dry.txt"))
-    >>> round(b.calibration_fit().k_factor_mv_per_k, 2)
-    -2.32
+    >>> b = read_pyrth(path("pyrth_mosfet/MOSFET_dry.txt"), PYRTH_MOSFET_CALIBRATION,
+    ...                tref_c=25.0)
+    >>> print(b.calibration_fit())
+    K-factor calibration: K = -2.324 mV/K, 0.607995 V at 25 degC
     """
     path = Path(path)
     label = str(path)
@@ -128,7 +154,8 @@ def read_pyrth(path: str | os.PathLike,
     return _cooling_bundle(t[first:], v[first:], rows[first:], label, table, power_w,
                            device or f"PyRth transient {path.stem}",
                            {"format": "pyrth-text", "file": path.name,
-                            "dropped_before_switch": first, "power_w_nominal": power_w})
+                            "dropped_before_switch": first, "power_w_nominal": power_w},
+                           tref_c)
 
 
 def _t3ster_power(path: Path) -> float:
@@ -140,7 +167,7 @@ def _t3ster_power(path: Path) -> float:
         elif "=" in line:
             key, value = (s.strip() for s in line.split("=", 1))
             if key.lower() in ("power", "powerstep") and section in ("power", ""):
-                p = _number(value.split()[0] if value else "", str(path), lineno, key)
+                p = parse_number(value.split()[0] if value else "", str(path), lineno, key)
                 if p == 0:
                     raise DataFormatError(f"{where(str(path), lineno, key)}zero power step")
                 return abs(p)
@@ -148,18 +175,44 @@ def _t3ster_power(path: Path) -> float:
 
 
 def _t3ster_calibration(path: Path) -> CalibrationTable:
-    body = [(i, line.strip()) for i, line in enumerate(read_text(path).splitlines(), start=1)
+    lines = list(enumerate(read_text(path).splitlines(), start=1))
+    body = [(i, line.strip()) for i, line in lines
             if line.strip() and not line.strip().startswith("#")]
     temp, volt, rows = _two_columns(body, str(path), ("temp_c", "v_tsp_v"))
-    return CalibrationTable(temp, volt, file="calibration.csv")
+    header = [line.strip().lstrip("#").strip() for _, line in lines
+              if line.strip().startswith("#")]
+    coefficients = None
+    if len(header) >= 7 and all(re.fullmatch(r"[+-]?[\d.]+([eE][+-]?\d+)?", h)
+                                for h in header[5:7]):
+        coefficients = (float(header[5]), float(header[6]))
+    return CalibrationTable(temp, volt, file="calibration.csv", coefficients=coefficients)
 
 
 def read_t3ster(raw: str | os.PathLike, pwr: str | os.PathLike | None = None,
-                tco: str | os.PathLike | None = None, device: str | None = None) -> Bundle:
+                tco: str | os.PathLike | None = None, device: str | None = None,
+                tref_c: float | None = None) -> Bundle:
     """Read a T3Ster measurement (``.raw`` + ``.pwr`` + ``.tco``) into a bundle.
 
-    ``pwr`` defaults to the ``.pwr`` file beside ``raw`` with the same stem; ``tco`` to the
-    only ``.tco`` file in that directory. See the module docstring for the formats.
+    Parameters
+    ----------
+    raw : the ``.raw`` time response record.
+    pwr : the power file; default the ``.pwr`` beside ``raw`` with the same stem.
+    tco : the calibration; default the only ``.tco`` file in that directory.
+    device : a name for the bundle.
+    tref_c : temperature of the device at the end of the record (re-anchors the calibration).
+
+    Returns
+    -------
+    Bundle
+        The ``.tco`` calibration (kind ``polynomial`` when its header holds the line) and one
+        cooling curve with raw ``v_tsp_v`` at the ``.pwr`` power.
+
+    Examples
+    --------
+    >>> from spicethermal.data import path
+    >>> b = read_t3ster(path("pyrth_mosfet/t3ster/T25_I-m5m-I-h600m_100s.raw"))
+    >>> b.calibration.kind, round(b.cooling[0].power_w, 4)
+    ('polynomial', 1.7541)
     """
     raw = Path(raw)
     label = str(raw)
@@ -203,4 +256,4 @@ def read_t3ster(raw: str | os.PathLike, pwr: str | os.PathLike | None = None,
                            _t3ster_power(pwr), device or f"T3Ster record {raw.stem}",
                            {"format": "t3ster", "file": raw.name, "pwr": pwr.name,
                             "tco": tco.name, "lsb_v": lsb, "uref_v": uref,
-                            "dropped_before_switch": int((~after).sum())})
+                            "dropped_before_switch": int((~after).sum())}, tref_c)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -188,7 +189,7 @@ def test_bad_pwm_csv(tmp_path: Path, text, row, column, words) -> None:
 
 
 BAD_MANIFEST = [
-    ({"format": "spicethermal-bundle/2"}, "key format"),
+    ({"format": "spicethermal-bundle/3"}, "key format"),
     ({"device": "no format"}, "key format"),
     ({"format": "spicethermal-bundle/1", "cooling": [{"file": "cooling_1.csv", "power_w": 0}]},
      "key cooling[0].power_w: 0.0 must be > 0"),
@@ -264,3 +265,66 @@ def test_read_columns_comments_and_rows(tmp_path: Path) -> None:
     cols = read_columns(p, ["t_s", "r"])
     assert cols.rows.tolist() == [4, 6]
     np.testing.assert_array_equal(cols["r"], [0.18, 0.39])
+
+
+# ------------------------------------------------------------------------ calibration kinds
+RAW = "t_s,v_tsp_v\n1e-4,0.55\n1e-3,0.56\n1e-2,0.58\n"
+CAL = "temp_c,v_tsp_v\n25,2.6127\n40,2.5899\n55,2.5670\n"
+V2 = "spicethermal-bundle/2"
+
+
+def _kind_bundle(tmp_path: Path, calibration: dict, fmt: str = V2) -> Path:
+    return _bundle(tmp_path, {"cooling_1.csv": RAW, "calibration.csv": CAL},
+                   {"format": fmt, "ambient_c": 25.0, "calibration": calibration,
+                    "cooling": [{"file": "cooling_1.csv", "power_w": 1.0}]})
+
+
+def test_k_factor_bundle_converts_and_round_trips(tmp_path: Path) -> None:
+    from spicethermal.calibration import KFactor
+
+    d = _kind_bundle(tmp_path, {"kind": "k-factor", "k_mv_per_k": -2.0, "v_ref_v": 0.6,
+                                "t_ref_c": 25.0})
+    b = Bundle.read(d)
+    assert isinstance(b.calibration, KFactor)
+    assert np.allclose(b.cooling_tj_c(0), 25.0 + (np.array([0.55, 0.56, 0.58]) - 0.6) / -2e-3)
+    again = Bundle.read(b.write(tmp_path / "copy"))
+    assert again.calibration == b.calibration and not (tmp_path / "copy" /
+                                                      "calibration.csv").exists()
+    assert json.loads((tmp_path / "copy" / "bundle.json").read_text())["format"] == V2
+
+
+def test_polynomial_bundle_keeps_coefficients_and_residuals(tmp_path: Path) -> None:
+    d = _kind_bundle(tmp_path, {"kind": "polynomial", "file": "calibration.csv",
+                                "coefficients_v": [2.6505, -1.5098e-3]})
+    b = Bundle.read(d)
+    cal = b.calibration_fit()
+    assert cal.coefficients == (2.6505, -1.5098e-3) and cal.kind == "polynomial"
+    expect = (np.array([2.6127, 2.5899, 2.5670]) - (2.6505 - 1.5098e-3 * np.array([25, 40, 55])))
+    assert np.allclose(cal.residuals_mv, expect * 1e3, atol=1e-9)
+    again = Bundle.read(b.write(tmp_path / "copy"))
+    assert again.calibration_fit().coefficients == cal.coefficients
+
+
+def test_table_bundles_are_still_written_as_version_1(tmp_path: Path) -> None:
+    b = Bundle(calibration=CalibrationTable([25, 75], [0.6, 0.5]))
+    doc = json.loads((b.write(tmp_path / "t") / "bundle.json").read_text())
+    assert doc["format"] == "spicethermal-bundle/1" and "kind" not in doc["calibration"]
+
+
+@pytest.mark.parametrize(("calibration", "fmt", "words"), [
+    ({"kind": "k-factor", "k_mv_per_k": -2, "v_ref_v": 0.6, "t_ref_c": 25},
+     "spicethermal-bundle/1", "calibration.kind: calibration kinds need format"),
+    ({"kind": "oven"}, V2, "calibration.kind: 'oven', expected one of"),
+    ({"kind": "k-factor", "v_ref_v": 0.6, "t_ref_c": 25}, V2, "exactly one of k_mv_per_k"),
+    ({"kind": "k-factor", "k_mv_per_k": -2, "t_ref_c": 25}, V2, "calibration.v_ref_v: missing"),
+    ({"kind": "k-factor", "k_mv_per_k": 0, "v_ref_v": 0.6, "t_ref_c": 25}, V2, "zero"),
+    ({"kind": "k-factor", "k_mv_per_k": "-2", "v_ref_v": 0.6, "t_ref_c": 25}, V2,
+     "k_mv_per_k: '-2' is not a number"),
+    ({"kind": "k-factor", "k_mv_per_k": -2, "v_ref_v": 0.6, "t_ref_c": 25, "file": "c.csv"},
+     V2, "calibration.file: not a key of a k-factor"),
+    ({"kind": "polynomial", "file": "calibration.csv"}, V2, "coefficients_v"),
+    ({"kind": "polynomial", "file": "calibration.csv", "coefficients_v": [1.0]}, V2, "2 or 3"),
+])
+def test_bad_calibration_kind_names_the_key(tmp_path: Path, calibration, fmt, words) -> None:
+    with pytest.raises(DataFormatError, match=re.escape(words)):
+        Bundle.read(_kind_bundle(tmp_path, calibration, fmt))

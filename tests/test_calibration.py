@@ -93,3 +93,46 @@ def test_pyrth_calibration_points() -> None:
 def test_bad_calibration(temp, volt, degree, words) -> None:
     with pytest.raises(DataFormatError, match=words):
         Calibration.fit(temp, volt, degree=degree)
+
+
+# ------------------------------------------------------------------ K-factor and polynomial
+def test_k_factor_is_the_line_through_its_anchor() -> None:
+    from spicethermal.calibration import KFactor, anchored
+
+    k = KFactor.from_mv_per_k(-2.5, v_ref_v=0.62, t_ref_c=20.0)
+    t = np.array([-10.0, 20.0, 75.5])
+    assert np.allclose(k.voltage(t), 0.62 - 2.5e-3 * (t - 20.0), rtol=0, atol=1e-15)
+    assert np.allclose(k.temperature(k.voltage(t)), t, rtol=0, atol=1e-12)
+    assert k.k_factor_mv_per_k == pytest.approx(-2.5) and k.kind == "k-factor"
+    # a table re-anchored elsewhere keeps its slope and moves its level
+    cal = Calibration.fit([20, 40, 60, 80], [0.60, 0.56, 0.52, 0.48])
+    a = anchored(cal, 0.65, 25.0)
+    assert a.k_v_per_k == pytest.approx(-2e-3, rel=1e-12)
+    assert float(a.temperature(0.65 - 0.04)) == pytest.approx(45.0, abs=1e-9)
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"k_v_per_k": 0.0, "v_ref_v": 0.6, "t_ref_c": 25.0}, "zero"),
+    ({"k_v_per_k": "x", "v_ref_v": 0.6, "t_ref_c": 25.0}, "k_v_per_k: 'x' is not a number"),
+    ({"k_v_per_k": -2e-3, "v_ref_v": float("nan"), "t_ref_c": 25.0}, "v_ref_v"),
+    ({"k_v_per_k": -2e-3, "v_ref_v": 0.6, "t_ref_c": -300.0}, "absolute zero"),
+])
+def test_bad_k_factor_names_the_parameter(kwargs, words) -> None:
+    from spicethermal.calibration import KFactor
+
+    with pytest.raises(DataFormatError, match=words):
+        KFactor(**kwargs)
+
+
+def test_given_polynomial_keeps_its_residuals() -> None:
+    """A line fitted elsewhere (a T3Ster .tco header) against the points: residuals are the
+    points minus that line, not a refit."""
+    t = np.array([25.0, 40.0, 55.0, 70.0])
+    v = 2.65 - 1.5e-3 * t + np.array([0.5, -0.2, 0.1, -0.4]) * 1e-3
+    cal = Calibration.from_coefficients([2.65, -1.5e-3], t, v)
+    assert cal.kind == "polynomial" and "given" in str(cal)
+    assert np.allclose(cal.residuals_mv, [0.5, -0.2, 0.1, -0.4], atol=1e-9)
+    with pytest.raises(DataFormatError, match="not monotonic"):
+        Calibration.from_coefficients([0.6, -2e-3, 1e-4], [0, 20, 40], [0.6, 0.6, 0.6])
+    with pytest.raises(DataFormatError, match="2 or 3"):
+        Calibration.from_coefficients([0.6], [0, 20], [0.6, 0.56])

@@ -10,7 +10,7 @@ import pytest
 from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, ZthTable
 from spicethermal.curves import ZthCurve, detect_transient, log_grid
 from spicethermal.errors import DataFormatError
-from spicethermal.importers import read_pyrth, read_t3ster
+from spicethermal.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3ster
 from spicethermal.ladder import Foster
 from spicethermal.synthetic import mur880e_foster, synthetic_cooling
 
@@ -194,8 +194,8 @@ def test_bad_times_name_the_row() -> None:
 
 
 def test_pyrth_mosfet_transients() -> None:
-    dry = read_pyrth(PYRTH / "MOSFET_dry.txt")
-    tim = read_pyrth(PYRTH / "MOSFET_tim.txt")
+    dry = read_pyrth(PYRTH / "MOSFET_dry.txt", PYRTH_MOSFET_CALIBRATION)
+    tim = read_pyrth(PYRTH / "MOSFET_tim.txt", PYRTH_MOSFET_CALIBRATION)
     assert dry.calibration_fit().k_factor_mv_per_k == pytest.approx(-2.32, abs=0.01)
     assert dry.cooling[0].power_w == 1.0  # nominal: Zth in K per watt of it
     zd, zt = ZthCurve.from_bundle(dry)[0], ZthCurve.from_bundle(tim)[0]

@@ -108,9 +108,10 @@ def test_spectrum_is_immutable_and_validated():
 # ------------------------------------------------------------------- real MOSFET data
 @pytest.fixture(scope="module")
 def mosfet():
-    from spicethermal.commands.spectrum import load_curve
+    from spicethermal.sources import read_source
 
-    curves = {name: load_curve(DATA / f"MOSFET_{name}.txt") for name in ("dry", "tim")}
+    curves = {name: read_source(DATA / f"MOSFET_{name}.txt", calibration=DATA / "calibration.csv",
+                                tref_c=25.0).curve() for name in ("dry", "tim")}
     return {name: (c, time_constant_spectrum(c)) for name, c in curves.items()}
 
 
@@ -175,7 +176,7 @@ def test_cli_spectrum_bad_input_exits_2_with_one_line(tmp_path, capsys):
 def test_pyrth_text_source_with_calibration_csv_and_power(tmp_path):
     """A PyRth-format file made from a known ladder: Zth comes back through the given
     calibration (V = 0.6 V − 2 mV/K · (T − 20 °C)) and power (2 W)."""
-    from spicethermal.commands.spectrum import load_curve
+    from spicethermal.sources import read_source
 
     ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
     t = np.geomspace(1e-6, 20.0, 700)
@@ -186,7 +187,7 @@ def test_pyrth_text_source_with_calibration_csv_and_power(tmp_path):
         f"{a:.9e} {b:.9e}\n" for a, b in zip(t, volts, strict=True)))
     cal = tmp_path / "cal.csv"
     cal.write_text("temp_c,v_tsp_v\n20,0.6\n40,0.56\n60,0.52\n")
-    curve = load_curve(src, calibration=cal, power_w=2.0)
+    curve = read_source(src, calibration=cal, power_w=2.0).curve()
     assert curve.label == "device"
     # Tj at the cut is extrapolated by √t from the first samples (the importer has no
     # steady value); for this lumped ladder that overshoots by about 0.05 % of Rth
@@ -201,14 +202,14 @@ def test_bundle_source(tmp_path, capsys):
     early-time correction; the spectrum holds the curve's Rth."""
     from spicethermal.bundle import Bundle, CoolingTable
     from spicethermal.cli import main
-    from spicethermal.commands.spectrum import load_curve
+    from spicethermal.sources import read_source
 
     ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
     t, tj = synthetic_cooling(ladder, 2.0, np.geomspace(1e-6, 20.0, 600), transient_s=3e-5)
     bundle = Bundle(device="test", reference="ambient", ambient_c=25.0, cooling=(
         CoolingTable(t, 2.0, tj_c=tj, tref_steady_c=25.0),))
     path = bundle.write(tmp_path / "run1")
-    curve = load_curve(path)
+    curve = read_source(path).curve()
     assert curve.label.startswith("run1") and curve.early is not None and curve.early.detected
     # √t is not this lumped ladder's early law: Tj at the cut comes out ~0.4 % high
     assert curve.rth_k_per_w == pytest.approx(4.0, rel=0.03)

@@ -131,11 +131,12 @@ def test_separation_of_two_synthetic_mountings():
 # ------------------------------------------------------------------- real MOSFET data
 @pytest.fixture(scope="module")
 def mosfet():
-    from spicethermal.commands.spectrum import load_curve
+    from spicethermal.sources import read_source
 
     out = {}
     for name in ("dry", "tim"):
-        curve = load_curve(DATA / f"MOSFET_{name}.txt")
+        curve = read_source(DATA / f"MOSFET_{name}.txt", calibration=DATA / "calibration.csv",
+                                tref_c=25.0).curve()
         out[name] = (curve, structure_function(curve))
     return out
 

@@ -61,7 +61,7 @@ def test_command_json_on_a_synthetic_mur880e(tmp_path: Path, capsys) -> None:
     5 mK noise, Tj at the cut extrapolated): r(t) within 8 % at 10 us, within 1.5 % from
     100 us (the bias of the extrapolated T0, ~0.02 K of a 15 K rise, dominates at 1 ms)."""
     path = _synthetic_bundle(tmp_path)
-    assert cli.main(["table1", str(path), "--json"]) == 0
+    assert cli.main(["table1", str(path), "--json", "--datasheet", "mur880e"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["format"] == "spicethermal-table1/1"
     assert doc["rth_measured_k_per_w"] == pytest.approx(1.51, rel=3e-3)
@@ -70,14 +70,19 @@ def test_command_json_on_a_synthetic_mur880e(tmp_path: Path, capsys) -> None:
     assert [row["t_s"] for row in doc["rows"]] == [1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0]
     assert doc["rows"][0]["extrapolated"] and not doc["rows"][2]["extrapolated"]
     assert doc["rows"][0]["paper_error_percent"] == pytest.approx(11.11, abs=0.01)
+    early = doc["early_time"]
+    assert early["detected"] and early["fit_window_s"][0] == early["masked_s"][1]
+    assert (early["tj0_c"] - 25.0) / 10.0 == pytest.approx(doc["rth_measured_k_per_w"])
 
 
 def test_command_text_is_an_aligned_table(tmp_path: Path, capsys) -> None:
     path = _synthetic_bundle(tmp_path)
-    assert cli.main(["table1", str(path)]) == 0
+    assert cli.main(["table1", str(path), "--datasheet", "mur880e"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    rows = lines[1:8]
-    assert "error (%)" in rows[0] and "datasheet r(t)" in rows[0]
+    assert lines[0].startswith("early time: masked")  # the √t window and Tj at the cut
+    start = next(i for i, line in enumerate(lines) if "error (%)" in line)
+    rows = lines[start:start + 7]
+    assert "datasheet r(t)" in rows[0]
     assert len({len(r) for r in rows}) == 1  # right-aligned columns
     assert rows[1].split()[0] == "0.01" and rows[6].split()[0] == "1000.00"
 
@@ -99,17 +104,17 @@ def test_command_on_csv_sources(tmp_path: Path, capsys) -> None:
     t = np.geomspace(1e-6, 10, 200)
     zth = tmp_path / "zth.csv"
     zth.write_text(format_columns({"t_s": t, "r": f.r_norm(t)}))
-    assert cli.main(["table1", str(zth), "--json"]) == 0
+    assert cli.main(["table1", str(zth), "--json", "--datasheet", "mur880e"]) == 0
     err = [r["error_percent"] for r in json.loads(capsys.readouterr().out)["rows"]]
     assert np.all(np.abs(err) < 0.5)
     _, tj = synthetic_cooling(f, 5.0, t, ambient_c=30.0)
     cool = tmp_path / "cooling.csv"
     cool.write_text(format_columns({"t_s": t, "tj_c": tj}))
-    assert cli.main(["table1", str(cool), "--json", "--tref-steady", "30",
+    assert cli.main(["table1", str(cool), "--json", "--tref-steady", "30", "--datasheet", "mur880e",
                      "--tj-steady", str(30 + 5.0 * f.rth), "--mask", "none"]) == 0
     err = [r["error_percent"] for r in json.loads(capsys.readouterr().out)["rows"]]
     assert np.all(np.abs(err) < 0.5)
-    assert cli.main(["table1", str(cool)]) == 2
+    assert cli.main(["table1", str(cool), "--datasheet", "mur880e"]) == 2
     assert "needs a reference" in capsys.readouterr().err
 
 
@@ -121,7 +126,7 @@ def _run(*args: str) -> subprocess.CompletedProcess:
 def test_bad_input_exits_2_with_one_line(tmp_path: Path) -> None:
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,zth_k_per_w\n1e-4,0.1\n1e-3,oops\n")
-    proc = _run("table1", str(bad))
+    proc = _run("table1", str(bad), "--datasheet", "mur880e")
     assert proc.returncode == 2 and proc.stdout == ""
     assert "Traceback" not in proc.stderr
     lines = proc.stderr.strip().splitlines()
@@ -155,3 +160,10 @@ def test_datasheet_readers(tmp_path: Path) -> None:
     z.write_text("t_s,r\n1e-3,0.2\n1e-2,-0.1\n")
     with pytest.raises(DataFormatError, match=r"zth.csv, row 3, column r: -0.1 must be >= 0"):
         read_zth_points(z, rth_k_per_w=1.0)
+
+
+def test_no_device_is_assumed(tmp_path: Path, capsys) -> None:
+    """Without --datasheet no datasheet is chosen for the user: the error names the option."""
+    path = _synthetic_bundle(tmp_path)
+    assert cli.main(["table1", str(path)]) == 2
+    assert "--datasheet" in capsys.readouterr().err

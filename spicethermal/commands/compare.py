@@ -11,6 +11,7 @@ import argparse
 import json
 
 from ..pwmsim import ENGINES
+from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import nonnegative as _window
 
 NAME = "compare"
@@ -21,7 +22,7 @@ HELP = "measured vs model over every data set of a bundle (the paper's Table 2)"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
-    parser.add_argument("bundle", metavar="BUNDLE", help="a spicethermal-bundle/1 directory")
+    parser.add_argument("bundle", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("--json", action="store_true",
                         help="print the spicethermal-comparison/1 document")
     parser.add_argument("--engine", choices=("auto", *ENGINES), default="auto",
@@ -30,15 +31,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--window", type=_window, metavar="S",
                         help="sample window for PWM readings, s (default: the model's "
                              "sample-window effect, else the bundle's sample_window_s)")
+    add_source_arguments(parser, curve=False, early=False)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bundle import Bundle
     from ..compare import compare
     from ..model import ThermalModel
 
     model = ThermalModel.load(args.model)
-    bundle = Bundle.read(args.bundle)
+    bundle = comparable_source(args, args.bundle)
     result = compare(model, bundle, args.engine, window_s=args.window)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))

@@ -21,6 +21,8 @@ import sys
 from pathlib import Path
 
 from ..errors import DataFormatError
+from ..sources import csv_header
+from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import number as _number
 from ._types import positive as _positive
 
@@ -33,9 +35,9 @@ HELP = "show where the model fails and which physical effect is missing"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("source", metavar="BUNDLE",
-                        help="a spicethermal-bundle/1 directory, or a CSV of PWM readings with "
-                             "measured and simulated columns (tj_exp_c, tj_model_c)")
+    parser.add_argument("source", metavar="SOURCE",
+                        help=f"{SOURCE_HELP}; or a CSV of PWM readings with measured and "
+                             f"simulated columns (tj_exp_c, tj_model_c)")
     parser.add_argument("--model", metavar="MODEL.json",
                         help="baseline model (default: the linear ladder fitted from the "
                              "bundle's cooling curves)")
@@ -57,6 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     table.add_argument("--ambient", type=_number, metavar="DEGC", default=25.0,
                        help="reference added to the rises (default 25, as in the paper)")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    add_source_arguments(parser, curve=False, power=False, rth=False, early=False)
 
 
 def _progress(quiet: bool):
@@ -73,15 +76,14 @@ def run(args: argparse.Namespace) -> int:
     from ..diagnose import diagnose, write_report
 
     source = Path(args.source)
-    if source.is_file():
+    if source.is_file() and "tj_exp_c" in csv_header(source):
         from ..diagnose import diagnose_table
 
         if args.model:
             raise DataFormatError("--model applies to a bundle, not to a table of readings")
         result = diagnose_table(source, rth_k_per_w=args.rth, power_w=args.power,
                                 window_s=args.window, ambient_c=args.ambient)
-    elif source.is_dir():
-        from ..bundle import Bundle
+    else:
         from ..effects import spec
 
         for name in args.effect or ():
@@ -91,10 +93,8 @@ def run(args: argparse.Namespace) -> int:
             from ..model import ThermalModel
 
             model = ThermalModel.load(args.model)
-        result = diagnose(Bundle.read(source), model, args.effect,
-                          progress=_progress(args.quiet))
-    else:
-        raise DataFormatError(f"{source}: no such bundle directory or file")
+        bundle = comparable_source(args, args.source, rth=False)
+        result = diagnose(bundle, model, args.effect, progress=_progress(args.quiet))
     if args.report:
         page = write_report(result, args.report)
         if not args.json and not args.quiet:

@@ -1,8 +1,10 @@
 """``spicethermal fit SOURCE [--order N|auto] [--effect NAME]... -o MODEL.json``.
 
-SOURCE is a measurement bundle directory (its first cooling curve, converted to Zth(t) with the
-early-time correction, or its first ``zth`` table; ``--curve`` picks another) or a Zth CSV file
-with columns ``t_s`` and ``zth_k_per_w`` (absolute) or ``r`` (normalized; needs ``--rth``).
+SOURCE is any curve source (:mod:`spicethermal.sources`): a measurement bundle directory (its
+first cooling curve, converted to Zth(t) with the early-time correction, or its first ``zth``
+table; ``--curve`` picks another), a Zth or datasheet points CSV (``t_s`` and ``zth_k_per_w``,
+or ``r`` with ``--rth``), a cooling CSV, a PyRth ``.txt`` or a T3Ster ``.raw`` (with
+``--calibration`` or ``--k-factor`` where the file has none).
 ΣR = Rth is held whenever Rth is known: measured by a cooling curve (eq. 1), given in the
 bundle or by ``--rth``. The fit's report (order, criterion, R ± u, τ ± u) goes into the model's
 provenance and its table to stdout.
@@ -13,11 +15,10 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
 
 from ..errors import DataFormatError
+from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import count as _count
-from ._types import positive as _positive
 
 NAME = "fit"
 HELP = "fit an RC ladder (automatic order, ΣR = Rth) to a Zth curve and write a model file"
@@ -37,19 +38,13 @@ def _order(text: str) -> int | str:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("source", metavar="SOURCE",
-                        help="bundle directory, or Zth CSV (t_s and zth_k_per_w, or r with --rth)")
+    parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("-o", "--output", metavar="MODEL.json", required=True,
                         help="model file to write (spicethermal-model/1)")
     parser.add_argument("--order", type=_order, default="auto", metavar="N|auto",
                         help="number of RC stages, or auto (default: chosen by BIC)")
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
                         help="largest order tried by --order auto (default 10)")
-    parser.add_argument("--rth", type=_positive, metavar="K_PER_W",
-                        help="known Rth (K/W), held as ΣR = Rth; needed for a normalized r column")
-    parser.add_argument("--curve", type=int, default=0, metavar="INDEX",
-                        help="which curve of a bundle to fit: cooling curves first, then zth "
-                             "tables (default 0)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME",
                         help="an effect to fit with the ladder (repeatable)")
     parser.add_argument("--topology", choices=("foster", "cauer"), default="foster",
@@ -57,50 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", metavar="FIG.png",
                         help="also write the fit figure (paper Fig. 7: fit, residuals, ladder)")
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print the fit table")
-
-
-def _from_csv(path: Path, rth: float | None) -> tuple[Any, bool, str]:
-    from ..bundle import ZthTable, read_columns
-    from ..curves import ZthCurve
-
-    cols = read_columns(path, ["t_s", ("zth_k_per_w", "r")], label=path.name)
-    table = ZthTable(cols["t_s"], zth_k_per_w=cols.get("zth_k_per_w"), r=cols.get("r"),
-                     rth_k_per_w=rth, file=path.name, rows=cols.rows)
-    if table.normalized and rth is None:
-        raise DataFormatError(f"{path.name}: column r is normalized (Zth/Rth): give --rth")
-    return ZthCurve.from_table(table, label=path.name), rth is not None, "ambient"
-
-
-def _from_bundle(path: Path, index: int, rth: float | None) -> tuple[Any, bool, str]:
-    from ..bundle import Bundle
-    from ..curves import ZthCurve
-
-    bundle = Bundle.read(path)
-    n_cool, n_zth = len(bundle.cooling), len(bundle.zth)
-    if n_cool + n_zth == 0:
-        raise DataFormatError(f"{path}: the bundle has no cooling curve and no zth table to fit")
-    if not 0 <= index < n_cool + n_zth:
-        raise DataFormatError(f"--curve {index}: the bundle has {n_cool} cooling curve(s) and "
-                              f"{n_zth} zth table(s) (valid: 0..{n_cool + n_zth - 1})")
-    if index < n_cool:
-        c = bundle.cooling[index]
-        tref, tref_steady = bundle.cooling_reference_c(index)
-        curve = ZthCurve.from_cooling(c.t_s, bundle.cooling_tj_c(index), c.power_w,
-                                      c.tj_steady_c, tref, tref_steady,
-                                      label=c.file or f"cooling[{index}]")
-        held = True  # Rth measured from the steady state (eq. 1)
-    else:
-        z = bundle.zth[index - n_cool]
-        if z.normalized and z.rth_k_per_w is None and rth is None:
-            raise DataFormatError(f"{path}: zth table {z.file}: normalized r needs rth_k_per_w "
-                                  f"(in bundle.json or --rth)")
-        if rth is not None and z.rth_k_per_w is None:
-            from dataclasses import replace
-
-            z = replace(z, rth_k_per_w=rth)
-        curve = ZthCurve.from_table(z, label=z.file or f"zth[{index - n_cool}]")
-        held = z.rth_k_per_w is not None
-    return curve, held or rth is not None, bundle.reference
+    add_source_arguments(parser)
 
 
 def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
@@ -134,22 +86,20 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
 def run(args: argparse.Namespace) -> int:
     from .. import __version__
     from ..fit import fit_model
+    from ..sources import early_time_json
 
     source = Path(args.source)
     if args.effect:
         return _run_with_effects(args, source)
-    if source.is_dir():
-        curve, held, reference = _from_bundle(source, args.curve, args.rth)
-    elif source.exists():
-        curve, held, reference = _from_csv(source, args.rth)
-    else:
-        raise DataFormatError(f"{source}: no such file or bundle directory")
+    src = read_source_args(args)
+    curve = src.curve(args.curve, early_window_s=args.early_window)
+    held, reference = src.rth_held(args.curve) or args.rth is not None, src.bundle.reference
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
         max_order=args.max_order, reference=reference,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
-                    "curve": getattr(curve, "label", "") or str(source)})
+                    "curve": curve.label or str(source), "early_time": early_time_json(curve)})
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
     out = model.save(args.output)
@@ -158,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
 
         fig7(result, args.plot, title=getattr(curve, "label", None) or source.name)
     if not args.quiet:
+        if curve.early is not None:
+            print(f"early time: {curve.early}")
         print(result)
         print(f"wrote {out}" + (f" and {args.plot}" if args.plot else ""))
     if not result.converged:  # pragma: no cover - fit_foster raises instead

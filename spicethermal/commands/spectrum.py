@@ -1,10 +1,11 @@
 """``spicethermal spectrum SOURCE [-o FIG.png] [--json]``: the time-constant spectrum (NID).
 
-SOURCE is a measurement bundle directory (its first cooling curve with the early-time
-correction, or first ``zth`` table; ``--curve`` picks another), a Zth CSV file (``t_s`` and
-``zth_k_per_w``), a PyRth transient ``.txt`` file (time and sensor voltage, converted through
-``--calibration CSV`` — default: the calibration of the PyRth MOSFET files — at ``--power W``,
-default 1 W) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco`` beside it).
+SOURCE is any curve source (:mod:`spicethermal.sources`): a measurement bundle directory (its
+first cooling curve with the early-time correction, or first ``zth`` table; ``--curve`` picks
+another), a Zth CSV file (``t_s`` and ``zth_k_per_w``), a cooling CSV, a PyRth transient
+``.txt`` file (time and sensor voltage, converted through ``--calibration CSV`` or
+``--k-factor MV_PER_K`` anchored with ``--tref DEGC`` — there is no default — at ``--power W``,
+default 1 W nominal) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco`` beside it).
 
 Prints the spectrum's summary, its peaks and the lumped Foster ladder; ``--json`` prints the
 spectrum (``spicethermal-spectrum/1``: ``tau_s``, ``r_density_k_per_w`` in K/W per unit ln τ,
@@ -16,10 +17,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
+import sys
 from typing import TYPE_CHECKING, Any
 
-from ..errors import DataFormatError
+from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import count as _count
 from ._types import positive as _positive
 
@@ -34,16 +35,9 @@ HELP = "time-constant spectrum of a Zth curve by deconvolution (NID, as T3Ster a
 
 
 
-def add_source_arguments(parser: argparse.ArgumentParser) -> None:
+def add_spectrum_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``spectrum`` and ``structure``: how to read SOURCE and deconvolve."""
-    parser.add_argument("--curve", type=int, default=0, metavar="INDEX",
-                        help="which curve of a bundle: cooling curves first, then zth tables "
-                             "(default 0)")
-    parser.add_argument("--calibration", metavar="CSV",
-                        help="TSP calibration (temp_c, v_tsp_v) for a PyRth .txt source "
-                             "(default: the PyRth MOSFET files' calibration)")
-    parser.add_argument("--power", type=_positive, metavar="W",
-                        help="heating power step for a PyRth .txt source (default 1 W)")
+    add_source_arguments(parser)
     parser.add_argument("--method", choices=("bayes", "nnls"), default="bayes",
                         help="deconvolution: Bayesian iteration (default) or NNLS + Tikhonov "
                              "(L-curve)")
@@ -63,47 +57,17 @@ def spectrum_options(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
-def load_curve(source: str | Path, *, curve: int = 0, calibration: str | Path | None = None,
-               power_w: float | None = None) -> ZthCurve:
-    """The Zth curve of SOURCE: a bundle directory, a Zth CSV, a PyRth ``.txt`` or a T3Ster
-    ``.raw`` file (see the module docstring)."""
-    from dataclasses import replace
-
-    from ..curves import ZthCurve
-    from .fit import _from_bundle, _from_csv
-
-    path = Path(source)
-    if not path.exists():
-        raise DataFormatError(f"{path}: no such file or bundle directory")
-    if path.is_dir():
-        zc = _from_bundle(path, curve, None)[0]
-        return replace(zc, label=f"{path.name}/{zc.label}" if zc.label else path.name)
-    suffix = path.suffix.lower()
-    if suffix in (".txt", ".raw"):
-        from ..importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3ster
-
-        if suffix == ".raw":
-            bundle = read_t3ster(path)
-        else:
-            cal: Any = PYRTH_MOSFET_CALIBRATION
-            if calibration is not None:
-                from ..bundle import CalibrationTable, read_columns
-
-                cols = read_columns(calibration, ["temp_c", "v_tsp_v"],
-                                    label=Path(calibration).name)
-                cal = CalibrationTable(cols["temp_c"], cols["v_tsp_v"],
-                                       file=Path(calibration).name, rows=cols.rows)
-            bundle = read_pyrth(path, calibration=cal,
-                                power_w=1.0 if power_w is None else power_w)
-        (zc,) = ZthCurve.from_bundle(bundle)
-        return replace(zc, label=path.stem)
-    return _from_csv(path, None)[0]
+def load_curve(args: argparse.Namespace, source: str) -> ZthCurve:
+    """The Zth curve of ``source`` read with the shared options (:mod:`spicethermal.sources`);
+    what was assumed goes to stderr, the early-time correction too."""
+    curve = read_source_args(args, source).curve(args.curve, early_window_s=args.early_window)
+    if curve.early is not None:
+        print(f"{curve.label}: early time: {curve.early}", file=sys.stderr)
+    return curve
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("source", metavar="SOURCE",
-                        help="bundle directory, Zth CSV (t_s, zth_k_per_w), PyRth .txt or "
-                             "T3Ster .raw")
+    parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("-o", "--output", metavar="FIG.png",
                         help="write the figure (Zth and model, derivative, spectrum)")
     parser.add_argument("--json", action="store_true", help="print the spectrum as JSON")
@@ -113,14 +77,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="lump into exactly N Foster stages instead (Ward merging)")
     parser.add_argument("--model", metavar="MODEL.json",
                         help="write the lumped Foster ladder as a model file")
-    add_source_arguments(parser)
+    add_spectrum_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..spectrum import time_constant_spectrum
 
-    curve = load_curve(args.source, curve=args.curve, calibration=args.calibration,
-                       power_w=args.power)
+    curve = load_curve(args, args.source)
     spec = time_constant_spectrum(curve, **spectrum_options(args))
     foster = spec.to_foster(args.stages_per_decade, order=args.order)
     if args.output:
@@ -136,7 +99,10 @@ def run(args: argparse.Namespace) -> int:
             "method": spec.method, "resolution_decades": spec.resolution_decades}
         ).save(args.model)
     if args.json:
+        from ..sources import early_time_json
+
         out = spec.to_dict()
+        out["early_time"] = early_time_json(curve)
         out["foster"] = {"r_k_per_w": list(foster.r), "tau_s": list(foster.tau)}
         print(json.dumps(out))
         return 0

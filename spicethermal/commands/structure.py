@@ -22,7 +22,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from .spectrum import _positive, add_source_arguments, load_curve, spectrum_options
+from ._source import SOURCE_HELP
+from .spectrum import _positive, add_spectrum_arguments, load_curve, spectrum_options
 
 NAME = "structure"
 HELP = "cumulative and differential structure functions; two sources: where they separate"
@@ -30,8 +31,7 @@ HELP = "cumulative and differential structure functions; two sources: where they
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("sources", metavar="SOURCE", nargs="+",
-                        help="one or two sources: bundle directory, Zth CSV, PyRth .txt, "
-                             "T3Ster .raw")
+                        help=f"one or two sources: {SOURCE_HELP}")
     parser.add_argument("-o", "--output", metavar="FIG.png",
                         help="write the figure (cumulative and differential structure "
                              "functions, separation marked)")
@@ -41,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Foster stages per decade of τ from the spectrum (default 10)")
     parser.add_argument("--threshold", type=_positive, default=None, metavar="DECADES",
                         help="separation threshold on |Δ log10 ΣC| (default 0.05)")
-    add_source_arguments(parser)
+    add_spectrum_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,8 +53,7 @@ def run(args: argparse.Namespace) -> int:
         raise DataFormatError(f"structure takes one or two sources, got {len(args.sources)}")
     functions = []
     for source in args.sources:
-        curve = load_curve(source, curve=args.curve, calibration=args.calibration,
-                           power_w=args.power)
+        curve = load_curve(args, source)
         spec = time_constant_spectrum(curve, **spectrum_options(args))
         functions.append(StructureFunction.from_spectrum(spec, args.stages_per_decade))
     sep = None

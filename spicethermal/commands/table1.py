@@ -1,11 +1,12 @@
 """``spicethermal table1 SOURCE [--json]``: the paper's Table 1 for a measured curve.
 
-SOURCE is a bundle directory (its first cooling curve, converted to Zth(t) with the
-early-time correction, or its first zth table; ``--curve`` picks another), a CSV file — a
-Zth curve (``t_s`` and ``zth_k_per_w``, or ``r``) or a cooling curve (``t_s``, ``tj_c``,
-optional ``tref_c``; ``--tref-steady`` when it has no ``tref_c``) — or a PyRth ``.txt`` /
-T3Ster ``.raw`` transient. The measured r(t) is compared with the MUR880E datasheet points
-shipped with the package (or ``--datasheet`` CSV with ``t_s`` and ``r``, and ``--rth``).
+SOURCE is any curve source (:mod:`spicethermal.sources`): a bundle directory (its first
+cooling curve, converted to Zth(t) with the early-time correction, or its first zth table;
+``--curve`` picks another), a Zth CSV (``t_s`` and ``zth_k_per_w``, or ``r``), a cooling CSV
+(``t_s``, ``tj_c``, optional ``tref_c``; ``--tref`` when it has no ``tref_c``), or a PyRth
+``.txt`` / T3Ster ``.raw`` transient. The measured r(t) is compared with the datasheet named
+by ``--datasheet``: a CSV of ``t_s`` and ``r`` (with ``--rth``), or ``mur880e`` for the
+MUR880E points of the paper shipped with the package. There is no default device.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import json
 from pathlib import Path
 
 from ..errors import DataFormatError
+from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import number as _number
 from ._types import positive as _positive
 
@@ -36,83 +38,50 @@ def _mask(text: str) -> float | str | None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("source", metavar="SOURCE",
-                        help="bundle directory, Zth or cooling CSV, PyRth .txt or T3Ster .raw")
+    parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--curve", type=int, default=0, metavar="INDEX",
-                        help="which curve of a bundle: cooling curves first, then zth tables")
-    parser.add_argument("--power", type=_positive, default=1.0, metavar="W",
-                        help="power before the cut for a cooling CSV (r(t) does not depend "
-                             "on it; default 1)")
     parser.add_argument("--tj-steady", type=_number, metavar="DEGC",
                         help="junction temperature at the cut for a cooling CSV (default: "
                              "sqrt(t) extrapolation)")
-    parser.add_argument("--tref-steady", type=_number, metavar="DEGC",
-                        help="reference temperature for a cooling CSV without tref_c")
+    parser.add_argument("--tref", "--tref-steady", type=_number, dest="tref", metavar="DEGC",
+                        help="reference temperature of a cooling CSV without tref_c, or the "
+                             "temperature at the end of a raw record (anchors the calibration)")
     parser.add_argument("--mask", type=_mask, default="auto", metavar="S|auto|none",
                         help="electrical transient to mask, s (default: auto-detect)")
-    parser.add_argument("--datasheet", metavar="CSV",
-                        help="datasheet r(t) points (t_s, r); default: the MUR880E of the paper")
+    parser.add_argument("--datasheet", metavar="CSV|mur880e",
+                        help="datasheet r(t) points (t_s, r), or mur880e: the paper's MUR880E "
+                             "(required: no device is assumed)")
     parser.add_argument("--rth", type=_positive, metavar="K_PER_W",
-                        help="datasheet Rth for --datasheet (default 1.51, the MUR880E)")
+                        help="datasheet Rth for a --datasheet CSV with r, also the Rth of a "
+                             "normalized SOURCE")
     parser.add_argument("--normalize", choices=("measured", "datasheet"), default="measured",
                         help="divide Zth by the measured Rth (eq. 2, default) or the datasheet's")
-
-
-def _curve(args: argparse.Namespace, rth_default: float):
-    from ..bundle import Bundle, read_columns
-    from ..curves import ZthCurve
-    from ..importers import read_pyrth, read_t3ster
-
-    path = Path(args.source)
-    options = {"mask_s": args.mask}
-    if path.is_dir() or path.name == "bundle.json":
-        return Bundle.read(path), options
-    if not path.exists():
-        raise DataFormatError(f"{path}: no such file or bundle directory")
-    suffix = path.suffix.lower()
-    if suffix == ".raw":
-        return read_t3ster(path), options
-    if suffix == ".txt":
-        return read_pyrth(path), options
-    cols = read_columns(path, ["t_s", ("zth_k_per_w", "r", "tj_c", "v_tsp_v")],
-                        ["tref_c"])
-    if "zth_k_per_w" in cols or "r" in cols:
-        return ZthCurve.from_points(cols["t_s"], cols.get("zth_k_per_w"), r=cols.get("r"),
-                                    rth_k_per_w=rth_default if "r" in cols else None,
-                                    label=path.name), options
-    if "tj_c" not in cols:
-        raise DataFormatError(f"{path}: raw v_tsp_v needs a calibration; put the curve in a "
-                              f"bundle with one")
-    if "tref_c" not in cols and args.tref_steady is None:
-        raise DataFormatError(f"{path}: a cooling curve needs a reference: a tref_c column "
-                              f"or --tref-steady")
-    return ZthCurve.from_cooling(cols["t_s"], cols["tj_c"], args.power, args.tj_steady,
-                                 cols.get("tref_c"), args.tref_steady, mask_s=args.mask,
-                                 label=path.name), options
+    add_source_arguments(parser, rth=False, tref=False)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bundle import Bundle
-    from ..curves import ZthCurve
     from ..datasheet import Datasheet, mur880e, read_zth_points, table1
+    from ..sources import early_time_json
 
-    if args.datasheet:
-        rth = args.rth if args.rth is not None else 1.51
-        pts = read_zth_points(args.datasheet, rth_k_per_w=rth)
-        ds = Datasheet(Path(args.datasheet).stem, pts.t_s, pts.r, pts.rth_k_per_w)
-    else:
+    if args.datasheet is None:
+        raise DataFormatError("give --datasheet CSV (t_s, r, with --rth) or --datasheet mur880e "
+                              "(the paper's MUR880E): no device is assumed")
+    if args.datasheet.lower() == "mur880e":
         ds = mur880e()
-    source, options = _curve(args, ds.rth_k_per_w)
-    if isinstance(source, Bundle):
-        curves = ZthCurve.from_bundle(source, **options)
-        if not 0 <= args.curve < len(curves):
-            raise DataFormatError(f"{args.source}: --curve {args.curve} does not exist (the "
-                                  f"bundle has {len(curves)} curves)")
-        source = curves[args.curve]
-    result = table1(source, ds, normalize=args.normalize)
-    if args.json:
-        print(json.dumps(result.to_json(), indent=2))
     else:
+        pts = read_zth_points(args.datasheet, rth_k_per_w=args.rth)
+        ds = Datasheet(Path(args.datasheet).stem, pts.t_s, pts.r, pts.rth_k_per_w)
+    args.rth = ds.rth_k_per_w  # a normalized SOURCE is scaled by the datasheet's Rth
+    src = read_source_args(args)
+    curve = src.curve(args.curve, early_window_s=args.early_window, mask_s=args.mask,
+                      tj_steady_c=args.tj_steady)
+    result = table1(curve, ds, normalize=args.normalize)
+    if args.json:
+        doc = result.to_json()
+        doc["early_time"] = early_time_json(curve)
+        print(json.dumps(doc, indent=2))
+    else:
+        if curve.early is not None:
+            print(f"early time: {curve.early}")
         print(result.format())
     return 0
