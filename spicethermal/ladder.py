@@ -9,11 +9,15 @@ resistance (K/W) a resistance, heat capacity (J/K) a capacitance.
 * :class:`Cauer` — capacitors to the reference, resistors in a chain from the junction. Its
   nodes are physical (die, solder, case, ...), which is the form to couple to other networks.
 
-Foster -> Cauer runs the continued-fraction expansion in exact rational arithmetic (up to 12
-stages) or the Lanczos tridiagonalisation in checked extended precision (above); Cauer ->
-Foster solves the tridiagonal eigenproblem in extended precision (mpmath). Both hold for any
-order the fitter or a structure function produces (round trips within 1e-15 at order 20 over
-8 decades of time constants).
+Both conversions go through the bidiagonal factor of the Cauer network
+(:mod:`spicethermal.bidiagonal`): the ladder's conductance matrix is ``G = Aᵀ R⁻¹ A`` with ``A``
+bidiagonal, so its modes are the squared singular values of ``B = R^-1/2 A C^-1/2``. Cauer ->
+Foster is LAPACK's bidiagonal SVD (high relative accuracy in double precision, O(n²): 0.04 s at
+1000 stages). Foster -> Cauer is the inverse problem, ill-conditioned by nature: exact rational
+arithmetic up to :data:`RATIONAL_MAX_ORDER` stages, above that Golub–Kahan bidiagonalisation in
+double precision, accepted only if converting back reproduces every R and τ within
+:data:`ROUND_TRIP_RTOL`; otherwise the Lanczos recursion in checked extended precision (up to
+:data:`EXTENDED_MAX_ORDER` stages), else a one-line refusal.
 """
 
 from __future__ import annotations
@@ -26,10 +30,15 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+from .bidiagonal import bidiagonalize, singular_values
 from .errors import DataFormatError
 
 #: Largest order :meth:`Foster.to_cauer` converts by exact rational arithmetic (auto method).
 RATIONAL_MAX_ORDER = 12
+#: Largest relative error in any R or τ a Foster -> Cauer conversion may show when converted back.
+ROUND_TRIP_RTOL = 1e-9
+#: Largest order converted in extended precision when double precision is not enough.
+EXTENDED_MAX_ORDER = 100
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -142,7 +151,7 @@ class Foster(_Ladder):
 
     @classmethod
     def from_cauer(cls, cauer: Cauer) -> Foster:
-        """Exact conversion of a Cauer network (extended-precision eigenproblem)."""
+        """Exact conversion of a Cauer network (bidiagonal SVD, high relative accuracy)."""
         return cauer.to_foster()
 
     @property
@@ -157,17 +166,43 @@ class Foster(_Ladder):
         """Exact Foster -> Cauer conversion.
 
         ``rational``: the continued fraction in exact rational arithmetic (slow beyond
-        ~15 stages: 2 s at order 20, a minute at 40). ``lanczos``: the Lanczos (Stieltjes)
-        tridiagonalisation of the spectral measure in extended precision, checked against
-        the Foster impedance at every pole and redone with more digits if it is off by more
-        than 1e-9; it agrees with the rational result to 1e-13. ``auto``: rational up to
-        :data:`RATIONAL_MAX_ORDER` stages, Lanczos above.
+        ~15 stages: 2 s at order 20, a minute at 40). ``bidiagonal``: Golub–Kahan
+        bidiagonalisation in double precision (0.005 s at 200 stages, 0.2 s at 1000).
+        ``lanczos``: the Lanczos (Stieltjes) tridiagonalisation of the spectral measure in
+        extended precision, checked against the Foster impedance at every pole and redone with
+        more digits if it is off by more than 1e-9. ``auto``: rational up to
+        :data:`RATIONAL_MAX_ORDER` stages; above, bidiagonal if converting the result back
+        reproduces every R and τ within :data:`ROUND_TRIP_RTOL`, else Lanczos up to
+        :data:`EXTENDED_MAX_ORDER` stages, else :class:`DataFormatError`.
+
+        >>> f = Foster.from_tau([1.0, 2.0, 3.0], [1e-3, 1e-1, 10.0])
+        >>> a, b = f.to_cauer("bidiagonal"), f.to_cauer("rational")
+        >>> bool(np.allclose(a.r + a.c, b.r + b.c, rtol=1e-12, atol=0))
+        True
         """
         if method == "rational" or (method == "auto" and self.order <= RATIONAL_MAX_ORDER):
             return Cauer(*_foster_to_cauer(self.r, self.tau))
-        if method in ("auto", "lanczos"):
+        if method == "bidiagonal":
+            return _foster_to_cauer_bidiagonal(self)
+        if method == "lanczos":
             return _foster_to_cauer_lanczos(self)
-        raise DataFormatError(f"method {method!r}: expected auto, rational or lanczos")
+        if method != "auto":
+            raise DataFormatError(f"method {method!r}: expected auto, rational, bidiagonal or "
+                                  f"lanczos")
+        try:
+            cauer = _foster_to_cauer_bidiagonal(self)
+            error = round_trip_error(self, cauer)
+        except (ArithmeticError, DataFormatError):
+            error = math.inf
+        if error <= ROUND_TRIP_RTOL:
+            return cauer
+        if self.order > EXTENDED_MAX_ORDER:
+            got = f"only to {error:.1e}" if math.isfinite(error) else "not at all"
+            raise DataFormatError(
+                f"Foster -> Cauer at order {self.order}: double precision reproduces the ladder "
+                f"{got} (limit {ROUND_TRIP_RTOL:g}) and extended precision is limited to "
+                f"{EXTENDED_MAX_ORDER} stages: lump it to fewer stages")
+        return _foster_to_cauer_lanczos(self)
 
 
 @dataclass(frozen=True, init=False)
@@ -222,7 +257,7 @@ class Cauer(_Ladder):
         return _cached_foster(self)
 
     def to_foster(self) -> Foster:
-        """Exact Cauer -> Foster conversion (tridiagonal eigenproblem in extended precision)."""
+        """Exact Cauer -> Foster conversion (bidiagonal SVD, high relative accuracy)."""
         return _cached_foster(self)
 
     def state_matrices(self) -> tuple[NDArray, NDArray]:
@@ -367,10 +402,6 @@ def _foster_to_cauer_lanczos(ladder: Foster) -> Cauer:
                           f"(time constants too close?)")
 
 
-def _dps_for(n: int) -> int:
-    return 40 + 6 * n
-
-
 def _cached_foster(cauer: Cauer) -> Foster:
     cached = cauer.__dict__.get("_foster_cache")
     if cached is None:
@@ -380,27 +411,56 @@ def _cached_foster(cauer: Cauer) -> Foster:
     return cached
 
 
-def _cauer_to_foster(r: Sequence[float], c: Sequence[float]) -> tuple[list[float], list[float]]:
+def _cauer_to_foster(r: Sequence[float], c: Sequence[float]) -> tuple[NDArray, NDArray]:
     """Poles and residues of the Cauer input impedance.
 
-    With ``C dθ/dt = -G θ + e0 P`` and ``M = C^-1/2 G C^-1/2 = V Λ Vᵀ`` (symmetric tridiagonal),
-    ``Z(s) = Σ v0k² / (C0 (s + λk))``, so ``τk = 1/λk`` and ``rk = v0k² / (C0 λk)``.
+    With ``C dθ/dt = -G θ + e0 P``, ``G = Aᵀ R⁻¹ A`` and ``B = R^-1/2 A C^-1/2 = U Σ Vᵀ``
+    (upper bidiagonal: ``B_ii = 1/√(r_i c_i)``, ``B_i,i+1 = -1/√(r_i c_i+1)``),
+    ``Z(s) = Σ v0k² / (C0 (s + σk²))``, so ``τk = 1/σk²`` and ``rk = v0k² τk / C0``.
     """
-    import mpmath
+    rr, cc = np.asarray(r, dtype=float), np.asarray(c, dtype=float)
+    sigma, v0 = singular_values(1 / np.sqrt(rr * cc), 1 / np.sqrt(rr[:-1] * cc[1:]))
+    tau = 1 / sigma**2
+    return v0**2 * tau / cc[0], tau
 
-    n = len(r)
-    with mpmath.workdps(_dps_for(n)):
-        rs = [mpmath.mpf(x) for x in r]
-        cs = [mpmath.mpf(x) for x in c]
-        m = mpmath.zeros(n, n)
-        for i in range(n):
-            g = 1 / rs[i] + (1 / rs[i - 1] if i > 0 else 0)
-            m[i, i] = g / cs[i]
-            if i + 1 < n:
-                off = -1 / (rs[i] * mpmath.sqrt(cs[i] * cs[i + 1]))
-                m[i, i + 1] = off
-                m[i + 1, i] = off
-        lam, vec = mpmath.eigsy(m)
-        taus = [1 / lam[k] for k in range(n)]
-        res = [vec[0, k] ** 2 / (cs[0] * lam[k]) for k in range(n)]
-        return [float(x) for x in res], [float(x) for x in taus]
+
+def _foster_to_cauer_bidiagonal(ladder: Foster) -> Cauer:
+    """Cauer elements from the bidiagonal whose singular values are ``1/√τ`` and whose right
+    vectors start with ``√(w_k / Σw)``, ``w_k = r_k/τ_k`` (inverse of :func:`_cauer_to_foster`)."""
+    r, tau = np.asarray(ladder.r), np.asarray(ladder.tau)
+    w = r / tau
+    total = float(w.sum())
+    d, e = bidiagonalize(1 / np.sqrt(tau), np.sqrt(w / total))
+    rs, cs = np.empty(ladder.order), np.empty(ladder.order)
+    cs[0] = 1 / total
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # Cauer() rejects
+        for i in range(ladder.order):
+            rs[i] = 1 / (d[i] ** 2 * cs[i])
+            if i + 1 < ladder.order:
+                cs[i + 1] = 1 / (rs[i] * e[i] ** 2)
+    return Cauer(rs, cs)
+
+
+def round_trip_error(foster: Foster, cauer: Cauer) -> float:
+    """Largest relative difference in any R or τ between ``foster`` and ``cauer`` converted back.
+
+    Parameters
+    ----------
+    foster : the original Foster ladder.
+    cauer : its Cauer equivalent.
+
+    Returns
+    -------
+    float : ``max |x' / x - 1|`` over all stage resistances and time constants.
+
+    Examples
+    --------
+    >>> f = Foster.from_tau([1.0, 2.0], [1e-3, 1.0])
+    >>> round_trip_error(f, f.to_cauer()) < 1e-12
+    True
+    """
+    if cauer.order != foster.order:
+        return math.inf
+    back = cauer.to_foster()
+    return float(max(np.max(np.abs(np.divide(back.r, foster.r) - 1)),
+                     np.max(np.abs(np.divide(back.tau, foster.tau) - 1))))

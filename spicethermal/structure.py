@@ -19,9 +19,9 @@ the structure function up to the interface and separate beyond it (JESD51-14 tra
 interface method). :func:`separation` finds that point; see its docstring for the
 definition.
 
-The Cauer equivalent is exact at any order (:meth:`spicethermal.ladder.Foster.to_cauer`:
-rational continued fraction up to 12 stages, checked extended-precision Lanczos above, as a
-structure function wants 50-150 stages).
+The Cauer equivalent is exact at any order a structure function wants (50-150 stages, and up to
+1000: :meth:`spicethermal.ladder.Foster.to_cauer`, rational continued fraction up to 12 stages,
+bidiagonal inverse SVD checked by its round trip above).
 
 >>> from spicethermal.ladder import Cauer
 >>> sf = StructureFunction.from_ladder(Cauer([1.0, 2.0], [1e-3, 1.0]))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
+from spicethermal.ladder import ROUND_TRIP_RTOL, Cauer, Foster, round_trip_error
 
 
 def test_single_stage_closed_forms():
@@ -66,7 +66,7 @@ def test_two_stage_cauer_by_hand():
     np.testing.assert_allclose(z_cauer, f.impedance(s.imag), rtol=1e-13)
 
 
-@pytest.mark.parametrize("order", [1, 2, 3, 5, 8, 12, 16, 20])
+@pytest.mark.parametrize("order", [1, 2, 3, 5, 8, 12, 16, 20, 50, 200])
 def test_round_trip_is_exact_over_eight_decades(order):
     rng = np.random.default_rng(order)
     tau = np.logspace(-5, 3, order) * rng.uniform(0.7, 1.3, order) if order > 1 else [1e-2]
@@ -90,3 +90,40 @@ def test_cauer_responses_go_through_foster(actuator):
     np.testing.assert_allclose(cauer.zth(t), actuator.zth(t), rtol=1e-12)
     assert Foster.from_cauer(cauer) == cauer.to_foster()
     np.testing.assert_allclose(cauer.time_constants(), actuator.time_constants(), rtol=1e-12)
+
+
+@pytest.mark.parametrize("order", [2, 6, 13, 20])
+def test_bidiagonal_conversion_agrees_with_exact_rationals(order):
+    rng = np.random.default_rng(10 + order)
+    f = Foster.from_tau(rng.uniform(0.05, 20.0, order),
+                        np.logspace(-5, 3, order) * rng.uniform(0.8, 1.2, order))
+    exact = f.to_cauer("rational")
+    fast = f.to_cauer("bidiagonal")
+    np.testing.assert_allclose(fast.r, exact.r, rtol=1e-11, atol=0)
+    np.testing.assert_allclose(fast.c, exact.c, rtol=1e-11, atol=0)
+
+
+def test_cauer_to_foster_two_stage_closed_form():
+    # Cauer r = (1, 1), c = (1, 1): C dθ/dt = -G θ + e0 P, G = [[1, -1], [-1, 2]], so
+    # Z(s) = e0ᵀ (sC + G)⁻¹ e0 = (s + 2) / (s² + 3 s + 1), poles -λ with λ = (3 ± √5)/2,
+    # residues (2 - λ) / (3 - 2 λ) = r/τ = r λ
+    f = Cauer([1.0, 1.0], [1.0, 1.0]).to_foster()
+    lam = np.array([(3 + 5**0.5) / 2, (3 - 5**0.5) / 2])
+    res = (2 - lam) / (3 - 2 * lam)
+    np.testing.assert_allclose(f.tau, 1 / lam, rtol=1e-15)
+    np.testing.assert_allclose(f.r, res / lam, rtol=1e-14)
+
+
+def test_lost_precision_is_a_one_line_refusal_naming_the_limit():
+    n = 400  # 400 stages within a factor 2 of time constant: no double-precision Cauer exists
+    f = Foster.from_tau(np.ones(n), np.linspace(1.0, 2.0, n))
+    with pytest.raises(DataFormatError, match=r"order 400: .*limited to 100 stages") as err:
+        f.to_cauer()
+    assert "\n" not in str(err.value)
+
+
+def test_round_trip_error_measures_the_worst_stage():
+    f = Foster.from_tau([1.0, 2.0], [1e-3, 1.0])
+    off = Cauer(f.to_cauer().r, np.multiply(f.to_cauer().c, [1.0, 1.0 + 1e-6]))
+    assert 1e-7 < round_trip_error(f, off) < 1e-5
+    assert round_trip_error(f, f.to_cauer()) <= ROUND_TRIP_RTOL
