@@ -824,9 +824,10 @@ class Bundle:
         written and fsynced into a new directory beside ``path``, which then replaces
         ``path`` in one step (:func:`spicethermal.files.replace_dir`): at every instant
         ``path`` holds the complete old or the complete new bundle, and leftovers of an
-        interrupted write are removed by the next one. Files of the old bundle that its
-        manifest does not list (an operator's notes, the raw logs) are kept (hard links);
-        a data file of the new bundle never overwrites one of them. An existing bundle is
+        interrupted write are removed by the next one. Files of the old bundle that the new
+        one does not list (an operator's notes, the raw logs, a superseded data set) are
+        kept (hard links): a write never deletes a file, and a data file of the new bundle
+        replaces only a file that the old manifest listed. An existing bundle is
         replaced (unless ``overwrite`` is false); an existing directory that is not a bundle
         is never touched.
         """
@@ -845,9 +846,11 @@ class Bundle:
                                          and not (path / MANIFEST).exists()):
                     raise DataFormatError(f"{path}: exists and is not a bundle; not replacing "
                                           f"it")
-                listed = manifest_files(path) | {MANIFEST}
-                keep = sorted(n for n in os.listdir(path) if n not in listed)
-                clash = sorted(set(keep) & {n for n, _ in named})
+                ours = manifest_files(path) | {MANIFEST}
+                new = {n for n, _ in named} | {MANIFEST}
+                entries = os.listdir(path)
+                keep = sorted(n for n in entries if n not in new)  # nothing is deleted
+                clash = sorted(n for n in entries if n in new and n not in ours)
                 if clash:
                     raise DataFormatError(f"{path / clash[0]}: exists and is not part of the "
                                           f"bundle; not overwriting it")

@@ -73,7 +73,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
     Returns a :class:`DemoResult` naming the report, the ``.lib`` files and a summary.
     """
     from . import plots, report
-    from .bench.client import run_bench
+    from .bench.session import run_bench
     from .bundle import Bundle
     from .compare import compare
     from .curves import ZthCurve
