@@ -314,33 +314,32 @@ def open_bounded(path: str | os.PathLike, label: object = None, *,
     """
     limit = MAX_BYTES if max_bytes is None else max_bytes
     name = label if label is not None else path
+    if "\0" in os.fspath(path):
+        raise DataFormatError(f"{where(name)}the file name contains a NUL character")
+    real = os.path.realpath(path)
+    if root is not None:
+        top = os.path.realpath(root)
+        if os.path.commonpath([top, real]) != top:
+            raise DataFormatError(f"{name}: leads outside the bundle (a symbolic link?); "
+                                  f"only files inside the bundle are read")
     try:
-        real = os.path.realpath(path)
-        if root is not None:
-            top = os.path.realpath(root)
-            if os.path.commonpath([top, real]) != top:
-                raise DataFormatError(f"{name}: leads outside the bundle (a symbolic link?); "
-                                      f"only files inside the bundle are read")
-        flags = os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0) | os.O_CLOEXEC
-        fd = os.open(real, flags)
-    except ValueError:  # an embedded NUL character
-        raise DataFormatError(f"{where(name)}the file name contains a NUL character") from None
+        fd = os.open(real, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0)
+                     | os.O_CLOEXEC)
     except FileNotFoundError:
         raise DataFormatError(f"{name}: file not found") from None
-    except IsADirectoryError:
-        raise DataFormatError(f"{name}: is a directory, expected a file") from None
     except OSError as exc:
         raise DataFormatError(f"{name}: cannot open ({exc.strerror})") from None
+    info = os.fstat(fd)
+    if not stat.S_ISREG(info.st_mode):
+        os.close(fd)
+        what = "is a directory" if stat.S_ISDIR(info.st_mode) else "not a regular file (a " \
+            "pipe, socket or device)"
+        raise DataFormatError(f"{name}: {what}, expected a file; not read")
+    if info.st_size > limit:
+        os.close(fd)
+        raise DataFormatError(f"{name}: {info.st_size} bytes, above the limit of {limit} "
+                              f"bytes (spicethermal.files.MAX_BYTES)")
     with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(fd)
-        if stat.S_ISDIR(info.st_mode):
-            raise DataFormatError(f"{name}: is a directory, expected a file")
-        if not stat.S_ISREG(info.st_mode):
-            raise DataFormatError(f"{name}: not a regular file (a pipe, socket or device); "
-                                  f"not read")
-        if info.st_size > limit:
-            raise DataFormatError(f"{name}: {info.st_size} bytes, above the limit of {limit} "
-                                  f"bytes (spicethermal.files.MAX_BYTES)")
         data = handle.read(limit + 1)
     if len(data) > limit:
         raise DataFormatError(f"{name}: above the limit of {limit} bytes "
