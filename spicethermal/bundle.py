@@ -50,6 +50,8 @@ if TYPE_CHECKING:  # pragma: no cover
 FORMAT = "spicethermal-bundle/1"
 MANIFEST = "bundle.json"
 ABSOLUTE_ZERO_C = -273.15
+#: Hottest plausible reading (degC): a reading above it is a unit or file error, not a device.
+MAX_TEMPERATURE_C = 2000.0
 
 #: Known columns: name -> (family prefix used to spot a wrong unit, what it means).
 COLUMNS: dict[str, tuple[str, str]] = {
@@ -329,13 +331,19 @@ def check_times(t_s: NDArray, file: str, rows: ArrayLike | None = None,
 
 
 def check_temperatures(values: NDArray, file: str, rows: ArrayLike | None, column: str) -> None:
-    """Temperatures in degC must not lie below absolute zero."""
+    """Temperatures in degC must lie between absolute zero and :data:`MAX_TEMPERATURE_C`."""
     rr = _rows_for(values.size, rows)
     bad = np.flatnonzero(values < ABSOLUTE_ZERO_C)
     if bad.size:
         i = bad[0]
         raise DataFormatError(f"{where(file, int(rr[i]), column)}{float(values[i])!r} degC "
                               f"is below absolute zero")
+    hot = np.flatnonzero(values > MAX_TEMPERATURE_C)
+    if hot.size:
+        i = hot[0]
+        raise DataFormatError(f"{where(file, int(rr[i]), column)}{float(values[i])!r} degC is "
+                              f"above {MAX_TEMPERATURE_C:g} degC, hotter than any device "
+                              f"survives (silicon melts at 1414 degC)")
 
 
 def _check_range(values: NDArray, file: str, rows: ArrayLike | None, column: str, *,
@@ -366,6 +374,9 @@ def _scalar(value: Any, key: str, *, positive: bool = False, temperature: bool =
         raise DataFormatError(f"{key}: {v!r} must be >= 0")
     if temperature and v < ABSOLUTE_ZERO_C:
         raise DataFormatError(f"{key}: {v!r} degC is below absolute zero")
+    if temperature and v > MAX_TEMPERATURE_C:
+        raise DataFormatError(f"{key}: {v!r} degC is above {MAX_TEMPERATURE_C:g} degC, hotter "
+                              f"than any device survives")
     return v
 
 

@@ -68,10 +68,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(one_line(f"spicethermal {args.command}: error: {text}"), file=sys.stderr)
         return code
 
+    def warn(message, category, filename, lineno, file=None, line=None) -> None:
+        print(one_line(f"spicethermal {args.command}: warning: {message}"), file=sys.stderr)
+
     try:
         with warnings.catch_warnings():
             # numerical warnings would break the one-line contract; results are checked
             warnings.simplefilter("ignore", RuntimeWarning)
+            warnings.showwarning = warn
             return int(args._run(args) or 0)
     except SpiceThermalError as exc:
         return fail(str(exc))

@@ -10,7 +10,6 @@ current state), which needs a handful of periods instead of the thousands a cold
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,7 +20,7 @@ import numpy as np
 
 from .effects import DEVICE, Effect
 from .errors import DataFormatError, SimulationError
-from .files import atomic_write_text, read_json
+from .files import atomic_write_text, dumps_json, read_json
 from .ladder import Cauer, Foster
 from .pwm import PwmState, check_drive, steady_state
 
@@ -394,15 +393,18 @@ class ThermalModel:
         effects = data.get("effects", [])
         if not isinstance(effects, list):
             raise DataFormatError(f"{source}: 'effects' must be a list")
+        provenance = data.get("provenance", {}) or {}
+        if not isinstance(provenance, Mapping):
+            raise DataFormatError(f"{source}: 'provenance' must be an object")
         try:
             return cls(ladder, tuple(Effect.from_dict(e) for e in effects),
-                       data.get("reference", "ambient"), data.get("provenance", {}) or {})
+                       data.get("reference", "ambient"), provenance)
         except DataFormatError as exc:
             raise DataFormatError(f"{source}: {exc}") from None
 
     def save(self, path: str | Path) -> Path:
         """Write the ``spicethermal-model/1`` JSON file atomically."""
-        return atomic_write_text(path, json.dumps(self.to_dict(), indent=2) + "\n")
+        return atomic_write_text(path, dumps_json(self.to_dict(), indent=2) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> ThermalModel:

@@ -15,11 +15,11 @@ stages; ``--model MODEL.json`` writes that ladder as a model file for ``export``
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import DataFormatError
+from ..files import dumps_json
 from ._types import count as _count
 from ._types import positive as _positive
 
@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         out = spec.to_dict()
         out["foster"] = {"r_k_per_w": list(foster.r), "tau_s": list(foster.tau)}
-        print(json.dumps(out))
+        print(dumps_json(out))
         return 0
     print(spec)
     peaks = ", ".join(f"{x:.3g}" for x in spec.peaks_s())

@@ -11,10 +11,10 @@ shipped with the package (or ``--datasheet`` CSV with ``t_s`` and ``r``, and ``-
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..errors import DataFormatError
+from ..files import dumps_json
 from ._types import number as _number
 from ._types import positive as _positive
 
@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
         source = curves[args.curve]
     result = table1(source, ds, normalize=args.normalize)
     if args.json:
-        print(json.dumps(result.to_json(), indent=2))
+        print(dumps_json(result.to_json(), indent=2))
     else:
         print(result.format())
     return 0
