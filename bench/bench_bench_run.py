@@ -16,7 +16,7 @@ import pytest
 
 
 def run_once(url: str) -> tuple[float, dict]:
-    from spicethermal.bench.client import run_bench
+    from spicethermal.bench.session import run_bench
 
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()

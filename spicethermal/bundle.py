@@ -19,12 +19,10 @@ file, the header being line 1 of a file without comments) and the column, or the
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
 import shutil
-import tempfile
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -34,7 +32,16 @@ import numpy as np
 
 from .calibration import KFactor
 from .errors import DataFormatError, where
-from .files import read_json, read_text
+from .files import (
+    clean_leftovers,
+    dumps_json,
+    link_tree,
+    locked,
+    read_json,
+    read_text,
+    replace_dir,
+    temp_dir_for,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -49,6 +56,8 @@ FORMATS = ("spicethermal-bundle/1", FORMAT)
 CALIBRATION_KINDS = ("table", "k-factor", "polynomial")
 MANIFEST = "bundle.json"
 ABSOLUTE_ZERO_C = -273.15
+#: Hottest plausible reading (degC): a reading above it is a unit or file error, not a device.
+MAX_TEMPERATURE_C = 2000.0
 
 #: Known columns: name -> (family prefix used to spot a wrong unit, what it means).
 COLUMNS: dict[str, tuple[str, str]] = {
@@ -103,7 +112,8 @@ def _frozen(values: ArrayLike) -> NDArray:
 
 
 def read_columns(path: str | os.PathLike, required: Sequence[str | tuple[str, ...]] = (),
-                 optional: Sequence[str] = (), *, label: str | None = None) -> Columns:
+                 optional: Sequence[str] = (), *, label: str | None = None,
+                 root: str | os.PathLike | None = None) -> Columns:
     """Read a CSV table with a header row, SI units in column names, ``#`` comments allowed.
 
     Parameters
@@ -113,6 +123,7 @@ def read_columns(path: str | os.PathLike, required: Sequence[str | tuple[str, ..
     optional : column names read when present. Other columns are ignored, unless they look
         like a known column in another unit (``t_ms`` for ``t_s``), which is an error.
     label : how messages name the file (default: the path as given).
+    root : a directory the file must lie inside (see :func:`spicethermal.files.read_text`).
 
     Returns
     -------
@@ -136,7 +147,8 @@ def read_columns(path: str | os.PathLike, required: Sequence[str | tuple[str, ..
     """
     path = Path(path)
     name = label if label is not None else str(path)
-    return parse_columns(read_text(path, name, "CSV file"), required, optional, label=name)
+    return parse_columns(read_text(path, name, "CSV file", root=root), required, optional,
+                         label=name)
 
 
 def parse_columns(text: str, required: Sequence[str | tuple[str, ...]] = (),
@@ -256,6 +268,30 @@ def format_columns(columns: Mapping[str, ArrayLike], comments: Iterable[str] = (
     return "\n".join(lines) + "\n"
 
 
+def manifest_files(path: str | os.PathLike) -> set[str]:
+    """Names of the data files that the ``bundle.json`` of directory ``path`` lists (empty
+    when there is none or it cannot be parsed: then nothing counts as replaceable).
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / MANIFEST).write_text('{"cooling": [{"file": "c1.csv"}], "pwm": {"file": 3}}')
+    >>> manifest_files(d)
+    {'c1.csv'}
+    """
+    try:
+        doc = read_json(Path(path) / MANIFEST, root=path)
+    except DataFormatError:
+        return set()
+    names: set[str] = set()
+    if isinstance(doc, dict):
+        for key in ("calibration", "cooling", "pwm", "zth"):
+            entries = doc.get(key)
+            for entry in entries if isinstance(entries, list) else [entries]:
+                if isinstance(entry, dict) and isinstance(entry.get("file"), str):
+                    names.add(entry["file"])
+    return names
+
+
 # --------------------------------------------------------------------------------------------
 # checks shared by the tables (they name file, row and column)
 # --------------------------------------------------------------------------------------------
@@ -309,13 +345,19 @@ def check_times(t_s: NDArray, file: str, rows: ArrayLike | None = None,
 
 
 def check_temperatures(values: NDArray, file: str, rows: ArrayLike | None, column: str) -> None:
-    """Temperatures in degC must not lie below absolute zero."""
+    """Temperatures in degC must lie between absolute zero and :data:`MAX_TEMPERATURE_C`."""
     rr = _rows_for(values.size, rows)
     bad = np.flatnonzero(values < ABSOLUTE_ZERO_C)
     if bad.size:
         i = bad[0]
         raise DataFormatError(f"{where(file, int(rr[i]), column)}{float(values[i])!r} degC "
                               f"is below absolute zero")
+    hot = np.flatnonzero(values > MAX_TEMPERATURE_C)
+    if hot.size:
+        i = hot[0]
+        raise DataFormatError(f"{where(file, int(rr[i]), column)}{float(values[i])!r} degC is "
+                              f"above {MAX_TEMPERATURE_C:g} degC, hotter than any device "
+                              f"survives (silicon melts at 1414 degC)")
 
 
 def _check_range(values: NDArray, file: str, rows: ArrayLike | None, column: str, *,
@@ -346,6 +388,9 @@ def _scalar(value: Any, key: str, *, positive: bool = False, temperature: bool =
         raise DataFormatError(f"{key}: {v!r} must be >= 0")
     if temperature and v < ABSOLUTE_ZERO_C:
         raise DataFormatError(f"{key}: {v!r} degC is below absolute zero")
+    if temperature and v > MAX_TEMPERATURE_C:
+        raise DataFormatError(f"{key}: {v!r} degC is above {MAX_TEMPERATURE_C:g} degC, hotter "
+                              f"than any device survives")
     return v
 
 
@@ -673,7 +718,7 @@ class Bundle:
         label = str(manifest)
         if not manifest.exists():
             raise DataFormatError(f"{path}: not a bundle (no {MANIFEST})")
-        doc = read_json(manifest)
+        doc = read_json(manifest, root=path)
         if not isinstance(doc, dict):
             raise DataFormatError(f"{label}: must hold a JSON object")
         fmt = doc.get("format")
@@ -706,7 +751,8 @@ class Bundle:
             if Path(name).is_absolute() or ".." in Path(name).parts:
                 raise DataFormatError(f"{label}, key {key}.file: {name!r} must be a file "
                                       f"inside the bundle")
-            return name, read_columns(target, required, optional, label=str(target))
+            return name, read_columns(target, required, optional, label=str(target),
+                                      root=path)
 
         def num(entry: dict, key: str, name: str, **kw) -> float | None:
             return _scalar(entry.get(name), f"{label}, key {key}.{name}", **kw)
@@ -821,48 +867,59 @@ class Bundle:
             doc.setdefault(k, v)
         return doc
 
-    def write(self, path: str | os.PathLike, *, overwrite: bool = True) -> Path:
+    def write(self, path: str | os.PathLike, *, overwrite: bool = True,
+              wait: bool = False) -> Path:
         """Write the bundle to directory ``path`` atomically and return the path.
 
-        Everything is written into a temporary directory next to ``path`` and renamed into
-        place at the end, so a reader never sees a half-written bundle and a failure leaves
-        nothing behind. An existing bundle at ``path`` is replaced (unless ``overwrite`` is
-        false); an existing directory that is not a bundle is never touched.
+        Under the bundle's lock (:func:`spicethermal.files.locked`: another writer is a
+        :class:`~spicethermal.errors.BusyError`, or is waited for with ``wait``) every file is
+        written and fsynced into a new directory beside ``path``, which then replaces
+        ``path`` in one step (:func:`spicethermal.files.replace_dir`): at every instant
+        ``path`` holds the complete old or the complete new bundle, and leftovers of an
+        interrupted write are removed by the next one. Files of the old bundle that the new
+        one does not list (an operator's notes, the raw logs, a superseded data set) are
+        kept (hard links): a write never deletes a file, and a data file of the new bundle
+        replaces only a file that the old manifest listed. An existing bundle is
+        replaced (unless ``overwrite`` is false); an existing directory that is not a bundle
+        is never touched.
         """
         path = Path(path)
-        if path.exists():
-            if not overwrite:
-                raise DataFormatError(f"{path}: exists (not overwriting)")
-            if not path.is_dir() or (any(path.iterdir()) and not (path / MANIFEST).exists()):
-                raise DataFormatError(f"{path}: exists and is not a bundle; not replacing it")
-        for name, _ in self._named_tables():
+        named = self._named_tables()
+        for name, _ in named:
             if Path(name).name != name or name in (MANIFEST, "", ".", ".."):
                 raise DataFormatError(f"{MANIFEST}: file name {name!r} must be a plain name")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
-        old: Path | None = None
-        try:
-            os.chmod(tmp, 0o755)  # mkdtemp makes it private; a bundle is an ordinary directory
-            files = [(name, format_columns(tbl.columns())) for name, tbl in self._named_tables()]
-            files.append((MANIFEST, json.dumps(self.manifest(), indent=2) + "\n"))
-            for name, text in files:
-                with open(tmp / name, "w", encoding="utf-8", newline="\n") as handle:
-                    handle.write(text)
-                    handle.flush()
-                    os.fsync(handle.fileno())
+        with locked(path, wait=wait):
+            clean_leftovers(path)
+            keep: list[str] = []
             if path.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old",
-                                            dir=path.parent))
-                os.rename(path, old / "bundle")
-            os.rename(tmp, path)
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
-            if old is not None and (old / "bundle").exists() and not path.exists():
-                os.rename(old / "bundle", path)
-            raise
-        finally:
-            if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
+                if not overwrite:
+                    raise DataFormatError(f"{path}: exists (not overwriting)")
+                if not path.is_dir() or (any(path.iterdir())
+                                         and not (path / MANIFEST).exists()):
+                    raise DataFormatError(f"{path}: exists and is not a bundle; not replacing "
+                                          f"it")
+                ours = manifest_files(path) | {MANIFEST}
+                new = {n for n, _ in named} | {MANIFEST}
+                entries = os.listdir(path)
+                keep = sorted(n for n in entries if n not in new)  # nothing is deleted
+                clash = sorted(n for n in entries if n in new and n not in ours)
+                if clash:
+                    raise DataFormatError(f"{path / clash[0]}: exists and is not part of the "
+                                          f"bundle; not overwriting it")
+            tmp = temp_dir_for(path)
+            try:
+                files = [(name, format_columns(tbl.columns())) for name, tbl in named]
+                files.append((MANIFEST, dumps_json(self.manifest(), indent=2) + "\n"))
+                for name, text in files:
+                    with open(tmp / name, "w", encoding="utf-8", newline="\n") as handle:
+                        handle.write(text)
+                        handle.flush()
+                        os.fsync(handle.fileno())
+                link_tree(path, tmp, keep)
+                replace_dir(tmp, path)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
         return path
 
     def with_(self, **changes: Any) -> Bundle:

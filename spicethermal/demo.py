@@ -8,7 +8,6 @@ with an HTML report (``index.html``) that reads offline.
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from collections.abc import Callable
@@ -17,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import SpiceThermalError
+from .files import write_json
 from .spice import DIALECTS, TOPOLOGIES
 
 #: The simulated devices. The actuator bench has the real bench's artefacts (electrical
@@ -73,7 +73,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
     Returns a :class:`DemoResult` naming the report, the ``.lib`` files and a summary.
     """
     from . import plots, report
-    from .bench.client import run_bench
+    from .bench.session import run_bench
     from .bundle import Bundle
     from .compare import compare
     from .curves import ZthCurve
@@ -188,8 +188,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         out, bundle=bundle, calibration=cal, curves=curves, model=model, fit=fit_result,
         libs=libs, table2=table2_cmp, diagnosis=diag, better=better, before=before, after=after,
         diagnosis_figures=diag_figs, table1=t1, summary=summary, elapsed_s=elapsed))
-    (out / "summary.json").write_text(json.dumps({"summary": summary, "timings_s": steps.timings},
-                                                 indent=2) + "\n")
+    write_json(out / "summary.json", {"summary": summary, "timings_s": steps.timings})
     return DemoResult(out, page, tuple(libs), summary, steps.timings)
 
 

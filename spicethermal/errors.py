@@ -23,6 +23,10 @@ class SimulationError(SpiceThermalError):
     """A circuit simulator failed or produced something unusable."""
 
 
+class BusyError(SpiceThermalError):
+    """Another process holds the lock of the bundle this one wants to change."""
+
+
 def where(file: object = None, row: int | None = None, column: str | None = None) -> str:
     """Format a location prefix such as ``cooling_1.csv, row 12, column tj_c: ``.
 

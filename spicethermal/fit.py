@@ -55,7 +55,6 @@ cases; noise-free ladders come back to 1e-13. A 46-point fit takes about 0.03 s,
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -64,6 +63,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .errors import DataFormatError, FitError
+from .files import dumps_json
 from .ladder import Foster
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -233,7 +233,7 @@ class FitResult:
 
     def to_json(self, indent: int | None = 2) -> str:
         """:meth:`to_dict` as a JSON string."""
-        return json.dumps(self.to_dict(), indent=indent)
+        return dumps_json(self.to_dict(), indent=indent)
 
     def __str__(self) -> str:
         head = (f"Foster ladder, order {self.order} ({self._order_note()}), "

@@ -10,7 +10,6 @@ current state), which needs a handful of periods instead of the thousands a cold
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -22,7 +21,7 @@ import numpy as np
 
 from .effects import DEVICE, Effect
 from .errors import DataFormatError, SimulationError
-from .files import atomic_write_text, read_json
+from .files import atomic_write_text, dumps_json, read_json
 from .ladder import Cauer, Foster
 from .pwm import PwmState, check_drive, steady_state
 
@@ -437,7 +436,7 @@ class ThermalModel:
 
     def save(self, path: str | Path) -> Path:
         """Write the ``spicethermal-model/2`` JSON file atomically."""
-        return atomic_write_text(path, json.dumps(self.to_dict(), indent=2) + "\n")
+        return atomic_write_text(path, dumps_json(self.to_dict(), indent=2) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> ThermalModel:

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .effects import Effect
+from .files import atomic_write_text
 from .ladder import Foster
 from .model import ThermalModel
 from .spice import DIALECTS, TOPOLOGIES, Pulse, initial_conditions, render_bench, render_lib
@@ -54,7 +55,7 @@ def write_all(directory: Path) -> list[Path]:
     out = []
     for name, make in GOLDEN.items():
         path = directory / name
-        path.write_text(make())
+        atomic_write_text(path, make())
         out.append(path)
     return out
 

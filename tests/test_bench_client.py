@@ -4,6 +4,7 @@ chain, link faults (nothing lost, nothing silently wrong), and the error message
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 from spicethermal.bench import client as bc
 from spicethermal.bench import protocol as p
 from spicethermal.bench.devices import preset
+from spicethermal.bench.session import run_bench
 from spicethermal.bundle import Bundle
 from spicethermal.cli import main
 from spicethermal.errors import DataFormatError, InstrumentError
@@ -25,19 +27,19 @@ CSVS = ("calibration.csv", "cooling_1.csv", "cooling_2.csv", "pwm.csv")
 
 @pytest.fixture(scope="module")
 def full_run(tmp_path_factory) -> Path:
-    return bc.run_bench("sim://actuator?seed=3", tmp_path_factory.mktemp("full") / "bundle")
+    return run_bench("sim://actuator?seed=3", tmp_path_factory.mktemp("full") / "bundle")
 
 
 @pytest.fixture(scope="module")
 def exact_run(tmp_path_factory) -> Path:
-    return bc.run_bench("sim://actuator?seed=7&noise=0.01&effects=sample-window",
+    return run_bench("sim://actuator?seed=7&noise=0.01&effects=sample-window",
                         tmp_path_factory.mktemp("exact") / "bundle",
                         actions=("calibrate", "cooling", "pwm"), **SMALL)
 
 
 @pytest.fixture(scope="module")
 def clean_small(tmp_path_factory) -> Path:
-    return bc.run_bench("sim://actuator?seed=11", tmp_path_factory.mktemp("clean") / "b",
+    return run_bench("sim://actuator?seed=11", tmp_path_factory.mktemp("clean") / "b",
                         actions=("calibrate", "cooling", "pwm"), **SMALL)
 
 
@@ -103,8 +105,8 @@ def test_pwm_readings_match_the_analytic_steady_state(exact_run):
 
 def test_ideal_hold_records_a_zero_window(tmp_path):
     with pytest.raises(InstrumentError, match="needs a calibration"):
-        bc.run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b", actions=("pwm",))
-    path = bc.run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b",
+        run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b", actions=("pwm",))
+    path = run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b",
                         actions=("calibrate", "pwm"), calibration_c=(25.0, 45.0),
                         pwm_freqs_hz=(25000.0,), pwm_duties=(0.5,))
     b = Bundle.read(path)
@@ -115,9 +117,9 @@ def test_ideal_hold_records_a_zero_window(tmp_path):
 
 def test_sub_actions_update_the_bundle(tmp_path):
     out = tmp_path / "b"
-    bc.run_bench("sim://mur880e?seed=1", out, actions=("calibrate",),
+    run_bench("sim://mur880e?seed=1", out, actions=("calibrate",),
                  calibration_c=(25.0, 50.0, 75.0))
-    bc.run_bench("sim://mur880e?seed=1", out, actions=("cooling",), cooling_powers_w=(10.0,))
+    run_bench("sim://mur880e?seed=1", out, actions=("cooling",), cooling_powers_w=(10.0,))
     b = Bundle.read(out)
     assert b.calibration.temp_c.size == 3 and len(b.cooling) == 1
     assert b.reference == "case"
@@ -129,7 +131,7 @@ def test_sub_actions_update_the_bundle(tmp_path):
 
 # ------------------------------------------------------------------------------ faults
 def test_link_faults_lose_nothing_and_change_nothing(clean_small, tmp_path):
-    faulty = bc.run_bench("sim://actuator?seed=11&faults=1e-3&stall=20", tmp_path / "f",
+    faulty = run_bench("sim://actuator?seed=11&faults=1e-3&stall=20", tmp_path / "f",
                           actions=("calibrate", "cooling", "pwm"), **SMALL)
     link = json.loads((faulty / "bundle.json").read_text())["bench"]["link"]
     assert link["corrupt"] > 5 and link["naks"] > 5 and link["timeouts"] > 0
@@ -138,7 +140,7 @@ def test_link_faults_lose_nothing_and_change_nothing(clean_small, tmp_path):
 
 
 def test_heavy_link_faults_still_lose_nothing(clean_small, tmp_path):
-    faulty = bc.run_bench("sim://actuator?seed=11&faults=1e-2", tmp_path / "f",
+    faulty = run_bench("sim://actuator?seed=11&faults=1e-2", tmp_path / "f",
                           actions=("calibrate", "cooling", "pwm"), **SMALL)
     link = json.loads((faulty / "bundle.json").read_text())["bench"]["link"]
     assert link["corrupt"] > 50
@@ -206,7 +208,7 @@ def test_dropped_duplicated_reordered_frames_are_recovered(clean_small, tmp_path
         return port
 
     monkeypatch.setattr(bc, "open_port", mangled)
-    out = bc.run_bench("sim://actuator?seed=11", tmp_path / "m",
+    out = run_bench("sim://actuator?seed=11", tmp_path / "m",
                        actions=("calibrate", "cooling", "pwm"), **SMALL)
     assert opened[0].mangled > 100
     link = json.loads((out / "bundle.json").read_text())["bench"]["link"]
@@ -227,9 +229,10 @@ def test_a_device_that_stops_answering_stops_the_run_clearly(tmp_path, monkeypat
     monkeypatch.setattr(bc, "open_port", lambda url, timeout_s=0.05: GoesSilent(
         real_open(url, timeout_s)))
     with pytest.raises(InstrumentError, match=r"no response .* for 5 s.*raw data .* kept"):
-        bc.run_bench("sim://actuator?seed=1", tmp_path / "b")
-    assert not (tmp_path / "b").exists()
-    kept = list((tmp_path / "b.raw").iterdir())
+        run_bench("sim://actuator?seed=1", tmp_path / "b")
+    # the raw log stays inside the (still empty, valid) bundle
+    assert Bundle.read(tmp_path / "b").cooling == ()
+    kept = list((tmp_path / "b" / "raw").iterdir())
     assert kept and (kept[0] / "raw_frames.bin").stat().st_size > 0
 
 
@@ -243,22 +246,22 @@ def test_a_device_that_stops_answering_stops_the_run_clearly(tmp_path, monkeypat
 ])
 def test_clear_instrument_errors(tmp_path, url, message):
     with pytest.raises(InstrumentError, match=message):
-        bc.run_bench(url, tmp_path / "b", actions=("rth",))
-    assert not (tmp_path / "b").exists()
-    # raw data are kept only when some arrived
-    for run in (tmp_path / "b.raw").glob("*"):
+        run_bench(url, tmp_path / "b", actions=("rth",))
+    # raw data are kept (in the bundle) only when some arrived; else nothing is left
+    for run in (tmp_path / "b" / "raw").glob("*"):
         assert (run / "raw_frames.bin").stat().st_size > 0
+    assert sorted(os.listdir(tmp_path)) in ([], ["b"])
 
 
 def test_bad_plans_are_refused_before_touching_the_bench(tmp_path):
     with pytest.raises(DataFormatError, match="duties"):
-        bc.run_bench("sim://actuator?mute=1", tmp_path / "b", pwm_duties=(1.5,))
+        run_bench("sim://actuator?mute=1", tmp_path / "b", pwm_duties=(1.5,))
     with pytest.raises(DataFormatError, match="unknown plan fields"):
-        bc.run_bench("sim://actuator", tmp_path / "b", power=3)
+        run_bench("sim://actuator", tmp_path / "b", power=3)
     (tmp_path / "notabundle").mkdir()
     (tmp_path / "notabundle" / "x.txt").write_text("keep me")
     with pytest.raises(DataFormatError, match="not a bundle"):
-        bc.run_bench("sim://actuator", tmp_path / "notabundle", actions=("rth",))
+        run_bench("sim://actuator", tmp_path / "notabundle", actions=("rth",))
 
 
 # ------------------------------------------------------------------------------ CLI
@@ -293,7 +296,7 @@ def test_temperature_coefficient_shows_in_pwm_readings_as_thermal_model_predicts
     from spicethermal.effects import Effect
     from spicethermal.model import ThermalModel
 
-    out = bc.run_bench("sim://actuator?seed=1&noise=0.01&effects=temperature-coefficient,"
+    out = run_bench("sim://actuator?seed=1&noise=0.01&effects=temperature-coefficient,"
                        "sample-window", tmp_path / "tc", actions=("calibrate", "pwm"),
                        calibration_c=(25.0, 45.0, 65.0), pwm_freqs_hz=(25000.0,),
                        pwm_duties=(0.2, 0.8))
@@ -336,7 +339,7 @@ def test_lost_commands_are_sent_again(clean_small, tmp_path, monkeypatch):
     opened = []
     monkeypatch.setattr(bc, "open_port", lambda url, timeout_s=0.05: opened.append(
         LosesCommands(real_open(url, timeout_s))) or opened[-1])
-    out = bc.run_bench("sim://actuator?seed=11", tmp_path / "lc",
+    out = run_bench("sim://actuator?seed=11", tmp_path / "lc",
                        actions=("calibrate", "cooling", "pwm"), **SMALL)
     link = json.loads((out / "bundle.json").read_text())["bench"]["link"]
     assert link["command_resends"] == opened[0].mangled > 5
@@ -347,16 +350,16 @@ def test_lost_commands_are_sent_again(clean_small, tmp_path, monkeypatch):
 def test_a_clipped_tsp_reading_stops_the_run(tmp_path):
     # 85 degC is 60 K above the reference diode: beyond the amplifier's range
     with pytest.raises(InstrumentError, match="out of the amplifier's range"):
-        bc.run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("calibrate",),
-                     calibration_c=(25.0, 85.0), calibration_settle_s=200.0)
-    assert not (tmp_path / "b").exists()
+        run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("calibrate",),
+                  calibration_c=(25.0, 85.0), calibration_settle_s=200.0)
+    assert Bundle.read(tmp_path / "b").calibration is None  # nothing recorded but the raw log
 
 
 def test_mur880e_bench_gives_back_the_datasheet_impedance(tmp_path):
     from spicethermal.curves import ZthCurve
     from spicethermal.fit import fit_model
 
-    out = bc.run_bench("sim://mur880e?seed=2", tmp_path / "m", actions=("calibrate", "cooling"),
+    out = run_bench("sim://mur880e?seed=2", tmp_path / "m", actions=("calibrate", "cooling"),
                        calibration_c=(25.0, 50.0, 75.0), cooling_powers_w=(10.0,))
     curve = ZthCurve.from_bundle(Bundle.read(out))[0]
     model, _ = fit_model(curve)

@@ -1,7 +1,8 @@
 """The measurement bench: protocol, pyserial client, and the simulated instrument.
 
 * :mod:`.protocol` - framing, CRC and messages (pure functions; spec in firmware/PROTOCOL.md)
-* :mod:`.client` - the pyserial client and the procedures; :func:`run_bench`
+* :mod:`.client` - the pyserial client and the procedures
+* :mod:`.session` - whole runs added to a bundle under its lock: :func:`.session.run_bench`
 * :mod:`.simulator` - the firmware core (host build, via ctypes) driving a simulated plant
 * :mod:`.protocol_sim` - the ``sim://`` pyserial URL handler
 * :mod:`.plant`, :mod:`.devices` - the simulated device and its presets

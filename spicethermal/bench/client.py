@@ -1,8 +1,8 @@
-"""The bench client: talks to the firmware over any pyserial URL and writes a bundle.
+"""The bench client: talks to the firmware over any pyserial URL.
 
 Layers, bottom up:
 
-* :class:`RawLog` — every byte read from the port is appended (and flushed) to
+* :class:`RawLog` — every byte read from the port is appended (and fsynced) to
   ``raw_frames.bin`` *before* it is processed; every frame, both directions, gets a line in
   ``frames.jsonl`` with what the link made of it (ok, crc, duplicate, gap, ...).
 * :class:`Link` — the host side of the protocol (firmware/PROTOCOL.md §4): in-order, exactly-once
@@ -10,11 +10,8 @@ Layers, bottom up:
   resend when SYNC shows the device never got it, timeouts and a silent-device error.
 * :class:`BenchClient` — handshake (protocol and firmware version) and the four procedures,
   each returning the samples it received, checked complete (DONE count, contiguous indices).
-* :func:`run_bench` — a whole run (calibration, Rth, two cooling curves, the PWM grid) and the
-  ``spicethermal-bundle/1`` it produces, through :class:`spicethermal.bundle.Bundle`.
 
-The measurement plan (powers, settling times, the PWM grid) comes from :data:`PLANS`, chosen by
-the board name the device reports; every value can be overridden.
+Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 
 >>> # a simulated bench, quickly: just the handshake
 >>> with BenchClient("sim://actuator?seed=1") as bench:
@@ -27,82 +24,19 @@ from __future__ import annotations
 import json
 import os
 import secrets
-import shutil
 import sys
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING
-
-import numpy as np
+from typing import IO
 
 from ..errors import DataFormatError, InstrumentError
 from . import protocol as p
 
-if TYPE_CHECKING:  # pragma: no cover
-    from ..bundle import Bundle
-    from ..calibration import Calibration
-
 SUPPORTED_FIRMWARE_MAJOR = 1
 ACTIONS = ("calibrate", "rth", "cooling", "pwm")
-
-
-# --------------------------------------------------------------------------- the plan
-@dataclass(frozen=True)
-class Plan:
-    """What to measure and how (SI units). :data:`PLANS` holds one per known board."""
-
-    description: str = "heated device"
-    reference: str = "ambient"
-    calibration_c: tuple[float, ...] = (25.0, 35.0, 45.0, 55.0, 65.0, 75.0)
-    calibration_settle_s: float = 300.0
-    calibration_n: int = 32
-    calibration_interval_s: float = 0.1
-    window_s: float = 1e-4
-    n_readings: int = 16
-    rth_power_w: float = 0.094
-    settle_s: float = 120.0
-    cooling_powers_w: tuple[float, ...] = (0.094, 0.3)
-    cooling_t_first_s: float = 1e-4
-    cooling_t_last_s: float = 60.0
-    per_decade: int = 10
-    pwm_power_w: float = 0.094
-    pwm_freqs_hz: tuple[float, ...] = (500.0, 1000.0, 3000.0, 5000.0, 10000.0, 25000.0)
-    pwm_duties: tuple[float, ...] = (0.2, 0.5, 0.8)
-    pwm_settle_s: float = 90.0
-    pwm_n: int = 8
-    pwm_interval_s: float = 0.1
-
-    def __post_init__(self) -> None:
-        for name in ("calibration_settle_s", "calibration_interval_s", "window_s",
-                     "rth_power_w", "settle_s", "cooling_t_first_s", "cooling_t_last_s",
-                     "pwm_power_w", "pwm_settle_s", "pwm_interval_s"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and np.isfinite(v) and v > 0):
-                raise DataFormatError(f"bench plan: {name} = {v!r} must be a positive number")
-        if not 1e-5 <= self.window_s <= 4e-3:
-            raise DataFormatError(f"bench plan: window_s = {self.window_s!r} must lie in "
-                                  f"10 us .. 4 ms")
-        if any(not 0 < d <= 1 for d in self.pwm_duties):
-            raise DataFormatError(f"bench plan: pwm duties {self.pwm_duties} must lie in (0, 1]")
-        if any(p_ <= 0 for p_ in self.cooling_powers_w + self.pwm_freqs_hz):
-            raise DataFormatError("bench plan: powers and frequencies must be positive")
-        if self.reference not in ("ambient", "case"):
-            raise DataFormatError(f"bench plan: reference {self.reference!r}: ambient or case")
-        if self.cooling_t_last_s <= self.cooling_t_first_s:
-            raise DataFormatError("bench plan: cooling_t_last_s must exceed cooling_t_first_s")
-
-
-PLANS: dict[str, Plan] = {
-    "actuator": Plan(description="thermopneumatic actuator, diode heater (paper, sections 2, 7)"),
-    "mur880e": Plan(description="MUR880E power diode on a heat sink, junction to case "
-                    "(paper, section 5)", reference="case",
-                    calibration_c=(25.0, 35.0, 45.0, 55.0, 65.0, 75.0), rth_power_w=10.0,
-                    cooling_powers_w=(10.0, 20.0), cooling_t_last_s=20.0, pwm_power_w=10.0,
-                    settle_s=300.0, pwm_settle_s=120.0),
-}
 
 
 # --------------------------------------------------------------------------- raw log
@@ -120,9 +54,11 @@ class RawLog:
             self._jsonl = open(directory / "frames.jsonl", "a", encoding="utf-8")
 
     def received(self, data: bytes) -> None:
+        """Append ``data`` to ``raw_frames.bin`` and fsync it: on disk before it is used."""
         if self._bin is not None and data:
             self._bin.write(data)
             self._bin.flush()
+            os.fsync(self._bin.fileno())
 
     def frame(self, direction: str, block: bytes, status: str, frame: p.Frame | None = None
               ) -> None:
@@ -138,6 +74,8 @@ class RawLog:
     def close(self) -> None:
         for f in (self._bin, self._jsonl):
             if f is not None:
+                f.flush()
+                os.fsync(f.fileno())
                 f.close()
         self._bin = self._jsonl = None
 
@@ -559,283 +497,3 @@ def _u16(v: int, name: str) -> int:
     if not 0 <= v <= 0xFFFF:
         raise DataFormatError(f"{name} = {v!r}: must fit in 16 bits")
     return int(v)
-
-
-# --------------------------------------------------------------------------- conversion
-class TspConversion:
-    """Junction temperature from the TSP, through the calibration.
-
-    The TSP is the heater diode's forward voltage minus the reference diode's (which sits on
-    the board, at the room ambient that the auxiliary thermocouple reads outside calibration).
-    The calibration recorded ``g(T) = Vf(T) − Vf(T_cal,ref)``; so a reading ``v`` at reference
-    temperature ``T_rd`` gives ``g(Tj) = v + g(T_rd)``.
-    """
-
-    def __init__(self, calibration: Calibration) -> None:
-        self.cal = calibration
-
-    def tj_c(self, v_tsp_v: np.ndarray, t_ref_diode_c: float) -> np.ndarray:
-        g_ref = float(self.cal.voltage(t_ref_diode_c))
-        return self.cal.temperature(np.asarray(v_tsp_v, dtype=float) + g_ref, margin_k=40.0)
-
-
-def _mean(samples: Sequence[p.Sample], attr: str) -> float:
-    if not samples:
-        raise InstrumentError(f"no samples to average for {attr}")
-    return float(np.mean([getattr(s, attr) for s in samples]))
-
-
-# --------------------------------------------------------------------------- whole runs
-class _Session:
-    """One bench run writing (part of) a bundle."""
-
-    def __init__(self, url: str, out_dir: Path, plan: Plan | None, overrides: dict,
-                 progress: bool) -> None:
-        self.url = url
-        self.out_dir = Path(out_dir)
-        self.plan_given = plan
-        self.overrides = overrides
-        self.progress_on = progress
-
-    def _raw_dirs(self, action: str) -> tuple[Path, Path]:
-        staging = self.out_dir.parent / f"{self.out_dir.name}.raw"
-        inside = self.out_dir / "raw"
-        if inside.is_dir() and not staging.exists():
-            os.replace(inside, staging)
-        stamp = time.strftime("%Y%m%dT%H%M%S")
-        run_dir = staging / f"{stamp}-{action}"
-        k = 1
-        while run_dir.exists():
-            k += 1
-            run_dir = staging / f"{stamp}-{action}-{k}"
-        return staging, run_dir
-
-    def run(self, actions: Sequence[str]) -> Path:
-        from ..bundle import Bundle
-
-        for a in actions:
-            if a not in ACTIONS:
-                raise DataFormatError(f"bench: unknown action {a!r}; expected {', '.join(ACTIONS)}")
-        previous = None
-        if (self.out_dir / "bundle.json").exists():
-            previous = Bundle.read(self.out_dir)
-        elif self.out_dir.exists() and any(p_ for p_ in self.out_dir.iterdir()
-                                          if p_.name != "raw"):
-            raise DataFormatError(f"{self.out_dir}: exists and is not a bundle; not writing "
-                                  f"into it")
-        staging, raw_dir = self._raw_dirs("-".join(actions) if len(actions) < 4 else "run")
-        try:
-            with BenchClient(self.url, raw_dir, progress=self.progress_on) as bench:
-                plan = self.plan_given or PLANS.get(bench.info.name, Plan())
-                if self.overrides:
-                    plan = replace(plan, **self.overrides)
-                try:
-                    bundle = self._measure(bench, plan, actions, previous)
-                finally:
-                    bench.progress.close()
-                    if sys.exc_info()[0] is not None:
-                        try:
-                            bench.abort()  # heater off
-                        except Exception:
-                            pass
-        except InstrumentError as exc:
-            raw = raw_dir / "raw_frames.bin"
-            if raw.exists() and raw.stat().st_size:
-                raise InstrumentError(f"{exc} (raw data of this session kept in {raw_dir})"
-                                      ) from None
-            shutil.rmtree(raw_dir, ignore_errors=True)
-            if staging.exists() and not any(staging.iterdir()):
-                staging.rmdir()
-            raise
-        bundle = bundle.with_(extra={**bundle.extra, "bench": self._bench_info(bench, plan)})
-        bundle.write(self.out_dir)
-        target = self.out_dir / "raw"
-        if target.exists():  # pragma: no cover - only if someone wrote one meanwhile
-            shutil.rmtree(target)
-        os.replace(staging, target)
-        return self.out_dir
-
-    def _bench_info(self, bench: BenchClient, plan: Plan) -> dict:
-        return {"port": self.url, "board": bench.info.name, "firmware": bench.info.firmware,
-                "protocol": bench.info.proto, "raw": "raw/",
-                "link": asdict(bench.link.stats), "plan": asdict(plan)}
-
-    # -- measuring -------------------------------------------------------------------------
-    def _measure(self, bench: BenchClient, plan: Plan, actions: Sequence[str],
-                 previous: Bundle | None) -> Bundle:
-        from ..bundle import Bundle
-
-        bundle = previous or Bundle(device=plan.description, reference=plan.reference)
-        bundle = bundle.with_(device=bundle.device or plan.description,
-                              reference=plan.reference)
-        steps = {"calibrate": plan.calibration_settle_s * len(plan.calibration_c),
-                 "rth": plan.settle_s,
-                 "cooling": (plan.settle_s + plan.cooling_t_last_s) * len(plan.cooling_powers_w),
-                 "pwm": plan.pwm_settle_s * len(plan.pwm_freqs_hz) * len(plan.pwm_duties)}
-        prog = bench.progress
-        prog.total = sum(steps[a] for a in actions)
-        prog.show("connected")
-        state = {"base": 0.0}
-
-        def status(m: p.Status) -> None:
-            prog.show(extra=min(m.elapsed_ms / 1e3, state["base"]))
-
-        bench.on_status = status
-        ambient: list[float] = []
-
-        def step(label: str, budget: float) -> None:
-            state["base"] = budget
-            prog.show(label)
-
-        if "calibrate" in actions:
-            bundle = self._calibrate(bench, plan, bundle, step)
-        conv = None
-        if bundle.calibration is not None:
-            conv = TspConversion(bundle.calibration.fit("auto"))
-        if "rth" in actions:
-            step(f"rth at {plan.rth_power_w:g} W", plan.settle_s)
-            run = bench.rth(plan.rth_power_w, plan.settle_s, plan.window_s, plan.n_readings)
-            prog.advance(plan.settle_s)
-            bundle = bundle.with_(extra={**bundle.extra,
-                                         "rth": self._rth_summary(run, conv, plan, bench)})
-            ambient += [s.taux_c for s in run.samples]
-        if "cooling" in actions:
-            tables = []
-            for k, power in enumerate(plan.cooling_powers_w, start=1):
-                step(f"cooling curve {k} at {power:g} W", plan.settle_s + plan.cooling_t_last_s)
-                run = bench.cooling(power, plan.settle_s, plan.window_s, plan.n_readings,
-                                    plan.cooling_t_first_s, plan.cooling_t_last_s,
-                                    plan.per_decade)
-                prog.advance(plan.settle_s + plan.cooling_t_last_s)
-                tables.append(self._cooling_table(run, conv, plan, k))
-                ambient += [s.taux_c for s in run.samples]
-            bundle = bundle.with_(cooling=tuple(tables))
-        if "pwm" in actions:
-            bundle = bundle.with_(pwm=self._pwm(bench, plan, conv, step, ambient))
-        if ambient:
-            bundle = bundle.with_(ambient_c=round(float(np.mean(ambient)), 4))
-        return bundle
-
-    def _calibrate(self, bench: BenchClient, plan: Plan, bundle: Bundle, step) -> Bundle:
-        from ..bundle import CalibrationTable
-
-        temps, volts = [], []
-        for t_set in plan.calibration_c:
-            step(f"calibration at {t_set:g} degC", plan.calibration_settle_s)
-            run = bench.calibrate(t_set, plan.calibration_settle_s, plan.calibration_n,
-                                  plan.calibration_interval_s)
-            bench.progress.advance(plan.calibration_settle_s)
-            cal = run.of_kind(p.KIND_CAL)
-            temps.append(round(_mean(cal, "taux_c"), 4))
-            volts.append(round(_mean(cal, "v_tsp_v"), 8))
-        table = CalibrationTable(temp_c=temps, v_tsp_v=volts, file="calibration.csv")
-        return bundle.with_(calibration=table)
-
-    @staticmethod
-    def _window_s(bench: BenchClient, plan: Plan) -> float:
-        return 0.0 if bench.info.caps & p.CAP_IDEAL_HOLD else plan.window_s
-
-    def _rth_summary(self, run: Run, conv: TspConversion | None, plan: Plan,
-                     bench: BenchClient) -> dict:
-        steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
-        p_w = _mean(power, "power_w")
-        tref = _mean(steady, "tamb_c")
-        out = {"power_w": round(p_w, 7), "tref_c": round(tref, 4),
-               "sample_window_s": self._window_s(bench, plan), "readings": len(steady),
-               "v_tsp_v": round(_mean(steady, "v_tsp_v"), 8)}
-        if conv is not None:
-            tj = float(np.mean(conv.tj_c([s.v_tsp_v for s in steady], _mean(run.samples,
-                                                                           "taux_c"))))
-            out["tj_c"] = round(tj, 4)
-            out["rth_k_per_w"] = round((tj - tref) / p_w, 5)
-        return out
-
-    def _cooling_table(self, run: Run, conv: TspConversion | None, plan: Plan, k: int):
-        from ..bundle import CoolingTable
-
-        steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
-        curve = run.of_kind(p.KIND_CURVE)
-        if not curve:
-            raise InstrumentError(f"{bench_name(run)}: the cooling curve holds no samples")
-        t_s = np.array([s.t_s for s in curve])
-        v = np.array([s.v_tsp_v for s in curve])
-        tref = np.array([s.tamb_c for s in curve])
-        extra = {"window_s": plan.window_s, "v_tsp_window_v": round(_mean(steady, "v_tsp_v"), 8)}
-        kw: dict = {}
-        if conv is not None:
-            t_rd = _mean(run.samples, "taux_c")
-            kw["tj_c"] = np.round(conv.tj_c(v, t_rd), 5)
-            extra["tj_window_c"] = round(float(np.mean(conv.tj_c(
-                [s.v_tsp_v for s in steady], t_rd))), 5)
-        else:
-            kw["v_tsp_v"] = v
-        return CoolingTable(t_s=t_s, power_w=round(_mean(power, "power_w"), 7),
-                            tref_c=np.round(tref, 4),
-                            tref_steady_c=round(_mean(steady, "tamb_c"), 4),
-                            file=f"cooling_{k}.csv", extra=extra, **kw)
-
-    def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion | None, step,
-             ambient: list[float]):
-        from ..bundle import PwmTable
-
-        if conv is None:
-            raise InstrumentError("bench pwm: needs a calibration (run 'bench calibrate' into "
-                                  "the same bundle first, or 'bench run')")
-        rows = []
-        for duty in plan.pwm_duties:
-            for freq in plan.pwm_freqs_hz:
-                step(f"pwm {freq / 1e3:g} kHz, duty {duty:g}", plan.pwm_settle_s)
-                run = bench.pwm(plan.pwm_power_w, freq, duty, plan.pwm_settle_s, plan.window_s,
-                                plan.pwm_n, plan.pwm_interval_s)
-                bench.progress.advance(plan.pwm_settle_s)
-                steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
-                t_rd = _mean(run.samples, "taux_c")
-                ambient += [s.taux_c for s in run.samples]
-                tj = float(np.mean(conv.tj_c([s.v_tsp_v for s in steady], t_rd)))
-                rows.append((freq, duty, round(tj, 4), round(_mean(steady, "tamb_c"), 4),
-                             round(_mean(power, "power_w"), 7)))
-        arr = np.array(rows)
-        return PwmTable(freq_hz=arr[:, 0], duty=arr[:, 1], tj_c=arr[:, 2], tref_c=arr[:, 3],
-                        row_power_w=arr[:, 4], power_w=plan.pwm_power_w,
-                        sample_window_s=self._window_s(bench, plan), file="pwm.csv")
-
-
-def bench_name(run: Run) -> str:
-    return p.PROC_NAMES.get(run.proc, "bench")
-
-
-def run_bench(url: str, out_dir: str | os.PathLike, *, progress: bool = False,
-              actions: Sequence[str] = ACTIONS, plan: Plan | None = None,
-              **overrides) -> Path:
-    """Run the bench at ``url`` and write (or update) the bundle ``out_dir``.
-
-    Parameters
-    ----------
-    url : any pyserial URL; ``sim://actuator`` or ``sim://mur880e`` (with options, see
-        :mod:`.protocol_sim`) for the simulated bench.
-    out_dir : the bundle directory. An existing bundle is updated: the sections measured now
-        replace its sections of the same name. Raw logs of every session go to ``raw/``.
-    progress : show a progress bar on stderr.
-    actions : which procedures, in order: any of ``calibrate``, ``rth``, ``cooling``, ``pwm``.
-    plan : the measurement plan (default: :data:`PLANS` for the board the device names).
-    overrides : fields of :class:`Plan` to change, e.g. ``settle_s=60``.
-
-    Returns
-    -------
-    Path
-        The bundle directory.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> out = pathlib.Path(tempfile.mkdtemp()) / "b"
-    >>> path = run_bench("sim://actuator?seed=1", out, actions=["calibrate"],
-    ...                  calibration_c=(25.0, 50.0), calibration_settle_s=60.0)
-    >>> sorted(x.name for x in path.iterdir())
-    ['bundle.json', 'calibration.csv', 'raw']
-    """
-    unknown = set(overrides) - set(Plan.__dataclass_fields__)
-    if unknown:
-        raise DataFormatError(f"run_bench: unknown plan fields {sorted(unknown)}")
-    replace(plan or Plan(), **overrides)  # check the values before touching the bench
-    return _Session(url, Path(out_dir), plan, overrides, progress).run(actions)

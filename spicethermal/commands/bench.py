@@ -1,7 +1,9 @@
 """``spicethermal bench ACTION --port URL -o BUNDLE``: measure on the bench (or its simulator).
 
 ACTION is ``run`` (calibration, Rth, two cooling curves, the PWM grid) or one procedure:
-``calibrate``, ``rth``, ``cooling``, ``pwm``; a single procedure updates an existing bundle.
+``calibrate``, ``rth``, ``cooling``, ``pwm``. The data sets measured are added to an existing
+bundle (a rerun gets new file names; ``--replace NAME`` replaces one); a second process
+writing the same bundle stops with a one-line error, or waits with ``--wait``.
 URL is any pyserial URL (``/dev/ttyUSB0``, ``socket://host:port``) or the simulated bench,
 ``sim://actuator`` / ``sim://mur880e`` with options such as
 ``?seed=3&noise=0.05&effects=sample-window,temperature-coefficient&faults=1e-3``.
@@ -26,18 +28,17 @@ ACTION_HELP = {
 }
 
 
-
-
-
-
-
-
 def _common(p: argparse.ArgumentParser, action: str) -> None:
     p.add_argument("--port", required=True, metavar="URL",
                    help="pyserial URL of the bench, or sim://actuator, sim://mur880e")
     p.add_argument("-o", "--out", required=True, metavar="BUNDLE",
                    help="bundle directory to write (an existing bundle is updated)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--wait", action="store_true",
+                   help="wait while another process writes the bundle (default: exit 2)")
+    p.add_argument("--replace", action="append", default=[], metavar="NAME",
+                   help="replace this data file of the bundle (e.g. cooling_1.csv) with the "
+                        "new data set of its kind; without it nothing is ever dropped")
     p.add_argument("--settle-s", type=_positive, dest="settle_s", metavar="S",
                    help="heating time to the steady state (default from the board's plan)")
     p.add_argument("--window-s", type=_positive, dest="window_s", metavar="S",
@@ -74,10 +75,11 @@ PLAN_KEYS = ("settle_s", "window_s", "calibration_c", "rth_power_w", "cooling_po
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bench.client import ACTIONS, run_bench
+    from ..bench.session import ACTIONS, run_bench
 
     overrides = {k: getattr(args, k) for k in PLAN_KEYS if getattr(args, k, None) is not None}
     actions = ACTIONS if args.action == "run" else (args.action,)
-    path = run_bench(args.port, args.out, progress=not args.quiet, actions=actions, **overrides)
+    path = run_bench(args.port, args.out, progress=not args.quiet, actions=actions,
+                     replace_names=args.replace, wait=args.wait, **overrides)
     print(f"bundle written: {path}")
     return 0

@@ -8,8 +8,8 @@ Measured vs model over every data set of the bundle: the PWM readings as the pap
 from __future__ import annotations
 
 import argparse
-import json
 
+from ..files import dumps_json
 from ..pwmsim import ENGINES
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import nonnegative as _window
@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     bundle = comparable_source(args, args.bundle)
     result = compare(model, bundle, args.engine, window_s=args.window)
     if args.json:
-        print(json.dumps(result.to_json(), indent=2))
+        print(dumps_json(result.to_json(), indent=2))
     else:
         print(result.table())
     return 0

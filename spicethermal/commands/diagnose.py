@@ -16,11 +16,11 @@ paper's Table 2): the two columns are then compared and the explanations the pap
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 from ..errors import DataFormatError
+from ..files import dumps_json
 from ..sources import csv_header
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import number as _number
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.json and not args.quiet:
             print(f"wrote {page}")
     if args.json:
-        print(json.dumps(result.to_json(), indent=2))
+        print(dumps_json(result.to_json(), indent=2))
     else:
         print(result)
     return 0

@@ -12,9 +12,9 @@ the junction peak with the prediction.
 from __future__ import annotations
 
 import argparse
-import json
 
 from ..errors import DataFormatError
+from ..files import dumps_json
 from ._types import index as _node
 from ._types import number as _number
 from ._types import positive as _positive
@@ -113,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
         doc = result.as_json()
         if check is not None:
             doc["ngspice"] = check
-        print(json.dumps(doc, indent=2))
+        print(dumps_json(doc, indent=2))
         return 0
     print(result)
     print()

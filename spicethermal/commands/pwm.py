@@ -10,8 +10,8 @@ steady state (:mod:`spicethermal.pwmsim`).
 from __future__ import annotations
 
 import argparse
-import json
 
+from ..files import dumps_json
 from ..pwmsim import ENGINES
 from ._types import duty, nonnegative, number, positive
 
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     state = pwm_state(model, args.power, args.freq, args.duty, args.window,
                       engine=args.engine, tref_c=args.tref)
     if args.json:
-        print(json.dumps(state.as_json()))
+        print(dumps_json(state.as_json()))
         return 0
     print(f"# {args.model}: {args.power:g} W at {args.freq:g} Hz, duty {args.duty:g}, "
           f"window {args.window:g} s, engine {args.engine}; rises over the reference, K")

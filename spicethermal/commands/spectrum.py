@@ -16,10 +16,10 @@ stages; ``--model MODEL.json`` writes that ladder as a model file for ``export``
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import TYPE_CHECKING, Any
 
+from ..files import dumps_json
 from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import count as _count
 from ._types import positive as _positive
@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
         out = spec.to_dict()
         out["early_time"] = early_time_json(curve)
         out["foster"] = {"r_k_per_w": list(foster.r), "tau_s": list(foster.tau)}
-        print(json.dumps(out))
+        print(dumps_json(out))
         return 0
     print(spec)
     peaks = ", ".join(f"{x:.3g}" for x in spec.peaks_s())

@@ -20,8 +20,8 @@ T3Ster ``.raw``) goes Zth(t) → time-constant spectrum (NID) → Foster ladder
 from __future__ import annotations
 
 import argparse
-import json
 
+from ..files import dumps_json
 from ._source import SOURCE_HELP
 from .spectrum import _positive, add_spectrum_arguments, load_curve, spectrum_options
 
@@ -66,9 +66,9 @@ def run(args: argparse.Namespace) -> int:
         fig_structure(functions, args.output, sep)
     if args.json:
         if sep is None:
-            print(json.dumps(functions[0].to_dict()))
+            print(dumps_json(functions[0].to_dict()))
         else:
-            print(json.dumps([{"source": src, **sf.to_dict(), "separation": sep.to_dict()}
+            print(dumps_json([{"source": src, **sf.to_dict(), "separation": sep.to_dict()}
                               for src, sf in zip(args.sources, functions, strict=True)]))
         return 0
     for sf in functions:

@@ -12,10 +12,10 @@ MUR880E points of the paper shipped with the package. There is no default device
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..errors import DataFormatError
+from ..files import dumps_json
 from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import number as _number
 from ._types import positive as _positive
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         doc = result.to_json()
         doc["early_time"] = early_time_json(curve)
-        print(json.dumps(doc, indent=2))
+        print(dumps_json(doc, indent=2))
     else:
         if curve.early is not None:
             print(f"early time: {curve.early}")

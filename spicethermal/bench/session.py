@@ -1,0 +1,483 @@
+"""Bench sessions: a measurement plan run on the bench and added to a bundle, losing nothing.
+
+A session holds the bundle's lock (:func:`spicethermal.files.locked`) from start to end, so a
+second writer stops with a one-line error (or waits, ``wait=True``). Raw bytes go to
+``BUNDLE/raw/<session>/`` inside the live bundle, appended and fsynced before they are
+processed (:class:`~spicethermal.bench.client.RawLog`); a new bundle starts empty on disk
+for that. The data sets measured are *added*: a rerun gets a new file name (``cooling_3.csv``,
+``calibration_2.csv``); a single section's previous entry (calibration, pwm, the Rth summary)
+moves to the manifest's ``superseded`` list and its file stays; only ``replace=[NAME]`` puts
+new data in the place of a listed file. The bundle is then replaced in one atomic step
+(:meth:`spicethermal.bundle.Bundle.write`). Killed at any moment, the bundle holds every data
+set it held before plus the raw log of the session.
+
+The measurement plan (powers, settling times, the PWM grid) comes from :data:`PLANS`, chosen
+by the board name the device reports; every value can be overridden.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import DataFormatError, InstrumentError
+from ..files import clean_leftovers, locked
+from . import protocol as p
+from .client import ACTIONS, BenchClient, Run
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..bundle import Bundle
+    from ..calibration import Calibration
+
+#: Data-set sections a procedure adds to, and the stem of their file names.
+SECTIONS = {"calibrate": "calibration", "cooling": "cooling", "pwm": "pwm"}
+
+
+# --------------------------------------------------------------------------- the plan
+@dataclass(frozen=True)
+class Plan:
+    """What to measure and how (SI units). :data:`PLANS` holds one per known board."""
+
+    description: str = "heated device"
+    reference: str = "ambient"
+    calibration_c: tuple[float, ...] = (25.0, 35.0, 45.0, 55.0, 65.0, 75.0)
+    calibration_settle_s: float = 300.0
+    calibration_n: int = 32
+    calibration_interval_s: float = 0.1
+    window_s: float = 1e-4
+    n_readings: int = 16
+    rth_power_w: float = 0.094
+    settle_s: float = 120.0
+    cooling_powers_w: tuple[float, ...] = (0.094, 0.3)
+    cooling_t_first_s: float = 1e-4
+    cooling_t_last_s: float = 60.0
+    per_decade: int = 10
+    pwm_power_w: float = 0.094
+    pwm_freqs_hz: tuple[float, ...] = (500.0, 1000.0, 3000.0, 5000.0, 10000.0, 25000.0)
+    pwm_duties: tuple[float, ...] = (0.2, 0.5, 0.8)
+    pwm_settle_s: float = 90.0
+    pwm_n: int = 8
+    pwm_interval_s: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name in ("calibration_settle_s", "calibration_interval_s", "window_s",
+                     "rth_power_w", "settle_s", "cooling_t_first_s", "cooling_t_last_s",
+                     "pwm_power_w", "pwm_settle_s", "pwm_interval_s"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and np.isfinite(v) and v > 0):
+                raise DataFormatError(f"bench plan: {name} = {v!r} must be a positive number")
+        if not 1e-5 <= self.window_s <= 4e-3:
+            raise DataFormatError(f"bench plan: window_s = {self.window_s!r} must lie in "
+                                  f"10 us .. 4 ms")
+        if any(not 0 < d <= 1 for d in self.pwm_duties):
+            raise DataFormatError(f"bench plan: pwm duties {self.pwm_duties} must lie in (0, 1]")
+        if any(p_ <= 0 for p_ in self.cooling_powers_w + self.pwm_freqs_hz):
+            raise DataFormatError("bench plan: powers and frequencies must be positive")
+        if self.reference not in ("ambient", "case"):
+            raise DataFormatError(f"bench plan: reference {self.reference!r}: ambient or case")
+        if self.cooling_t_last_s <= self.cooling_t_first_s:
+            raise DataFormatError("bench plan: cooling_t_last_s must exceed cooling_t_first_s")
+
+
+PLANS: dict[str, Plan] = {
+    "actuator": Plan(description="thermopneumatic actuator, diode heater (paper, sections 2, 7)"),
+    "mur880e": Plan(description="MUR880E power diode on a heat sink, junction to case "
+                    "(paper, section 5)", reference="case",
+                    calibration_c=(25.0, 35.0, 45.0, 55.0, 65.0, 75.0), rth_power_w=10.0,
+                    cooling_powers_w=(10.0, 20.0), cooling_t_last_s=20.0, pwm_power_w=10.0,
+                    settle_s=300.0, pwm_settle_s=120.0),
+}
+
+
+# --------------------------------------------------------------------------- conversion
+class TspConversion:
+    """Junction temperature from the TSP, through the calibration.
+
+    The TSP is the heater diode's forward voltage minus the reference diode's (which sits on
+    the board, at the room ambient that the auxiliary thermocouple reads outside calibration).
+    The calibration recorded ``g(T) = Vf(T) − Vf(T_cal,ref)``; so a reading ``v`` at reference
+    temperature ``T_rd`` gives ``g(Tj) = v + g(T_rd)``.
+    """
+
+    def __init__(self, calibration: Calibration) -> None:
+        self.cal = calibration
+
+    def tj_c(self, v_tsp_v: np.ndarray, t_ref_diode_c: float) -> np.ndarray:
+        g_ref = float(self.cal.voltage(t_ref_diode_c))
+        return self.cal.temperature(np.asarray(v_tsp_v, dtype=float) + g_ref, margin_k=40.0)
+
+
+def _mean(samples: Sequence[p.Sample], attr: str) -> float:
+    if not samples:
+        raise InstrumentError(f"no samples to average for {attr}")
+    return float(np.mean([getattr(s, attr) for s in samples]))
+
+
+# --------------------------------------------------------------------------- adding data sets
+def fresh_name(stem: str, taken: set[str]) -> str:
+    """The first free file name for a data set: ``calibration.csv``, ``calibration_2.csv``,
+    ...; cooling curves are numbered from 1 (``cooling_1.csv``). The name is added to
+    ``taken``.
+
+    >>> taken = {"cooling_1.csv", "pwm.csv"}
+    >>> fresh_name("cooling", taken), fresh_name("pwm", taken), fresh_name("pwm", taken)
+    ('cooling_2.csv', 'pwm_2.csv', 'pwm_3.csv')
+    """
+    k = 1
+    while True:
+        name = f"{stem}_{k}.csv" if k > 1 or stem == "cooling" else f"{stem}.csv"
+        if name not in taken:
+            taken.add(name)
+            return name
+        k += 1
+
+
+def add_datasets(bundle: Bundle, new: dict, taken: set[str],
+                 replace_names: Sequence[str] = ()) -> Bundle:
+    """``bundle`` with the data sets of ``new`` added, none of its own dropped.
+
+    Parameters
+    ----------
+    bundle : the bundle as it is on disk.
+    new : section -> new data: ``calibration`` and ``pwm`` a table, ``cooling`` a list of
+        tables, ``rth`` a summary dict (any may be missing).
+    taken : every name in the bundle's directory (new names avoid them; updated).
+    replace_names : listed files whose data sets the new ones of the same section replace
+        (same name, same place); without them a new data set gets a new name and a single
+        section's old entry moves to ``superseded`` (its file stays in the directory).
+
+    Returns
+    -------
+    Bundle
+        The merged bundle (not yet written).
+    """
+    superseded = list(bundle.extra.get("superseded", []))
+    replace_left = list(replace_names)
+    doc = bundle.manifest()
+
+    def take(stem: str, old_name: str | None) -> str:
+        if old_name is not None and old_name in replace_left:
+            replace_left.remove(old_name)
+            return old_name
+        return fresh_name(stem, taken)
+
+    changes: dict = {}
+    for section in ("calibration", "pwm"):
+        table = new.get(section)
+        if table is None:
+            continue
+        old = getattr(bundle, section)
+        name = take(section, old.file if old is not None else None)
+        if old is not None and name != old.file:
+            superseded.append({"section": section, **doc[section]})
+        changes[section] = replace(table, file=name)
+    if new.get("cooling"):
+        cooling = list(bundle.cooling)
+        for table in new["cooling"]:
+            slot = next((i for i, c in enumerate(cooling) if c.file in replace_left), None)
+            if slot is None:
+                cooling.append(replace(table, file=fresh_name("cooling", taken)))
+            else:
+                replace_left.remove(cooling[slot].file)
+                cooling[slot] = replace(table, file=bundle.cooling[slot].file)
+        changes["cooling"] = tuple(cooling)
+    extra = dict(bundle.extra)
+    if new.get("rth") is not None:
+        if "rth" in extra:
+            superseded.append({"section": "rth", **extra["rth"]})
+        extra["rth"] = new["rth"]
+    if superseded:
+        extra["superseded"] = superseded
+    return bundle.with_(extra=extra, **changes)
+
+
+# --------------------------------------------------------------------------- whole runs
+class Session:
+    """One bench run adding data sets to the bundle ``out_dir`` (see the module's text)."""
+
+    def __init__(self, url: str, out_dir: Path, plan: Plan | None, overrides: dict,
+                 progress: bool, replace_names: Sequence[str] = (), wait: bool = False) -> None:
+        self.url = url
+        self.out_dir = Path(out_dir)
+        self.plan_given = plan
+        self.overrides = overrides
+        self.progress_on = progress
+        self.replace_names = tuple(replace_names)
+        self.wait = wait
+
+    def _raw_dir(self, action: str) -> Path:
+        stamp = time.strftime("%Y%m%dT%H%M%S")
+        raw = self.out_dir / "raw"
+        run_dir, k = raw / f"{stamp}-{action}", 1
+        while run_dir.exists():
+            k += 1
+            run_dir = raw / f"{stamp}-{action}-{k}"
+        return run_dir
+
+    def _check_replace(self, previous: Bundle, actions: Sequence[str]) -> None:
+        measured = {SECTIONS[a] for a in actions if a in SECTIONS}
+        kinds = {t.file: s for s, ts in (("calibration", [previous.calibration]),
+                                         ("cooling", previous.cooling), ("pwm", [previous.pwm]))
+                 for t in ts if t is not None}
+        for name in self.replace_names:
+            if name not in kinds:
+                raise DataFormatError(f"--replace {name}: not a data file of {self.out_dir} "
+                                      f"(listed: {', '.join(sorted(kinds)) or 'none'})")
+            if kinds[name] not in measured:
+                raise DataFormatError(f"--replace {name}: this run measures no "
+                                      f"{kinds[name]} data set")
+
+    def run(self, actions: Sequence[str]) -> Path:
+        from ..bundle import MANIFEST, Bundle
+
+        for a in actions:
+            if a not in ACTIONS:
+                raise DataFormatError(f"bench: unknown action {a!r}; expected {', '.join(ACTIONS)}")
+        out = self.out_dir
+        with locked(out, wait=self.wait):
+            clean_leftovers(out)
+            created = not out.exists() or not any(out.iterdir())
+            if (out / MANIFEST).exists():
+                previous = Bundle.read(out)
+            elif not created:
+                raise DataFormatError(f"{out}: exists and is not a bundle; not writing into it")
+            else:
+                previous = Bundle()
+            self._check_replace(previous, actions)
+            if created:  # the raw log needs a home that is a valid bundle at every instant
+                previous.write(out)
+            raw_dir = self._raw_dir("-".join(actions) if len(actions) < 4 else "run")
+            try:
+                with BenchClient(self.url, raw_dir, progress=self.progress_on) as bench:
+                    plan = self.plan_given or PLANS.get(bench.info.name, Plan())
+                    if self.overrides:
+                        plan = replace(plan, **self.overrides)
+                    try:
+                        new = self._measure(bench, plan, actions, previous)
+                    finally:
+                        bench.progress.close()
+                        if sys.exc_info()[0] is not None:
+                            try:
+                                bench.abort()  # heater off
+                            except Exception:
+                                pass
+            except InstrumentError as exc:
+                raw = raw_dir / "raw_frames.bin"
+                if raw.exists() and raw.stat().st_size:
+                    raise InstrumentError(f"{exc} (raw data of this session kept in "
+                                          f"{raw_dir})") from None
+                shutil.rmtree(raw_dir, ignore_errors=True)
+                if created:
+                    shutil.rmtree(out, ignore_errors=True)
+                elif raw_dir.parent.is_dir() and not any(raw_dir.parent.iterdir()):
+                    raw_dir.parent.rmdir()
+                raise
+            session = f"raw/{raw_dir.name}/"
+            for key in ("calibration", "pwm"):
+                if new.get(key) is not None:
+                    new[key] = replace(new[key], extra={**new[key].extra, "raw": session})
+            new["cooling"] = [replace(c, extra={**c.extra, "raw": session})
+                              for c in new.get("cooling", [])]
+            taken = set(os.listdir(out))
+            bundle = add_datasets(new["base"], new, taken, self.replace_names)
+            bundle = bundle.with_(extra={**bundle.extra,
+                                         "bench": self._bench_info(bench, plan, session)})
+            bundle.write(out)
+        return out
+
+    def _bench_info(self, bench: BenchClient, plan: Plan, raw: str) -> dict:
+        return {"port": self.url, "board": bench.info.name, "firmware": bench.info.firmware,
+                "protocol": bench.info.proto, "raw": raw,
+                "link": asdict(bench.link.stats), "plan": asdict(plan)}
+
+    # -- measuring -------------------------------------------------------------------------
+    def _measure(self, bench: BenchClient, plan: Plan, actions: Sequence[str],
+                 previous: Bundle) -> dict:
+        """The new data sets by section (see :func:`add_datasets`), and under ``base`` the
+        previous bundle with this run's device, reference and ambient."""
+        base = previous.with_(device=previous.device or plan.description,
+                              reference=plan.reference)
+        new: dict = {}
+        steps = {"calibrate": plan.calibration_settle_s * len(plan.calibration_c),
+                 "rth": plan.settle_s,
+                 "cooling": (plan.settle_s + plan.cooling_t_last_s) * len(plan.cooling_powers_w),
+                 "pwm": plan.pwm_settle_s * len(plan.pwm_freqs_hz) * len(plan.pwm_duties)}
+        prog = bench.progress
+        prog.total = sum(steps[a] for a in actions)
+        prog.show("connected")
+        state = {"base": 0.0}
+
+        def status(m: p.Status) -> None:
+            prog.show(extra=min(m.elapsed_ms / 1e3, state["base"]))
+
+        bench.on_status = status
+        ambient: list[float] = []
+
+        def step(label: str, budget: float) -> None:
+            state["base"] = budget
+            prog.show(label)
+
+        calibration = previous.calibration
+        if "calibrate" in actions:
+            calibration = new["calibration"] = self._calibrate(bench, plan, step)
+        conv = None
+        if calibration is not None:
+            conv = TspConversion(calibration.fit("auto"))
+        if "rth" in actions:
+            step(f"rth at {plan.rth_power_w:g} W", plan.settle_s)
+            run = bench.rth(plan.rth_power_w, plan.settle_s, plan.window_s, plan.n_readings)
+            prog.advance(plan.settle_s)
+            new["rth"] = self._rth_summary(run, conv, plan, bench)
+            ambient += [s.taux_c for s in run.samples]
+        if "cooling" in actions:
+            tables = []
+            for k, power in enumerate(plan.cooling_powers_w, start=1):
+                step(f"cooling curve {k} at {power:g} W", plan.settle_s + plan.cooling_t_last_s)
+                run = bench.cooling(power, plan.settle_s, plan.window_s, plan.n_readings,
+                                    plan.cooling_t_first_s, plan.cooling_t_last_s,
+                                    plan.per_decade)
+                prog.advance(plan.settle_s + plan.cooling_t_last_s)
+                tables.append(self._cooling_table(run, conv, plan, k))
+                ambient += [s.taux_c for s in run.samples]
+            new["cooling"] = tables
+        if "pwm" in actions:
+            new["pwm"] = self._pwm(bench, plan, conv, step, ambient)
+        if ambient:
+            base = base.with_(ambient_c=round(float(np.mean(ambient)), 4))
+        new["base"] = base
+        return new
+
+    def _calibrate(self, bench: BenchClient, plan: Plan, step):
+        from ..bundle import CalibrationTable
+
+        temps, volts = [], []
+        for t_set in plan.calibration_c:
+            step(f"calibration at {t_set:g} degC", plan.calibration_settle_s)
+            run = bench.calibrate(t_set, plan.calibration_settle_s, plan.calibration_n,
+                                  plan.calibration_interval_s)
+            bench.progress.advance(plan.calibration_settle_s)
+            cal = run.of_kind(p.KIND_CAL)
+            temps.append(round(_mean(cal, "taux_c"), 4))
+            volts.append(round(_mean(cal, "v_tsp_v"), 8))
+        return CalibrationTable(temp_c=temps, v_tsp_v=volts, file="calibration.csv")
+
+    @staticmethod
+    def _window_s(bench: BenchClient, plan: Plan) -> float:
+        return 0.0 if bench.info.caps & p.CAP_IDEAL_HOLD else plan.window_s
+
+    def _rth_summary(self, run: Run, conv: TspConversion | None, plan: Plan,
+                     bench: BenchClient) -> dict:
+        steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
+        p_w = _mean(power, "power_w")
+        tref = _mean(steady, "tamb_c")
+        out = {"power_w": round(p_w, 7), "tref_c": round(tref, 4),
+               "sample_window_s": self._window_s(bench, plan), "readings": len(steady),
+               "v_tsp_v": round(_mean(steady, "v_tsp_v"), 8)}
+        if conv is not None:
+            tj = float(np.mean(conv.tj_c([s.v_tsp_v for s in steady], _mean(run.samples,
+                                                                           "taux_c"))))
+            out["tj_c"] = round(tj, 4)
+            out["rth_k_per_w"] = round((tj - tref) / p_w, 5)
+        return out
+
+    def _cooling_table(self, run: Run, conv: TspConversion | None, plan: Plan, k: int):
+        from ..bundle import CoolingTable
+
+        steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
+        curve = run.of_kind(p.KIND_CURVE)
+        if not curve:
+            raise InstrumentError(f"{bench_name(run)}: the cooling curve holds no samples")
+        t_s = np.array([s.t_s for s in curve])
+        v = np.array([s.v_tsp_v for s in curve])
+        tref = np.array([s.tamb_c for s in curve])
+        extra = {"window_s": plan.window_s, "v_tsp_window_v": round(_mean(steady, "v_tsp_v"), 8)}
+        kw: dict = {}
+        if conv is not None:
+            t_rd = _mean(run.samples, "taux_c")
+            kw["tj_c"] = np.round(conv.tj_c(v, t_rd), 5)
+            extra["tj_window_c"] = round(float(np.mean(conv.tj_c(
+                [s.v_tsp_v for s in steady], t_rd))), 5)
+        else:
+            kw["v_tsp_v"] = v
+        return CoolingTable(t_s=t_s, power_w=round(_mean(power, "power_w"), 7),
+                            tref_c=np.round(tref, 4),
+                            tref_steady_c=round(_mean(steady, "tamb_c"), 4),
+                            file=f"cooling_{k}.csv", extra=extra, **kw)
+
+    def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion | None, step,
+             ambient: list[float]):
+        from ..bundle import PwmTable
+
+        if conv is None:
+            raise InstrumentError("bench pwm: needs a calibration (run 'bench calibrate' into "
+                                  "the same bundle first, or 'bench run')")
+        rows = []
+        for duty in plan.pwm_duties:
+            for freq in plan.pwm_freqs_hz:
+                step(f"pwm {freq / 1e3:g} kHz, duty {duty:g}", plan.pwm_settle_s)
+                run = bench.pwm(plan.pwm_power_w, freq, duty, plan.pwm_settle_s, plan.window_s,
+                                plan.pwm_n, plan.pwm_interval_s)
+                bench.progress.advance(plan.pwm_settle_s)
+                steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
+                t_rd = _mean(run.samples, "taux_c")
+                ambient += [s.taux_c for s in run.samples]
+                tj = float(np.mean(conv.tj_c([s.v_tsp_v for s in steady], t_rd)))
+                rows.append((freq, duty, round(tj, 4), round(_mean(steady, "tamb_c"), 4),
+                             round(_mean(power, "power_w"), 7)))
+        arr = np.array(rows)
+        return PwmTable(freq_hz=arr[:, 0], duty=arr[:, 1], tj_c=arr[:, 2], tref_c=arr[:, 3],
+                        row_power_w=arr[:, 4], power_w=plan.pwm_power_w,
+                        sample_window_s=self._window_s(bench, plan), file="pwm.csv")
+
+
+def bench_name(run: Run) -> str:
+    return p.PROC_NAMES.get(run.proc, "bench")
+
+
+def run_bench(url: str, out_dir: str | os.PathLike, *, progress: bool = False,
+              actions: Sequence[str] = ACTIONS, plan: Plan | None = None,
+              replace_names: Sequence[str] = (), wait: bool = False, **overrides) -> Path:
+    """Run the bench at ``url`` and write (or update) the bundle ``out_dir``.
+
+    Parameters
+    ----------
+    url : any pyserial URL; ``sim://actuator`` or ``sim://mur880e`` (with options, see
+        :mod:`.protocol_sim`) for the simulated bench.
+    out_dir : the bundle directory. The data sets measured are added to an existing bundle
+        (new file names; the previous calibration, pwm table and Rth summary are kept under
+        ``superseded``). Raw logs of every session go to ``raw/``.
+    progress : show a progress bar on stderr.
+    actions : which procedures, in order: any of ``calibrate``, ``rth``, ``cooling``, ``pwm``.
+    plan : the measurement plan (default: :data:`PLANS` for the board the device names).
+    replace_names : listed data files that the new data sets of their section replace.
+    wait : wait for another writer of the bundle instead of failing with BusyError.
+    overrides : fields of :class:`Plan` to change, e.g. ``settle_s=60``.
+
+    Returns
+    -------
+    Path
+        The bundle directory.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "b"
+    >>> path = run_bench("sim://actuator?seed=1", out, actions=["calibrate"],
+    ...                  calibration_c=(25.0, 50.0), calibration_settle_s=60.0)
+    >>> sorted(x.name for x in path.iterdir())
+    ['bundle.json', 'calibration.csv', 'raw']
+    """
+    unknown = set(overrides) - set(Plan.__dataclass_fields__)
+    if unknown:
+        raise DataFormatError(f"run_bench: unknown plan fields {sorted(unknown)}")
+    replace(plan or Plan(), **overrides)  # check the values before touching the bench
+    return Session(url, Path(out_dir), plan, overrides, progress, replace_names,
+                   wait).run(actions)
