@@ -103,6 +103,29 @@ def _from_bundle(path: Path, index: int, rth: float | None) -> tuple[Any, bool, 
     return curve, held or rth is not None, bundle.reference
 
 
+def read_curve(source: str | Path, index: int = 0, rth: float | None = None
+               ) -> tuple[Any, bool, str]:
+    r"""The Zth curve ``spicethermal fit SOURCE`` fits: curve ``index`` of a bundle directory
+    (cooling curves first, then zth tables) or a Zth CSV file (``rth`` for a normalized one).
+
+    Returns ``(curve, held, reference)``: the :class:`~spicethermal.curves.ZthCurve`, whether
+    its Rth is known and to be held as ΣR = Rth, and the bundle's thermal reference.
+
+    >>> import pathlib, tempfile
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "zth.csv"
+    >>> _ = p.write_text("\n".join(["t_s,zth_k_per_w", "0.001,0.5", "0.01,1", "0.1,1.5"]))
+    >>> curve, held, reference = read_curve(p)
+    >>> len(curve), held, reference
+    (3, False, 'ambient')
+    """
+    source = Path(source)
+    if source.is_dir():
+        return _from_bundle(source, index, rth)
+    if source.exists():
+        return _from_csv(source, rth)
+    raise DataFormatError(f"{source}: no such file or bundle directory")
+
+
 def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     """``--effect``: the ladder and the named effects fitted to every data set of a bundle
     (:func:`spicethermal.diagnose.fit_with_effects`)."""
@@ -138,12 +161,7 @@ def run(args: argparse.Namespace) -> int:
     source = Path(args.source)
     if args.effect:
         return _run_with_effects(args, source)
-    if source.is_dir():
-        curve, held, reference = _from_bundle(source, args.curve, args.rth)
-    elif source.exists():
-        curve, held, reference = _from_csv(source, args.rth)
-    else:
-        raise DataFormatError(f"{source}: no such file or bundle directory")
+    curve, held, reference = read_curve(source, args.curve, args.rth)
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
