@@ -13,12 +13,16 @@ Hoaglin's 3.5) for
 * its heat path: the cumulative structure function ΣR(ΣC) of its fitted ladder (exact
   Cauer equivalent, :mod:`spicethermal.structure`) read at fixed ΣC levels
   (:data:`LEVELS_PER_DECADE` per decade, from the population's first to last ΣC), each level
-  z-scored across the population. Extra resistance in a layer (a voided die attach, a dry
-  interface) stays in ΣR all the way out, so the excess must *persist*: from the level where
-  ``|z|`` is largest to the end of the path, ΔR stays at least half as large, with the same
-  sign. A fit that only moves resistance between neighbouring stages (ΣR dips and comes
-  back) does not count. The reason names where the excess begins: the path matches the
-  population up to the last level before ``|z|`` climbs above :data:`Z_OUTLIER`.
+  z-scored across the population. As a path is compared at many levels, its limit is
+  raised so that a device has the same chance of a false alarm as from its Rth alone
+  (Bonferroni: ``|z| ≥ Φ⁻¹(1 − p/(2m))`` for ``m`` levels, ``p`` the two-sided tail beyond
+  :data:`Z_OUTLIER`; 4.37 for the 37 levels of 4.5 decades). Extra resistance in a layer
+  (a voided die attach, a dry interface) stays in ΣR all the way out, so the excess must
+  *persist*: from the level where ``|z|`` is largest to the end of the path, ΔR stays at
+  least half as large, with the same sign. A fit that only moves resistance between
+  neighbouring stages (ΣR dips and comes back) does not count. The reason names where the
+  excess begins: the path matches the population up to the last level before ``|z|``
+  climbs above :data:`Z_OUTLIER`.
 
 Typical and worst case (:func:`envelopes`)
 ------------------------------------------
@@ -51,7 +55,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import ThermalModel
 
 __all__ = ["PERCENTILES", "RESOLUTION", "Z_OUTLIER", "Outlier", "envelopes", "find_outliers",
-           "pwm_peaks", "robust_z"]
+           "fit_envelope", "path_limit", "pwm_peaks", "robust_z"]
 
 #: A robust z-score at or beyond this marks an outlier (Iglewicz & Hoaglin).
 Z_OUTLIER = 3.5
@@ -136,14 +140,15 @@ def find_outliers(rth_k_per_w: ArrayLike, ladders: Sequence[Any]) -> list[Outlie
     path = np.array([s.r_at(levels) for s in sfs])
     typical = np.median(path, axis=0)
     z_path = robust_z(path, floor)
+    limit = path_limit(n_levels)
     out = []
     for i in range(rth.size):
         excess = path[i] - typical
         k, persistent = _persistent_peak(z_path[i], excess)
-        zp = float(z_path[i, k]) if persistent else 0.0
-        if abs(z_rth[i]) < Z_OUTLIER and abs(zp) < Z_OUTLIER:
+        zp = float(z_path[i, k]) if persistent and abs(z_path[i, k]) >= limit else 0.0
+        if abs(z_rth[i]) < Z_OUTLIER and zp == 0.0:
             continue
-        if abs(zp) >= Z_OUTLIER:
+        if zp != 0.0:
             start = k
             while start > 0 and z_path[i, start - 1] * np.sign(zp) >= Z_OUTLIER:
                 start -= 1
@@ -159,6 +164,17 @@ def find_outliers(rth_k_per_w: ArrayLike, ladders: Sequence[Any]) -> list[Outlie
             out.append(Outlier(i, float(z_rth[i]), 0.0, float(rth[i] - np.median(rth)), None,
                                None, reason))
     return out
+
+
+def path_limit(levels: int) -> float:
+    """The |z| a heat path compared at ``levels`` ΣC levels must reach (module docstring).
+
+    >>> round(path_limit(1), 6) == Z_OUTLIER, round(path_limit(37), 2)
+    (True, 4.37)
+    """
+    from scipy.stats import norm
+
+    return float(norm.isf(norm.sf(Z_OUTLIER) / levels))
 
 
 def _persistent_peak(z: NDArray, excess: NDArray) -> tuple[int, bool]:
