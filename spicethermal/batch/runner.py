@@ -174,9 +174,17 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
         with client:
             yield client
         return
+    import dask
+
     n = workers or os.cpu_count() or 1
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+    # one task per worker thread at a time: a device takes seconds, nothing is gained by
+    # queueing more on a worker, and a worker that dies then takes no bystander with it.
+    # No dashboard; the scheduler's HTTP endpoints on a free port (8787 may be taken).
+    config = {"distributed.scheduler.worker-saturation": 1.0}
+    with dask.config.set(config), \
+            LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                         dashboard_address=None, silence_logs=logging.ERROR,
+                         scheduler_kwargs={"dashboard_address": ":0"}) as cluster, \
             Client(cluster) as client:
         yield client
 
