@@ -206,6 +206,7 @@ def test_command_end_to_end_on_a_simulated_population(tmp_path, capsys):
     (["batch", "-o", "OUT"], "give SOURCES"),
     (["batch", "--simulate", "2", "--duty", "1.5", "-o", "OUT"], "--duty 1.5"),
     (["batch", "--simulate", "2", "--effect", "nope", "-o", "OUT"], "nope"),
+    (["batch", "--simulate", "2", "MISSING", "-o", "OUT"], "MISSING: no such file"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(argv, message, tmp_path, capsys,
                                                   monkeypatch):

@@ -35,8 +35,8 @@ from ..errors import DataFormatError, SpiceThermalError
 from ..files import atomic_write_text, read_json
 from .device import COLUMNS, Options, Source, characterize, make_row
 
-__all__ = ["BatchRun", "cluster_client", "find_sources", "load_results", "run_batch",
-           "write_table"]
+__all__ = ["BatchRun", "check_output", "cluster_client", "find_sources", "load_results",
+           "run_batch", "write_table"]
 
 RESULT = "result.json"
 
@@ -117,6 +117,13 @@ def load_results(out_dir: str | os.PathLike) -> dict[str, dict[str, Any]]:
         if row.get("sha256") and not row.get("error"):
             done[row["sha256"]] = record
     return done
+
+
+def check_output(out_dir: str | os.PathLike, resume: bool) -> None:
+    """Refuse an output directory that holds an earlier batch's results unless resuming."""
+    if not resume and any(Path(out_dir, "devices").glob(f"*/{RESULT}")):
+        raise DataFormatError(f"{out_dir}: holds the results of an earlier batch; give "
+                              f"--resume to continue it, or another output directory")
 
 
 def _save(out: Path, result: dict[str, Any]) -> dict[str, Any]:
@@ -213,9 +220,7 @@ def run_batch(paths: Sequence[str | os.PathLike], out_dir: str | os.PathLike, *,
     """
     out = Path(out_dir)
     options = options or Options()
-    if not resume and any(Path(out, "devices").glob(f"*/{RESULT}")):
-        raise DataFormatError(f"{out}: holds the results of an earlier batch; give --resume "
-                              f"to continue it, or another output directory")
+    check_output(out, resume)
     sources = [Source.read(p, name) for p, name in find_sources(paths, exclude=out)]
     done = load_results(out) if resume else {}
     records: dict[int, dict[str, Any]] = {}

@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..batch.device import Options
-    from ..batch.runner import cluster_client, run_batch
+    from ..batch.runner import check_output, cluster_client, find_sources, run_batch
     from ..batch.summary import summarize
     from ..effects import spec
 
@@ -81,6 +81,9 @@ def run(args: argparse.Namespace) -> int:
         spec(name)
     sources = list(args.sources)
     out = Path(args.output)
+    if sources:
+        find_sources(sources, exclude=out)  # every source exists, before anything is written
+    check_output(out, args.resume)
     if args.simulate:
         from ..batch.population import write_population
 
