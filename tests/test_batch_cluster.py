@@ -103,7 +103,7 @@ def test_an_interrupted_batch_resumes_where_it_stopped(tmp_path):
             proc.kill()
             proc.wait()
     assert proc.returncode == 2, err
-    assert err.strip().splitlines()[-1] == "spicethermal batch: error: KeyboardInterrupt"
+    assert err.strip().splitlines()[-1] == "spicethermal batch: error: interrupted"
     done = len(list(out.glob("devices/*/result.json")))
     assert 2 <= done < 8
     assert not (out / "results.csv").exists()
