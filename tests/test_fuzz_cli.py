@@ -33,7 +33,7 @@ from spicethermal.model import ThermalModel
 
 EXAMPLES = int(os.environ.get("SPICETHERMAL_FUZZ_EXAMPLES", "60"))
 SLOW = os.environ.get("SPICETHERMAL_FUZZ_SLOW") == "1"
-LIMIT_S = int(os.environ.get("SPICETHERMAL_FUZZ_LIMIT_S", "60"))
+LIMIT_S = int(os.environ.get("SPICETHERMAL_FUZZ_LIMIT_S", "180"))
 SKIP = set() if SLOW else {"bench", "demo"}
 VERBOSE = os.environ.get("SPICETHERMAL_FUZZ_VERBOSE") == "1"
 

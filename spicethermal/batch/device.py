@@ -113,7 +113,7 @@ def characterize(source: Source, options: Options) -> dict[str, Any]:
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "bad.csv"
     >>> _ = p.write_text("t_s,zth_k_per_w\\n1e-3,oops\\n")
-    >>> characterize(Source.read(p, "bad"), Options())["row"]["error"]
+    >>> characterize(Source.read(p, "bad"), Options())["row"]["error"].split("/")[-1]
     "bad.csv, row 2, column zth_k_per_w: malformed number 'oops'"
     """
     t0 = time.perf_counter()
