@@ -47,6 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="largest order tried by --order auto (default 10)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME",
                         help="an effect to fit with the ladder (repeatable)")
+    parser.add_argument("--weighting", choices=("relative", "absolute"), default="relative",
+                        help="relative (default: log-domain, every decade of time counts, as "
+                             "datasheet and measured curves need) or absolute (K/W) residuals")
     parser.add_argument("--topology", choices=("foster", "cauer"), default="foster",
                         help="topology stored in the model file (exact conversion; default foster)")
     parser.add_argument("--plot", metavar="FIG.png",
@@ -97,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
-        max_order=args.max_order, reference=reference,
+        max_order=args.max_order, reference=reference, weighting=args.weighting,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
                     "curve": curve.label or str(source), "early_time": early_time_json(curve)})
     if args.topology != model.ladder.topology:
