@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from ..errors import DataFormatError
-from ._source import SOURCE_HELP, add_source_arguments, read_source_args
+from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 
 NAME = "fit"
@@ -62,6 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "fit window, Tj(0)")
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print the fit table")
     add_source_arguments(parser)
+    add_bootstrap_arguments(parser)
 
 
 def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
@@ -121,11 +122,24 @@ def run(args: argparse.Namespace) -> int:
         max_order=args.max_order, reference=reference, weighting=args.weighting,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
                     "curve": curve.label or str(source), "early_time": early_time_json(curve)})
+    fb = None
+    if args.bootstrap:
+        from ..bootstrap import fit_bootstrap
+        from ..model import ThermalModel
+
+        fb = fit_bootstrap(result, args.bootstrap, args.seed)
+        prov = dict(model.provenance)
+        prov["fit"] = {**prov["fit"], "bootstrap": fb.to_dict()}
+        model = ThermalModel(model.ladder, model.effects, model.reference, prov)
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
     out = model.save(args.output)
     written = [str(out)]
-    if args.plot:
+    if args.plot and fb is not None:
+        from ..bootstrap import fig_fit_band
+
+        written.append(str(fig_fit_band(result, fb, args.plot, title=curve.label)))
+    elif args.plot:
         from ..plots import fig7
 
         written.append(str(fig7(result, args.plot, title=curve.label or source.name)))
@@ -141,6 +155,10 @@ def run(args: argparse.Namespace) -> int:
         if curve.early is not None:
             print(f"early time: {curve.early}")
         print(result)
+        if fb is not None:
+            print(f"bootstrap ({fb.n} resamples): u(R) = "
+                  + ", ".join(f"{u:.3g}" for u in fb.u_r_k_per_w) + " K/W; u(tau) = "
+                  + ", ".join(f"{u:.3g}" for u in fb.u_tau_s) + " s")
         print(f"wrote {', '.join(written)}")
     if not result.converged:  # pragma: no cover - fit_foster raises instead
         print(f"warning: {result.message}", file=sys.stderr)
