@@ -92,6 +92,7 @@ __all__ = [
     "OrderTrial",
     "fit_foster",
     "fit_model",
+    "log_bins",
 ]
 
 #: Name of the order-selection criterion (see the module docstring).
@@ -319,12 +320,24 @@ def _as_data(t_s: ArrayLike, zth: ArrayLike, sigma: ArrayLike | None,
     return t, z, s
 
 
+def log_bins(t_s: NDArray, per_decade: int) -> tuple[NDArray, NDArray]:
+    """Log-spaced bins of increasing times ``t_s`` (> 0), ``per_decade`` to a decade, each
+    from ``10^(k/per_decade)``: the index of each bin's first sample and its sample count
+    (average any column ``x`` with ``np.add.reduceat(x, start) / counts``).
+
+    >>> start, counts = log_bins(np.array([1.0, 1.5, 2.0, 20.0]), 2)
+    >>> start.tolist(), counts.tolist()
+    ([0, 3], [3, 1])
+    """
+    idx = np.floor(np.log10(t_s) * per_decade + 1e-9).astype(np.int64)
+    _, start = np.unique(idx, return_index=True)
+    return start, np.diff(np.append(start, idx.size))
+
+
 def _log_bins(t: NDArray, z: NDArray, s: NDArray | None,
               per_decade: int) -> tuple[NDArray, NDArray, NDArray | None]:
     """Average dense data into log-spaced bins; bins holding one point keep it exactly."""
-    edges_idx = np.floor(np.log10(t) * per_decade + 1e-9).astype(np.int64)
-    _, start = np.unique(edges_idx, return_index=True)
-    counts = np.diff(np.append(start, t.size))
+    start, counts = log_bins(t, per_decade)
     tb = np.add.reduceat(t, start) / counts
     zb = np.add.reduceat(z, start) / counts
     sb = None if s is None else np.sqrt(np.add.reduceat(s * s, start)) / counts
@@ -338,9 +351,7 @@ def _bin_noise(t: NDArray, z: NDArray, tf: NDArray) -> NDArray:
     if tf.size == t.size:
         return np.zeros(tf.size)
     sigma = 1.4826 * float(np.median(np.abs(np.diff(z)))) / math.sqrt(2.0)
-    idx = np.floor(np.log10(t) * BINS_PER_DECADE + 1e-9).astype(np.int64)
-    _, counts = np.unique(idx, return_counts=True)
-    return sigma / np.sqrt(counts)
+    return sigma / np.sqrt(log_bins(t, BINS_PER_DECADE)[1])
 
 
 # ------------------------------------------------------------------------------ numerics

@@ -35,7 +35,7 @@ import numpy as np
 from .bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ZthTable, read_columns
 from .calibration import KFactor
 from .errors import DataFormatError
-from .fit import BINS_PER_DECADE, DENSE_POINTS
+from .fit import BINS_PER_DECADE, DENSE_POINTS, log_bins
 
 if TYPE_CHECKING:  # pragma: no cover
     from .curves import ZthCurve
@@ -172,9 +172,7 @@ def thin(cooling: CoolingTable, points_per_decade: int = BINS_PER_DECADE) -> Coo
     if t.size <= DENSE_POINTS:
         return cooling
     keep = t > 0
-    idx = np.floor(np.log10(t[keep]) * points_per_decade + 1e-9).astype(np.int64)
-    _, start = np.unique(idx, return_index=True)
-    counts = np.diff(np.append(start, idx.size))
+    start, counts = log_bins(t[keep], points_per_decade)
 
     def mean(values: np.ndarray | None) -> np.ndarray | None:
         return None if values is None else np.add.reduceat(values[keep], start) / counts
