@@ -211,14 +211,14 @@ def read_source(source: str | os.PathLike, *, calibration: str | os.PathLike | N
     cal = _calibration(calibration, k_factor_mv_per_k, tref_c)
     notes: list[str] = []
     if path.is_dir():
-        bundle = Bundle.read(path)
+        bundle = Bundle.read(path, cal)
         if cal is not None:
             raw = [c.v_tsp_v for c in bundle.cooling if c.v_tsp_v is not None]
             if isinstance(cal, KFactor) and raw:
                 cal, note = _anchor(cal, raw[0])
                 notes.append(note)
-            bundle = bundle.with_(calibration=cal)
-            notes.append(f"calibration replaced: {cal}")
+                bundle = bundle.with_(calibration=cal)
+            notes.append(f"calibration from the command line: {cal}")
         return Source(path, "bundle", _with_rth(bundle, rth_k_per_w), tuple(notes),
                       rth_k_per_w is not None)
     suffix = path.suffix.lower()
