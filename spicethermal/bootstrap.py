@@ -56,7 +56,18 @@ class Band:
 
     @classmethod
     def of(cls, x: NDArray, samples: NDArray, level: float = LEVEL) -> Band:
-        """The band of ``samples`` (one resample per row) at ``x``."""
+        """The band of ``samples`` (one resample per row) at ``x``.
+
+        Parameters
+        ----------
+        x : abscissae, one per column of ``samples``.
+        samples : one resample per row (NaN where a resample has no value).
+        level : central probability.
+
+        Returns
+        -------
+        Band
+        """
         q = 50.0 * (1.0 - level)
         lo, hi = np.nanpercentile(samples, [q, 100.0 - q], axis=0)
         return cls(np.asarray(x, dtype=float), lo, hi, level)
@@ -68,7 +79,19 @@ class Band:
 
 
 def resamples(model: NDArray, data: NDArray, n: int, seed: int = 0) -> Iterator[NDArray]:
-    """``n`` curves ``model + residuals`` with the residuals ``data − model`` redrawn."""
+    """``n`` curves ``model + residuals`` with the residuals ``data − model`` redrawn.
+
+    Parameters
+    ----------
+    model : the smooth model at the data's abscissae.
+    data : the data.
+    n : number of resamples (>= 2).
+    seed : random seed.
+
+    Returns
+    -------
+    iterator of ndarray
+    """
     if not (isinstance(n, int | np.integer) and n >= 2):
         raise DataFormatError(f"bootstrap: n = {n!r} resamples, need at least 2")
     resid = np.asarray(data, dtype=float) - np.asarray(model, dtype=float)
@@ -192,7 +215,15 @@ def _log_c_at(sf: StructureFunction, r: NDArray) -> NDArray:
 
 
 def shade(ax, band: Band, color: str = "C0", label: str | None = None) -> None:
-    """Draw ``band`` on ``ax`` as a translucent area."""
+    """Draw ``band`` on ``ax`` as a translucent area.
+
+    Parameters
+    ----------
+    ax : matplotlib axes.
+    band : the band.
+    color : its colour.
+    label : legend text (default: the level).
+    """
     ax.fill_between(band.x, band.lo, band.hi, color=color, alpha=0.25, lw=0,
                     label=label or f"{100 * band.level:g} % bootstrap band")
 

@@ -81,7 +81,16 @@ class PowerProfile:
 
     @classmethod
     def read(cls, path: str | os.PathLike) -> PowerProfile:
-        """A CSV with columns ``t_s`` and ``power_w`` (``#`` comments allowed)."""
+        """A CSV with columns ``t_s`` and ``power_w`` (``#`` comments allowed).
+
+        Parameters
+        ----------
+        path : the CSV file.
+
+        Returns
+        -------
+        PowerProfile
+        """
         from .bundle import read_columns
 
         cols = read_columns(path, ["t_s", "power_w"])
@@ -122,6 +131,17 @@ class Prediction:
 def output_times(profile: PowerProfile, t_end_s: float | None = None,
                  points: int = DEFAULT_POINTS) -> NDArray:
     """The profile's own times up to ``t_end_s`` (default its last) and ``points`` even ones.
+
+    Parameters
+    ----------
+    profile : the power profile.
+    t_end_s : the last output time, s (after the profile's end its power is held).
+    points : even points from 0 to ``t_end_s``.
+
+    Returns
+    -------
+    ndarray
+        Sorted, without duplicates.
 
     >>> output_times(PowerProfile([0.0, 2.0], [1.0, 1.0]), points=3).tolist()
     [0.0, 1.0, 2.0]
@@ -170,7 +190,29 @@ def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = 
 def pwl_response(model: ThermalModel, profile: PowerProfile, t_s: NDArray) -> NDArray:
     """Exact junction rise (K) of the model's linear ladder under the piecewise-linear
     ``profile`` at ``t_s``, from rest: each mode ``z' = -λ z + b p(t)`` integrated in closed
-    form over every segment where ``p`` is linear."""
+    form over every segment where ``p`` is linear.
+
+    Parameters
+    ----------
+    model : the model (its ladder; device effects are ignored here).
+    profile : the power profile.
+    t_s : output times, ascending.
+
+    Returns
+    -------
+    ndarray
+        The rise over the reference at ``t_s``, K.
+
+    Examples
+    --------
+    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> m = ThermalModel(Foster.from_tau([3.0], [0.5]))
+    >>> step = PowerProfile([0.0, 1e-12], [0.0, 2.0])
+    >>> rise = pwl_response(m, step, np.array([0.5]))[0]
+    >>> bool(abs(rise - 6 * (1 - np.exp(-1))) < 1e-9)
+    True
+    """
     from scipy.linalg import eigh
 
     from .model import Network
@@ -247,7 +289,19 @@ def _ngspice_response(model: ThermalModel, profile: PowerProfile, t_s: NDArray,
 
 def plot_prediction(result: Prediction, path: str | os.PathLike, title: str | None = None,
                     ax=None):
-    """Tj (left axis) and power (right axis) against time, written to ``path`` (PNG)."""
+    """Tj (left axis) and power (right axis) against time, written to ``path`` (PNG).
+
+    Parameters
+    ----------
+    result : the prediction.
+    path : the PNG file (written atomically; with ``ax`` nothing is written).
+    title : a title (default: engine and reference).
+    ax : draw into these axes instead of a new figure.
+
+    Returns
+    -------
+    Path
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -30,7 +30,18 @@ def foster_table_csv(foster: Foster, u_r_k_per_w: Sequence[float] | None = None,
                      u_tau_s: Sequence[float] | None = None) -> str:
     """The Foster table as CSV (``r_k_per_w, tau_s, c_j_per_k`` and, when given, the standard
     uncertainties ``u_r_k_per_w, u_tau_s``), readable by
-    :func:`spicethermal.datasheet.read_foster_table`."""
+    :func:`spicethermal.datasheet.read_foster_table`.
+
+    Parameters
+    ----------
+    foster : the ladder.
+    u_r_k_per_w, u_tau_s : per-stage standard uncertainties (both or neither).
+
+    Returns
+    -------
+    str
+        The CSV text (module docstring).
+    """
     cols: dict[str, Sequence[float]] = {"r_k_per_w": foster.r, "tau_s": foster.tau,
                                         "c_j_per_k": foster.c}
     if u_r_k_per_w is not None and u_tau_s is not None:
@@ -45,6 +56,17 @@ def duty_family(ladder: Foster | Cauer, duties: Sequence[float],
     state (:func:`spicethermal.pwm.r_duty_exact` × Rth): columns ``t_s`` and
     ``zth_k_per_w_d<D>``. ``t_s`` defaults to 10 points per decade from a decade below the
     fastest to a decade above the slowest time constant.
+
+    Parameters
+    ----------
+    ladder : the model's ladder.
+    duties : duty cycles, 0..1 (0: single pulse).
+    t_s : pulse widths, s.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns, ready for :func:`~spicethermal.bundle.format_columns`.
 
     >>> from spicethermal.ladder import Foster
     >>> fam = duty_family(Foster.from_tau([2.0], [1.0]), [0.0, 0.5], np.array([1.0]))
