@@ -780,7 +780,9 @@ def fit_foster(
         message=chosen.message, warnings=tuple(notes),
         n_fit_points=n,
         weighting=("absolute K/W, weights 1/sigma" if sf is not None else
-                   f"relative, weights 1/sqrt(Zth^2 + ({RELATIVE_FLOOR:g} max Zth)^2)" if relative
+                   f"relative, weights 1/sqrt(Zth^2 + ({RELATIVE_FLOOR:g} max Zth)^2"
+                   + (f" + (bin noise / {RELATIVE_PRECISION:g})^2)" if n != t.size else ")")
+                   if relative
                    else "absolute K/W, equal weight per point on the log-time grid")
         + (f"; {t.size} points averaged into {n} log-spaced bins "
            f"({BINS_PER_DECADE} per decade)" if n != t.size else ""),

@@ -155,6 +155,7 @@ def run(args: argparse.Namespace) -> int:
         if curve.early is not None:
             print(f"early time: {curve.early}")
         print(result)
+        print(f"weighting: {result.weighting}")
         if fb is not None:
             print(f"bootstrap ({fb.n} resamples): u(R) = "
                   + ", ".join(f"{u:.3g}" for u in fb.u_r_k_per_w) + " K/W; u(tau) = "
