@@ -300,7 +300,10 @@ def _anchor(cal: KFactor, v_tsp_v: np.ndarray) -> tuple[KFactor, str]:
 
 def _anchor_note(bundle: Bundle) -> list[str]:
     anchor = bundle.extra.get("source", {}).get("anchored")
-    return [f"calibration anchored: {anchor}"] if anchor else []
+    if anchor:
+        return [f"calibration anchored: {anchor}"]
+    return [f"the record ends at {bundle.cooling[0].tref_steady_c:.4g} degC through the "
+            f"calibration as given (--tref DEGC anchors it at the device's true temperature)"]
 
 
 def _with_rth(bundle: Bundle, rth: float | None) -> Bundle:
