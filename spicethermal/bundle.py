@@ -703,10 +703,12 @@ class Bundle:
 
     # -- reading -------------------------------------------------------------------------
     @classmethod
-    def read(cls, path: str | os.PathLike) -> Bundle:
+    def read(cls, path: str | os.PathLike,
+             calibration: CalibrationTable | KFactor | None = None) -> Bundle:
         """Read and validate the bundle directory ``path`` (or its ``bundle.json``).
 
-        Raises :class:`DataFormatError` naming the file, row and column (or the key of
+        ``calibration`` replaces the bundle's own (or supplies a missing one). Raises
+        :class:`DataFormatError` naming the file, row and column (or the key of
         ``bundle.json``) of the first problem.
         """
         path = Path(path)
@@ -769,8 +771,7 @@ class Bundle:
                     text = str(path / fname) + text[len(fname):]
                 raise DataFormatError(text) from None
 
-        calibration = None
-        if doc.get("calibration") is not None:
+        if calibration is None and doc.get("calibration") is not None:
             calibration = _read_calibration(section("calibration"), fmt, label, table, wrap,
                                              known)
 
@@ -784,7 +785,9 @@ class Bundle:
                 trs = num(entry, key, "tref_steady_c", temperature=True)
                 if "v_tsp_v" in cols and "tj_c" not in cols and calibration is None:
                     raise DataFormatError(f"{label}, key {key}: {name} gives v_tsp_v but the "
-                                          f"bundle has no calibration to convert it")
+                                          f"bundle has no calibration to convert it (add one, "
+                                          f"docs/bundle-format.md, or pass --calibration CSV "
+                                          f"or --k-factor MV_PER_K with --tref DEGC)")
                 cooling.append(wrap(lambda cols=cols, name=name, entry=entry, power=power,
                                     tjs=tjs, trs=trs: CoolingTable(
                     t_s=cols["t_s"], power_w=power, tj_c=cols.get("tj_c"),

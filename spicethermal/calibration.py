@@ -431,7 +431,17 @@ Converter = Calibration | KFactor
 def anchored(calibration: Converter, v_tsp_v: float, temp_c: float) -> KFactor:
     """The K-factor of ``calibration`` re-anchored so that ``v_tsp_v`` reads ``temp_c``: what a
     transient recorded with another sense current or amplifier offset than the calibration
-    needs (for a quadratic, the slope at ``temp_c`` as the table reads it).
+    needs (for a quadratic, the slope where the table puts ``v_tsp_v``).
+
+    Parameters
+    ----------
+    calibration : a fitted or given polynomial, or a K-factor.
+    v_tsp_v : a voltage of the transient at a known temperature (the end of a cooling record).
+    temp_c : that temperature, degC.
+
+    Returns
+    -------
+    KFactor
 
     >>> cal = Calibration.fit([25, 75], [0.60, 0.50])
     >>> k = anchored(cal, 0.65, 25.0)

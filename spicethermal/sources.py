@@ -35,7 +35,7 @@ import numpy as np
 from .bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ZthTable, read_columns
 from .calibration import KFactor
 from .errors import DataFormatError
-from .fit import BINS_PER_DECADE, DENSE_POINTS
+from .fit import BINS_PER_DECADE, DENSE_POINTS, log_bins
 
 if TYPE_CHECKING:  # pragma: no cover
     from .curves import ZthCurve
@@ -48,6 +48,14 @@ CALIBRATION_OPTIONS = "--calibration CSV (temp_c, v_tsp_v) or --k-factor MV_PER_
 
 def read_calibration(path: str | os.PathLike) -> CalibrationTable:
     """A calibration CSV (``temp_c``, ``v_tsp_v``) as a table.
+
+    Parameters
+    ----------
+    path : the CSV file.
+
+    Returns
+    -------
+    CalibrationTable
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "cal.csv"
@@ -163,6 +171,16 @@ def thin(cooling: CoolingTable, points_per_decade: int = BINS_PER_DECADE) -> Coo
     """A cooling curve with more than :data:`DENSE_POINTS` samples averaged into log-spaced
     bins (every column by the same bins; a bin of one sample keeps it); others unchanged.
 
+    Parameters
+    ----------
+    cooling : the curve.
+    points_per_decade : bins per decade of time.
+
+    Returns
+    -------
+    CoolingTable
+        The thinned curve (the same object when it is not dense).
+
     >>> t = np.geomspace(1e-6, 1.0, 2000)
     >>> c = thin(CoolingTable(t, 1.0, tj_c=30 - np.sqrt(t), tref_steady_c=25.0), 10)
     >>> c.t_s.size, bool(np.all(np.diff(c.t_s) > 0))
@@ -172,9 +190,7 @@ def thin(cooling: CoolingTable, points_per_decade: int = BINS_PER_DECADE) -> Coo
     if t.size <= DENSE_POINTS:
         return cooling
     keep = t > 0
-    idx = np.floor(np.log10(t[keep]) * points_per_decade + 1e-9).astype(np.int64)
-    _, start = np.unique(idx, return_index=True)
-    counts = np.diff(np.append(start, idx.size))
+    start, counts = log_bins(t[keep], points_per_decade)
 
     def mean(values: np.ndarray | None) -> np.ndarray | None:
         return None if values is None else np.add.reduceat(values[keep], start) / counts
@@ -213,14 +229,14 @@ def read_source(source: str | os.PathLike, *, calibration: str | os.PathLike | N
     cal = _calibration(calibration, k_factor_mv_per_k, tref_c)
     notes: list[str] = []
     if path.is_dir():
-        bundle = Bundle.read(path)
+        bundle = Bundle.read(path, cal)
         if cal is not None:
             raw = [c.v_tsp_v for c in bundle.cooling if c.v_tsp_v is not None]
             if isinstance(cal, KFactor) and raw:
                 cal, note = _anchor(cal, raw[0])
                 notes.append(note)
-            bundle = bundle.with_(calibration=cal)
-            notes.append(f"calibration replaced: {cal}")
+                bundle = bundle.with_(calibration=cal)
+            notes.append(f"calibration from the command line: {cal}")
         return Source(path, "bundle", _with_rth(bundle, rth_k_per_w), tuple(notes),
                       rth_k_per_w is not None)
     suffix = path.suffix.lower()
@@ -253,7 +269,17 @@ def _calibration(calibration: str | os.PathLike | None, k_mv_per_k: float | None
 
 
 def csv_header(path: str | os.PathLike) -> list[str]:
-    """The column names of a CSV file (its first line that is not a ``#`` comment)."""
+    """The column names of a CSV file (its first line that is not a ``#`` comment).
+
+    Parameters
+    ----------
+    path : the file.
+
+    Returns
+    -------
+    list of str
+        Empty for a file without a header.
+    """
     from .files import read_text
 
     for line in read_text(Path(path)).splitlines():
@@ -274,7 +300,10 @@ def _anchor(cal: KFactor, v_tsp_v: np.ndarray) -> tuple[KFactor, str]:
 
 def _anchor_note(bundle: Bundle) -> list[str]:
     anchor = bundle.extra.get("source", {}).get("anchored")
-    return [f"calibration anchored: {anchor}"] if anchor else []
+    if anchor:
+        return [f"calibration anchored: {anchor}"]
+    return [f"the record ends at {bundle.cooling[0].tref_steady_c:.4g} degC through the "
+            f"calibration as given (--tref DEGC anchors it at the device's true temperature)"]
 
 
 def _with_rth(bundle: Bundle, rth: float | None) -> Bundle:
@@ -320,27 +349,28 @@ def _read_csv(path: Path, cal: CalibrationTable | KFactor | None, tref_c: float 
     return Source(path, "cooling-csv", bundle, tuple(notes))
 
 
-def describe(source: Source, curve: ZthCurve | None = None) -> list[str]:
-    """Lines a command prints about what it read: the notes and the early-time correction
-    (the chosen window and the extrapolated Tj at the cut).
-
-    >>> from spicethermal.data import path
-    >>> src = read_source(path("pyrth_mosfet/MOSFET_tim.txt"), k_factor_mv_per_k=-2.324,
-    ...                   tref_c=25.0)
-    >>> for line in describe(src, src.curve()):
-    ...     print(line.split(": ", 1)[1][:32])
-    power 1 W nominal (the file hold
-    calibration anchored: 0.606836 V
-    early time: masked 83 samples be
-    """
-    lines = [f"{source.path}: {note}" for note in source.notes]
-    if curve is not None and curve.early is not None:
-        lines.append(f"{curve.label}: early time: {curve.early}")
-    return lines
-
-
 def early_time_json(curve: ZthCurve) -> dict[str, Any] | None:
-    """The early-time correction of ``curve`` for JSON outputs (``None`` without one)."""
+    """The early-time correction of ``curve`` for JSON outputs (``None`` without one).
+
+    Parameters
+    ----------
+    curve : a curve from :meth:`Source.curve`.
+
+    Returns
+    -------
+    dict or None
+        ``masked_s``, ``fit_window_s``, ``fit_points``, ``tj0_c`` (the extrapolated Tj at the
+        cut), ``slope_k_per_sqrt_s``, ``fit_rms_k``, ``detected``.
+
+    Examples
+    --------
+    >>> from spicethermal.curves import ZthCurve
+    >>> t = np.geomspace(1e-6, 1.0, 300)
+    >>> c = ZthCurve.from_cooling(t, 40 - 10 * np.sqrt(t), 1.0, tref_steady_c=25.0,
+    ...                           mask_s=1e-4)
+    >>> round(early_time_json(c)["tj0_c"], 9)
+    40.0
+    """
     e = curve.early
     if e is None:
         return None

@@ -222,6 +222,12 @@ def test_t3ster_record(tmp_path: Path) -> None:
     assert np.all(np.diff(r.zth_k_per_w) > -1e-3 * z.rth_k_per_w)
     again = Bundle.read(b.write(tmp_path / "t3"))
     np.testing.assert_array_equal(again.cooling[0].v_tsp_v, b.cooling[0].v_tsp_v)
+    # the .tco header's line, kept with its points: residuals are points minus that line
+    cal = again.calibration_fit()
+    assert cal.kind == "polynomial" and cal.coefficients == (2.6505, -1.5098e-3)
+    expect = np.array(cal.v_tsp_v) - (2.6505 - 1.5098e-3 * np.array(cal.temp_c))
+    np.testing.assert_allclose(cal.residuals_mv, expect * 1e3, atol=1e-9)
+    assert np.max(np.abs(cal.residuals_mv)) < 2.0
 
 
 def test_importer_errors(tmp_path: Path) -> None:

@@ -237,7 +237,7 @@ def test_curves_command(tmp_path, actuator, capsys):
     out = tmp_path / "fig8.png"
     assert main(["curves", path, "-o", str(out)]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10000
-    assert capsys.readouterr().out.strip() == str(out)
+    assert capsys.readouterr().out.splitlines() == [str(out), str(out.with_suffix(".csv"))]
     assert main(["curves", path, "-o", str(out), "--duty", "0.5", "--duty", "0"]) == 0
     with pytest.raises(SystemExit) as exc:
         main(["curves", path, "-o", str(out), "--duty", "1.5"])

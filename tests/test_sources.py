@@ -75,3 +75,27 @@ def test_thin_averages_in_log_bins_and_keeps_short_curves() -> None:
     assert np.all(np.abs((30.0 - th.tj_c) / 0.5 - lt) < 1.0 / 20)
     short = CoolingTable(t[:100], 1.0, tj_c=np.full(100, 30.0), tref_steady_c=25.0)
     assert thin(short) is short
+
+
+def test_bundle_without_calibration_takes_one_from_the_command_line(tmp_path: Path) -> None:
+    """A bundle of raw v_tsp_v and no calibration: the error names the options, and with
+    --k-factor/--tref the record reads back as the ladder's Zth."""
+    from spicethermal.bundle import Bundle
+
+    t = np.geomspace(1e-5, 20.0, 80)
+    tj = 25.0 + LADDER.cooling(t)
+    raw = CoolingTable(t, 1.0, v_tsp_v=0.6 - 2e-3 * (tj - 25.0),
+                       tj_steady_c=25.0 + LADDER.rth, file="cooling_1.csv")
+    d = tmp_path / "raw"
+    d.mkdir()
+    (d / "cooling_1.csv").write_text(format_columns(raw.columns()))
+    (d / "bundle.json").write_text('{"format": "spicethermal-bundle/1", "ambient_c": 25.0, '
+                                   '"cooling": [{"file": '
+                                   '"cooling_1.csv", "power_w": 1.0, "tj_steady_c": %r}]}'
+                                   % (25.0 + LADDER.rth))
+    with pytest.raises(DataFormatError, match="--calibration CSV or --k-factor"):
+        Bundle.read(d)
+    src = read_source(d, k_factor_mv_per_k=-2.0, tref_c=25.0)
+    assert any("anchored" in n for n in src.notes)
+    curve = src.curve(mask_s=None)
+    assert np.allclose(curve.zth_k_per_w, LADDER.zth(t), atol=1e-9)

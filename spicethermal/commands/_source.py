@@ -7,7 +7,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from ._types import listed, number, positive
+from ._types import count, listed, number, positive
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..bundle import Bundle
@@ -87,3 +87,12 @@ def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True
     for note in notes:
         print(f"{src.path}: {note}", file=sys.stderr)
     return bundle
+
+
+def add_bootstrap_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--bootstrap N`` and ``--seed`` (:mod:`spicethermal.bootstrap`)."""
+    group = parser.add_argument_group("uncertainty")
+    group.add_argument("--bootstrap", type=count, metavar="N",
+                       help="residual bootstrap with N resamples: 95 %% bands in the figure and "
+                            "the JSON, parameter spreads (off by default; 50 is typical)")
+    group.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")

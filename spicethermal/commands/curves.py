@@ -2,12 +2,15 @@
 
 Duty-cycle impedance curves r_D(t) for D = 0, 0.1 ... 0.9 (or the given ``--duty`` values):
 the paper's eq. 3, ``D + (1 − D) r(t)`` (dashed), and the exact periodic-steady-state form
-(solid). Both come from the model's linear ladder (device effects are not used here).
+(solid). Both come from the model's linear ladder (device effects are not used here). Beside
+the figure, ``FIG.csv`` holds the exact family in K/W per duty (columns ``t_s`` and
+``zth_k_per_w_d<D>``), as a datasheet gives it.
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from ._types import duty as _duty
 
@@ -27,11 +30,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..bundle import format_columns
+    from ..files import atomic_write_text
     from ..model import ThermalModel
     from ..plots import FIG8_DUTIES, fig8
+    from ..tables import duty_family
 
     model = ThermalModel.load(args.model)
     duties = tuple(args.duty) if args.duty else FIG8_DUTIES
     path = fig8(model.ladder, args.output, duties, title=args.title)
+    table = atomic_write_text(Path(path).with_suffix(".csv"), format_columns(
+        duty_family(model.ladder, duties),
+        [f"peak Zth (K/W) of pulses of width t_s repeated at duty D, exact; {args.model}"]))
     print(path)
+    print(table)
     return 0

@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from ..errors import DataFormatError
-from ._source import SOURCE_HELP, add_source_arguments, read_source_args
+from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 
 NAME = "fit"
@@ -47,12 +47,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="largest order tried by --order auto (default 10)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME",
                         help="an effect to fit with the ladder (repeatable)")
+    parser.add_argument("--weighting", choices=("relative", "absolute"), default="relative",
+                        help="relative (default: log-domain, every decade of time counts, as "
+                             "datasheet and measured curves need) or absolute (K/W) residuals")
     parser.add_argument("--topology", choices=("foster", "cauer"), default="foster",
                         help="topology stored in the model file (exact conversion; default foster)")
     parser.add_argument("--plot", metavar="FIG.png",
                         help="also write the fit figure (paper Fig. 7: fit, residuals, ladder)")
+    parser.add_argument("--foster-table", metavar="CSV",
+                        help="also write the Foster table (r_k_per_w, tau_s, c_j_per_k, "
+                             "uncertainties) as CSV")
+    parser.add_argument("--early-plot", metavar="FIG.png",
+                        help="also draw the early-time (√t) correction: record, masked span, "
+                             "fit window, Tj(0)")
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print the fit table")
     add_source_arguments(parser)
+    add_bootstrap_arguments(parser)
 
 
 def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
@@ -83,6 +93,18 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     return 0
 
 
+def _early_plot(src, args: argparse.Namespace, curve) -> Path:
+    """The √t figure of cooling curve ``--curve`` of the source (the record as read)."""
+    from ..early_figure import fig_early_time
+
+    if curve.early is None or args.curve >= len(src.bundle.cooling):
+        raise DataFormatError(f"--early-plot: {curve.label} has no early-time correction (a "
+                              f"cooling curve with Tj at the cut given, or a Zth table)")
+    c = src.bundle.cooling[args.curve]
+    return fig_early_time(c.t_s, src.bundle.cooling_tj_c(args.curve), curve.early,
+                          args.early_plot, title=f"{curve.label}: early-time correction")
+
+
 def run(args: argparse.Namespace) -> int:
     from .. import __version__
     from ..fit import fit_model
@@ -97,21 +119,48 @@ def run(args: argparse.Namespace) -> int:
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
-        max_order=args.max_order, reference=reference,
+        max_order=args.max_order, reference=reference, weighting=args.weighting,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
                     "curve": curve.label or str(source), "early_time": early_time_json(curve)})
+    fb = None
+    if args.bootstrap:
+        from ..bootstrap import fit_bootstrap
+        from ..model import ThermalModel
+
+        fb = fit_bootstrap(result, args.bootstrap, args.seed)
+        prov = dict(model.provenance)
+        prov["fit"] = {**prov["fit"], "bootstrap": fb.to_dict()}
+        model = ThermalModel(model.ladder, model.effects, model.reference, prov)
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
     out = model.save(args.output)
-    if args.plot:
+    written = [str(out)]
+    if args.plot and fb is not None:
+        from ..bootstrap import fig_fit_band
+
+        written.append(str(fig_fit_band(result, fb, args.plot, title=curve.label)))
+    elif args.plot:
         from ..plots import fig7
 
-        fig7(result, args.plot, title=getattr(curve, "label", None) or source.name)
+        written.append(str(fig7(result, args.plot, title=curve.label or source.name)))
+    if args.foster_table:
+        from ..files import atomic_write_text
+        from ..tables import foster_table_csv
+
+        written.append(str(atomic_write_text(args.foster_table, foster_table_csv(
+            result.foster, result.u_r_k_per_w, result.u_tau_s))))
+    if args.early_plot:
+        written.append(str(_early_plot(src, args, curve)))
     if not args.quiet:
         if curve.early is not None:
             print(f"early time: {curve.early}")
         print(result)
-        print(f"wrote {out}" + (f" and {args.plot}" if args.plot else ""))
+        print(f"weighting: {result.weighting}")
+        if fb is not None:
+            print(f"bootstrap ({fb.n} resamples): u(R) = "
+                  + ", ".join(f"{u:.3g}" for u in fb.u_r_k_per_w) + " K/W; u(tau) = "
+                  + ", ".join(f"{u:.3g}" for u in fb.u_tau_s) + " s")
+        print(f"wrote {', '.join(written)}")
     if not result.converged:  # pragma: no cover - fit_foster raises instead
         print(f"warning: {result.message}", file=sys.stderr)
     return 0

@@ -11,6 +11,10 @@ Prints the spectrum's summary, its peaks and the lumped Foster ladder; ``--json`
 spectrum (``spicethermal-spectrum/1``: ``tau_s``, ``r_density_k_per_w`` in K/W per unit ln τ,
 ``method``, ``resolution_decades``, ``t_resolved_s``, ``rth_k_per_w``) plus the lumped Foster
 stages; ``--model MODEL.json`` writes that ladder as a model file for ``export``.
+``--bootstrap N`` (residual bootstrap, :mod:`spicethermal.bootstrap`) adds the 95 % band of
+R(τ) to the figure and ``"bootstrap"`` to the JSON (``spectrum``: ``tau_s``,
+``r_density_k_per_w_lo``, ``r_density_k_per_w_hi``, ``level``). The early-time correction (the
+√t window and Tj at the cut) goes to stderr and to the JSON as ``"early_time"``.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from ..files import dumps_json
-from ._source import SOURCE_HELP, add_source_arguments, read_source_args
+from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 from ._types import positive as _positive
 
@@ -36,8 +40,10 @@ HELP = "time-constant spectrum of a Zth curve by deconvolution (NID, as T3Ster a
 
 
 def add_spectrum_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options shared by ``spectrum`` and ``structure``: how to read SOURCE and deconvolve."""
+    """Options shared by ``spectrum`` and ``structure``: how to read SOURCE, deconvolve and
+    bootstrap."""
     add_source_arguments(parser)
+    add_bootstrap_arguments(parser)
     parser.add_argument("--method", choices=("bayes", "nnls"), default="bayes",
                         help="deconvolution: Bayesian iteration (default) or NNLS + Tikhonov "
                              "(L-curve)")
@@ -86,7 +92,17 @@ def run(args: argparse.Namespace) -> int:
     curve = load_curve(args, args.source)
     spec = time_constant_spectrum(curve, **spectrum_options(args))
     foster = spec.to_foster(args.stages_per_decade, order=args.order)
-    if args.output:
+    sb = None
+    if args.bootstrap:
+        from ..bootstrap import spectrum_bootstrap
+
+        sb = spectrum_bootstrap(curve, spec, args.bootstrap, args.seed,
+                                **spectrum_options(args))
+    if args.output and sb is not None:
+        from ..bootstrap import fig_spectrum_band
+
+        fig_spectrum_band(spec, sb, args.output)
+    elif args.output:
         from ..plots import fig_spectrum
 
         fig_spectrum(spec, args.output)
@@ -103,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
 
         out = spec.to_dict()
         out["early_time"] = early_time_json(curve)
+        if sb is not None:
+            out["bootstrap"] = sb.to_dict()
         out["foster"] = {"r_k_per_w": list(foster.r), "tau_s": list(foster.tau)}
         print(dumps_json(out))
         return 0

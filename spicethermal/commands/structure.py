@@ -7,6 +7,9 @@ T3Ster ``.raw``) goes Zth(t) → time-constant spectrum (NID) → Foster ladder
 (:func:`spicethermal.structure.separation`: the first ΣR from which
 ``|Δ log10 ΣC| > --threshold`` holds to the end of the range both resolve) and marked.
 
+``--bootstrap N`` adds a 95 % band of ΣC against ΣR to the figure and, as ``"band"``
+(``r_k_per_w``, ``c_j_per_k_lo``, ``c_j_per_k_hi``, ``level``), to each JSON object.
+
 ``--json`` output:
 
 * one source: exactly ``{"cumulative": {"r_k_per_w": [...], "c_j_per_k": [...]}}``;
@@ -41,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Foster stages per decade of τ from the spectrum (default 10)")
     parser.add_argument("--threshold", type=_positive, default=None, metavar="DECADES",
                         help="separation threshold on |Δ log10 ΣC| (default 0.05)")
-    add_spectrum_arguments(parser)
+    add_spectrum_arguments(parser)  # with --bootstrap
 
 
 def run(args: argparse.Namespace) -> int:
@@ -51,25 +54,38 @@ def run(args: argparse.Namespace) -> int:
 
     if len(args.sources) > 2:
         raise DataFormatError(f"structure takes one or two sources, got {len(args.sources)}")
-    functions = []
+    functions, bands = [], []
     for source in args.sources:
         curve = load_curve(args, source)
         spec = time_constant_spectrum(curve, **spectrum_options(args))
         functions.append(StructureFunction.from_spectrum(spec, args.stages_per_decade))
+        if args.bootstrap:
+            from ..bootstrap import spectrum_bootstrap
+
+            bands.append(spectrum_bootstrap(curve, spec, args.bootstrap, args.seed,
+                                            args.stages_per_decade,
+                                            **spectrum_options(args)).structure)
     sep = None
     if len(functions) == 2:
         threshold = SEPARATION_THRESHOLD if args.threshold is None else args.threshold
         sep = separation(functions[0], functions[1], threshold_decades=threshold)
-    if args.output:
+    if args.output and bands:
+        from ..bootstrap import fig_structure_band
+
+        fig_structure_band(functions, bands, args.output, sep)
+    elif args.output:
         from ..plots import fig_structure
 
         fig_structure(functions, args.output, sep)
     if args.json:
+        docs = [sf.to_dict() for sf in functions]
+        for doc, band in zip(docs, bands, strict=False):  # only with --bootstrap
+            doc["band"] = band.to_dict("r_k_per_w", "c_j_per_k")
         if sep is None:
-            print(dumps_json(functions[0].to_dict()))
+            print(dumps_json(docs[0]))
         else:
-            print(dumps_json([{"source": src, **sf.to_dict(), "separation": sep.to_dict()}
-                              for src, sf in zip(args.sources, functions, strict=True)]))
+            print(dumps_json([{"source": src, **doc, "separation": sep.to_dict()}
+                              for src, doc in zip(args.sources, docs, strict=True)]))
         return 0
     for sf in functions:
         print(sf)

@@ -1,4 +1,4 @@
-"""``spicethermal table1 SOURCE [--json]``: the paper's Table 1 for a measured curve.
+"""``spicethermal table1 SOURCE --datasheet CSV|mur880e [--json]``: the paper's Table 1 for a curve.
 
 SOURCE is any curve source (:mod:`spicethermal.sources`): a bundle directory (its first
 cooling curve, converted to Zth(t) with the early-time correction, or its first zth table;
