@@ -197,7 +197,7 @@ class Cauer(_Ladder):
 
         A node without capacity inside the ladder joins its two resistors in series (exact).
         One at the junction is a resistance that responds at once; it gets a capacitance whose
-        time constant is 1e-9 of the ladder's fastest ``r·c`` (Zth changes only below that).
+        time constant is 1e-12 of the ladder's fastest ``r·c`` (Zth changes by ~1e-12 Rth).
 
         >>> Cauer([1.0, 2.0, 3.0], [1.0, 0.0, 2.0]).with_capacitances()
         Cauer(r=(3.0, 3.0), c=(1.0, 2.0))
@@ -210,7 +210,7 @@ class Cauer(_Ladder):
                 r[i - 1] += r.pop(i)
                 c.pop(i)
         if c[0] == 0:
-            c[0] = 1e-9 * min(ri * ci for ri, ci in zip(r[1:], c[1:], strict=True)) / r[0]
+            c[0] = 1e-12 * min(ri * ci for ri, ci in zip(r[1:], c[1:], strict=True)) / r[0]
         return Cauer(r, c)
 
     @classmethod

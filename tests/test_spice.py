@@ -263,10 +263,13 @@ HEATSINKS = {"slow": (1.0, 100.0), "among": (0.2, 0.05)}
 COUPLED_TOLERANCE = {"slow": 0.02, "among": 0.05}
 
 
+PWM_PERIOD_S = 0.01
+
+
 def drive_segments(drive, power, tstop):
     if drive == "step":
         return [(0.0, np.inf, power)], f"IP 0 TJ PWL(0 0 1n {power})"
-    period = 0.01
+    period = PWM_PERIOD_S
     segs = [seg for k in range(int(tstop / period) + 2) for seg in
             ((k * period, (k + 0.5) * period, power), ((k + 0.5) * period, (k + 1) * period, 0))]
     return segs, f"IP 0 TJ PULSE(0 {power} 0 1n 1n {period / 2} {period})"
@@ -279,11 +282,12 @@ def coupled_error(lib, name, pins, resistors, capacitors, heatsink, drive, diale
     r_hs, c_hs = HEATSINKS[heatsink]
     tstop = 5 * r_hs * c_hs if heatsink == "among" else (20.0 if drive == "step" else 2.0)
     segs, source = drive_segments(drive, power, tstop)
+    tmax = tstop / 2000 if drive == "step" else min(tstop / 2000, PWM_PERIOD_S / 100)
     nodes = {"junction": "TJ", "reference": "TC", "ambient": "TA"}
     inst = " ".join(nodes[role] for role in pins.order)
     net = (f"* coupled\n.include {lib}\nX1 {inst} {name}\nCHS TC 0 {c_hs}\nRHS TC TA {r_hs}\n"
            f"VA TA 0 DC {ambient_c}\n{source}\n.options {options}\n"
-           f".tran {tstop / 2000} {tstop} 0 {tstop / 2000}\n.end\n")
+           f".tran {tmax} {tstop} 0 {tmax}\n.end\n")
     w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
     rs = [*resistors, ("TC", "TA", r_hs)]
     cs = [*capacitors, ("TC", c_hs)]

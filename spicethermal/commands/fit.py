@@ -40,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("source", metavar="SOURCE",
                         help="bundle directory, or Zth CSV (t_s and zth_k_per_w, or r with --rth)")
     parser.add_argument("-o", "--output", metavar="MODEL.json", required=True,
-                        help="model file to write (spicethermal-model/1)")
+                        help="model file to write (spicethermal-model/2)")
     parser.add_argument("--order", type=_order, default="auto", metavar="N|auto",
                         help="number of RC stages, or auto (default: chosen by BIC)")
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
@@ -54,6 +54,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="an effect to fit with the ladder (repeatable)")
     parser.add_argument("--topology", choices=("foster", "cauer"), default="foster",
                         help="topology stored in the model file (exact conversion; default foster)")
+    parser.add_argument("--reference", choices=("case", "ambient"),
+                        help="what the curve is measured to: junction-to-case or -ambient "
+                             "(default: the bundle's reference; ambient for a CSV)")
     parser.add_argument("--plot", metavar="FIG.png",
                         help="also write the fit figure (paper Fig. 7: fit, residuals, ladder)")
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print the fit table")
@@ -145,11 +148,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         raise DataFormatError(f"{source}: no such file or bundle directory")
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
+    t = [float(x) for x in curve.t_s if x > 0]
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
-        max_order=args.max_order, reference=reference,
+        max_order=args.max_order, reference=args.reference or reference,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
-                    "curve": getattr(curve, "label", "") or str(source)})
+                    "curve": getattr(curve, "label", "") or str(source),
+                    **({"valid_t_s": [min(t), max(t)]} if t else {})})
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
     out = model.save(args.output)
