@@ -20,7 +20,7 @@ from spicethermal.cli import main
 from spicethermal.errors import DataFormatError
 from spicethermal.ladder import Cauer, Foster
 from spicethermal.model import ThermalModel
-from spicethermal.vendor import evaluate, import_model, read_library, spice_number
+from spicethermal.vendor import evaluate, import_model, spice_number
 
 VENDOR = ROOT / "tests" / "data" / "vendor"
 SCHEMA = json.loads((ROOT / "spicethermal" / "data" / "model.schema.json").read_text())
@@ -210,7 +210,8 @@ def test_every_written_model_validates_against_the_schema(tmp_path, actuator):
                  str(tmp_path / "f.json")]) == 0
     doc = json.loads((tmp_path / "f.json").read_text())
     validate(doc)
-    assert doc["reference"] == "case" and doc["provenance"]["valid_t_s"] == [float(t[0]), float(t[-1])]
+    assert doc["reference"] == "case"
+    assert doc["provenance"]["valid_t_s"] == [float(t[0]), float(t[-1])]
     assert main(["export", str(tmp_path / "f.json"), "-o", str(tmp_path / "f.lib")]) == 0
     assert "junction-to-case" in (tmp_path / "f.lib").read_text()
     import jsonschema
