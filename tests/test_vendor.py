@@ -1,18 +1,19 @@
 """Vendor thermal models: import exactly, export to every dialect, couple to heatsinks.
 
-The real networks in ``tests/data/vendor/`` (sources in its README) are typed out again below
-from the vendors' files, so the import is checked against numbers that did not pass through
-it; their responses come from :func:`test_spice.exact_rise` (scipy, the full network).
+The real networks in ``spicethermal/data/vendor/`` (sources in its README) are typed out
+again below from the vendors' files, so the import is checked against numbers that did not
+pass through it; their responses come from :func:`test_spice.exact_rise` (scipy, the full network).
 """
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ROOT
+from conftest import NETLISTS, ROOT
 from test_spice import COUPLED_TOLERANCE, coupled_error, exact_rise, ladder_branches
 
 from spicethermal import spice
@@ -22,7 +23,7 @@ from spicethermal.ladder import Cauer, Foster
 from spicethermal.model import ThermalModel
 from spicethermal.vendor import evaluate, import_model, spice_number
 
-VENDOR = ROOT / "tests" / "data" / "vendor"
+VENDOR = ROOT / "spicethermal" / "data" / "vendor"
 SCHEMA = json.loads((ROOT / "spicethermal" / "data" / "model.schema.json").read_text())
 
 #: (file, subckt) -> (topology, R junction first, C, case C), typed from the vendors' files.
@@ -304,3 +305,27 @@ def test_cauer_fitted_to_a_vendor_zth_coupled_to_heatsinks(tmp_path, key):
         for drive in ("step", "pwm"):
             err = coupled_error(lib, "F", pins, rs, cs, heatsink, drive)
             assert err < COUPLED_TOLERANCE[heatsink], f"{heatsink} {drive}: {100 * err:.2f} %"
+
+
+@pytest.mark.ngspice
+def test_readme_heatsink_example_runs_and_matches_the_vendor_network(tmp_path):
+    from spicethermal.netlists import HEATSINK_EXAMPLE, VENDOR_EXAMPLE
+
+    deck_file = NETLISTS / f"{VENDOR_EXAMPLE[1]}_heatsink.cir"
+    readme = (ROOT / "README.md").read_text()
+    block = re.search(r"```spice\n(\* IPB019N08N3 on a heatsink.*?)```", readme, re.S)
+    assert block and block.group(1) == deck_file.read_text(), "README deck != netlists/ file"
+    lib = NETLISTS / f"{VENDOR_EXAMPLE[1]}.lib"
+    deck = block.group(1).replace(f".include {lib.name}", f".include {lib}")
+    w = spice.NgspiceBatch().run(deck, ["V(TJ)"])
+    _, r, c, case_c = NETWORKS[(Path(VENDOR_EXAMPLE[0]).name, VENDOR_EXAMPLE[1])]
+    hs = HEATSINK_EXAMPLE
+    rs, cs = branches(r, c, case_c)
+    rs.append(("TC", "TA", hs["heatsink_r"]))
+    cs.append(("TC", hs["heatsink_c"]))
+    p, on = hs["power_w"], hs["on_s"]
+    exact = hs["ambient_c"] + exact_rise(rs, cs, "J", w.t_s, [(0.0, on, p), (on, np.inf, 0.0)])
+    sel = w.t_s > 1e-4  # after the 1 µs ramp of the deck
+    rise = np.max(exact - hs["ambient_c"])
+    assert rise > 1.5 * p * sum(r)  # the heatsink heats up: the coupling matters
+    assert np.max(np.abs(w["V(TJ)"][sel] - exact[sel])) < 0.005 * rise
