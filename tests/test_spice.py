@@ -83,23 +83,26 @@ def test_pyspice_backend_agrees_with_batch(tmp_path, actuator):
 
 
 @pytest.mark.ngspice
+@pytest.mark.parametrize("temperature", spice.TEMPERATURES)
 @pytest.mark.parametrize("dialect", spice.DIALECTS)
 @pytest.mark.parametrize("topology", spice.TOPOLOGIES)
-def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology):
+def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology, temperature):
     ladder = Foster.from_tau([20.0, 80.0], [1e-3, 0.5])
     model = ThermalModel(ladder, (
         Effect.create("temperature-coefficient", alpha_per_k=-4e-3, t0_c=25.0),
         Effect.create("phase-change", t_c=40.0, width_k=2.0, latent_j=0.02, node=1),
     )).with_topology(topology)
-    lib = spice.export(model, tmp_path / "m.lib", dialect, topology, "NL")
-    tref, toffset = spice.reference_drive(model, 25.0)
+    lib = spice.export(model, tmp_path / "m.lib", dialect, topology, "NL",
+                       temperature=temperature)
+    # rise: TREF grounded, the ambient as TOFFSET; absolute: TREF at 25 V, no offset anywhere
+    tref, toffset = spice.reference_drive(model, 25.0) if temperature == "rise" else (25.0, None)
     net = spice.render_bench(lib, "NL", power_w=0.3, tstop_s=4.0, tmax_s=4e-3, tref_c=tref,
                              toffset_c=toffset)
     w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
     t = w.t_s[w.t_s > 1e-3]
     rise = 4e-8  # the bench's default ramp, 1e-5 of the maximum step
     py = model.simulate(t, Schedule((0.0, rise / 2), (0.0, 0.3)), tref_c=25.0).tj_k + 25.0
-    sim = w["V(TJ)"][w.t_s > 1e-3] + 25.0
+    sim = w["V(TJ)"][w.t_s > 1e-3] + 25.0 - tref
     assert np.max(np.abs(sim - py)) < 0.03  # K, of a rise of about 25 K
     lin = ThermalModel(model.ladder).simulate(t, Schedule.step(0.3)).tj_k + 25.0
     assert np.max(np.abs(lin - py)) > 1.0  # the effects matter at this strength
@@ -201,6 +204,15 @@ def test_negligible_stages_are_merged_and_said_in_the_header():
     cauer, notes = spice.simulator_ready(Cauer([0.1, 1e-15, 0.2], [1e-3, 2e-3, 1.0]))
     assert cauer.r == (0.1, 0.2) and cauer.c == pytest.approx((1e-3, 1.002)) and notes
     assert spice.simulator_ready(Foster([1.0], [1.0]))[1] == []
+
+
+@pytest.mark.ngspice
+def test_merged_export_runs_where_the_exact_stages_would_not(tmp_path):
+    bad = ThermalModel(Foster([0.3, 2.4e-22, 0.5], [1e-3, 8e15, 1.0]))
+    lib = spice.export(bad, tmp_path / "m.lib", "ngspice", "foster", "D")
+    w = spice.NgspiceBatch().run(spice.render_bench(lib, "D", power_w=1.0, tstop_s=10.0,
+                                                    tmax_s=0.01), ["V(TJ)"])
+    assert abs(w["V(TJ)"][-1] - bad.ladder.zth(10.0)) < 1e-3 * bad.rth
 
 
 def test_header_states_reference_source_fit_error_and_time_range(actuator):
