@@ -142,13 +142,15 @@ def test_cli_bad_input_is_one_line_without_traceback(tmp_path):
 
 
 # ------------------------------------------------------------------ names, pins, conventions
+@pytest.mark.ngspice
+@pytest.mark.parametrize("dialect", spice.DIALECTS)
 @pytest.mark.parametrize("name", ["SPD22N08S2L-50", "IPB019N08N3", "2N7002", "C3M0065090D",
                                   "GS66508B", "FDMS86181.TH", "irf540n_thermal"])
-def test_vendor_part_names_are_accepted_and_run(tmp_path, name):
+def test_vendor_part_names_are_accepted_and_run(tmp_path, name, dialect):
     model = ThermalModel(Foster.from_tau([1.0, 2.0], [1e-3, 1.0]))
-    lib = spice.export(model, tmp_path / "m.lib", "ngspice", "cauer", name)
+    lib = spice.export(model, tmp_path / "m.lib", dialect, "cauer", name)
     w = spice.NgspiceBatch().run(spice.render_bench(lib, name, power_w=1.0, tstop_s=5.0,
-                                                    tmax_s=0.05), ["V(TJ)"])
+                                                    tmax_s=0.05), ["V(TJ)"], dialect)
     assert abs(w["V(TJ)"][-1] - model.ladder.zth(5.0)) < 1e-3 * model.rth
 
 
@@ -362,3 +364,29 @@ def test_three_pin_form_and_both_temperature_conventions(tmp_path, distributed, 
     err = coupled_error(lib, "DEV", pins, rs, cs, "among", "step", "pspice",
                         ambient_c=ambient_c, options="")
     assert err < COUPLED_TOLERANCE["among"]
+
+
+@pytest.mark.ngspice
+def test_absolute_temperatures_next_to_an_electrothermal_vendor_expression(tmp_path, actuator):
+    """A vendor-style electrothermal expression reads V(Tj) in degC (Rds(on) ∝ (T/298 K)^2.5,
+    as Infineon's level-3 models): with --temperature absolute it gets the junction
+    temperature, and the self-consistent steady state matches the closed loop solved here."""
+    from scipy.optimize import brentq
+
+    ladder = Foster.from_tau([2.0, 6.0], [1e-3, 0.05])  # Rth 8 K/W
+    i_a, r0, amb = 3.0, 0.5, 25.0
+
+    def power(tj_c):
+        return i_a**2 * r0 * ((tj_c + 273.15) / 298.15) ** 2.5
+
+    tj = brentq(lambda x: x - amb - ladder.rth * power(x), amb, 500.0)
+    pins = spice.Pins.parse("Tj,Tcase")
+    lib = spice.export(ThermalModel(ladder, reference="case"), tmp_path / "d.lib", "ngspice",
+                       "cauer", "DEV", pins=pins, temperature="absolute")
+    net = (f"* self-heating\n.include {lib}\nX1 TJ TC DEV\nVC TC 0 DC {amb}\n"
+           f"BPD 0 TJ I={i_a}**2*{r0}*pwr((V(TJ)+273.15)/298.15,2.5)\n"
+           ".tran 1m 1 0 1m\n.end\n")
+    w = spice.NgspiceBatch().run(net, ["V(TJ)"])
+    assert abs(w["V(TJ)"][-1] - tj) < 1e-3 * (tj - amb)
+    as_rise = brentq(lambda x: x - ladder.rth * power(x), 0.0, 500.0) + amb
+    assert abs(as_rise - tj) > 0.05 * (tj - amb)  # reading a rise as degC would be wrong
