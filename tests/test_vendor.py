@@ -215,7 +215,7 @@ def test_every_written_model_validates_against_the_schema(tmp_path, actuator):
     assert doc["provenance"]["valid_t_s"] == [float(t[0]), float(t[-1])]
     assert main(["export", str(tmp_path / "f.json"), "-o", str(tmp_path / "f.lib")]) == 0
     lib = (tmp_path / "f.lib").read_text()
-    assert "junction-to-case" in lib and ".SUBCKT zth TJ TREF" in lib  # named for its data
+    assert "junction-to-case" in lib and ".SUBCKT f TJ TREF" in lib  # named for its file
     assert "Valid from 1e-05 s to 100 s" in lib and "Fit error: rms" in lib
     import jsonschema
 

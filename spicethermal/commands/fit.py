@@ -62,7 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print the fit table")
 
 
-def _from_csv(path: Path, rth: float | None) -> tuple[Any, bool, str, str]:
+def _from_csv(path: Path, rth: float | None) -> tuple[Any, bool, str]:
     from ..bundle import ZthTable, read_columns
     from ..curves import ZthCurve
 
@@ -71,10 +71,10 @@ def _from_csv(path: Path, rth: float | None) -> tuple[Any, bool, str, str]:
                      rth_k_per_w=rth, file=path.name, rows=cols.rows)
     if table.normalized and rth is None:
         raise DataFormatError(f"{path.name}: column r is normalized (Zth/Rth): give --rth")
-    return ZthCurve.from_table(table, label=path.name), rth is not None, "ambient", path.stem
+    return ZthCurve.from_table(table, label=path.name), rth is not None, "ambient"
 
 
-def _from_bundle(path: Path, index: int, rth: float | None) -> tuple[Any, bool, str, str]:
+def _from_bundle(path: Path, index: int, rth: float | None) -> tuple[Any, bool, str]:
     from ..bundle import Bundle
     from ..curves import ZthCurve
 
@@ -103,7 +103,7 @@ def _from_bundle(path: Path, index: int, rth: float | None) -> tuple[Any, bool, 
             z = replace(z, rth_k_per_w=rth)
         curve = ZthCurve.from_table(z, label=z.file or f"zth[{index - n_cool}]")
         held = z.rth_k_per_w is not None
-    return curve, held or rth is not None, bundle.reference, bundle.device or path.name
+    return curve, held or rth is not None, bundle.reference
 
 
 def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
@@ -142,9 +142,9 @@ def run(args: argparse.Namespace) -> int:
     if args.effect:
         return _run_with_effects(args, source)
     if source.is_dir():
-        curve, held, reference, device = _from_bundle(source, args.curve, args.rth)
+        curve, held, reference = _from_bundle(source, args.curve, args.rth)
     elif source.exists():
-        curve, held, reference, device = _from_csv(source, args.rth)
+        curve, held, reference = _from_csv(source, args.rth)
     else:
         raise DataFormatError(f"{source}: no such file or bundle directory")
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
@@ -153,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
         max_order=args.max_order, reference=args.reference or reference,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
-                    "device": device, "curve": getattr(curve, "label", "") or str(source),
+                    "curve": getattr(curve, "label", "") or str(source),
                     **({"valid_t_s": [min(t), max(t)]} if t else {})})
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
