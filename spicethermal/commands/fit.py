@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -148,13 +149,14 @@ def run(args: argparse.Namespace) -> int:
     else:
         raise DataFormatError(f"{source}: no such file or bundle directory")
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
-    t = [float(x) for x in curve.t_s if x > 0]
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
         max_order=args.max_order, reference=args.reference or reference,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
-                    "curve": getattr(curve, "label", "") or str(source),
-                    **({"valid_t_s": [min(t), max(t)]} if t else {})})
+                    "curve": getattr(curve, "label", "") or str(source)})
+    t = [float(x) for x in curve.t_s if x > 0]
+    if t:  # the data's time range, where the ladder holds: the .lib header states it
+        model = replace(model, provenance={**model.provenance, "valid_t_s": [min(t), max(t)]})
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
     out = model.save(args.output)
