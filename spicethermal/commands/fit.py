@@ -154,11 +154,11 @@ def run(args: argparse.Namespace) -> int:
         max_order=args.max_order, reference=args.reference or reference,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
                     "curve": getattr(curve, "label", "") or str(source)})
+    if args.topology != model.ladder.topology:
+        model = model.with_topology(args.topology)
     t = [float(x) for x in curve.t_s if x > 0]
     if t:  # the data's time range, where the ladder holds: the .lib header states it
         model = replace(model, provenance={**model.provenance, "valid_t_s": [min(t), max(t)]})
-    if args.topology != model.ladder.topology:
-        model = model.with_topology(args.topology)
     out = model.save(args.output)
     if args.plot:
         from ..plots import fig7
