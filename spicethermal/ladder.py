@@ -375,7 +375,9 @@ def _cached_foster(cauer: Cauer) -> Foster:
     cached = cauer.__dict__.get("_foster_cache")
     if cached is None:
         full = cauer.with_capacitances()
-        cached = Foster.from_tau(*_cauer_to_foster(full.r, full.c))
+        r, tau = (np.asarray(x, dtype=float) for x in _cauer_to_foster(full.r, full.c))
+        keep = r > 0  # a mode the junction does not see (a nearly massless node) adds nothing
+        cached = Foster.from_tau(r[keep], tau[keep])
         object.__setattr__(cauer, "_foster_cache", cached)
     return cached
 
