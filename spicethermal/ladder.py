@@ -232,7 +232,7 @@ class Cauer(_Ladder):
 
         A node without capacity inside the ladder joins its two resistors in series (exact).
         One at the junction is a resistance that responds at once; it gets a capacitance whose
-        time constant is 1e-9 of the ladder's fastest ``r·c`` (Zth changes only below that).
+        time constant is 1e-12 of the ladder's fastest ``r·c`` (Zth changes by ~1e-12 Rth).
 
         >>> Cauer([1.0, 2.0, 3.0], [1.0, 0.0, 2.0]).with_capacitances()
         Cauer(r=(3.0, 3.0), c=(1.0, 2.0))
@@ -245,7 +245,7 @@ class Cauer(_Ladder):
                 r[i - 1] += r.pop(i)
                 c.pop(i)
         if c[0] == 0:
-            c[0] = 1e-9 * min(ri * ci for ri, ci in zip(r[1:], c[1:], strict=True)) / r[0]
+            c[0] = 1e-12 * min(ri * ci for ri, ci in zip(r[1:], c[1:], strict=True)) / r[0]
         return Cauer(r, c)
 
     @classmethod
@@ -406,7 +406,9 @@ def _cached_foster(cauer: Cauer) -> Foster:
     cached = cauer.__dict__.get("_foster_cache")
     if cached is None:
         full = cauer.with_capacitances()
-        cached = Foster.from_tau(*_cauer_to_foster(full.r, full.c))
+        r, tau = (np.asarray(x, dtype=float) for x in _cauer_to_foster(full.r, full.c))
+        keep = r > 0  # a mode the junction does not see (a nearly massless node) adds nothing
+        cached = Foster.from_tau(r[keep], tau[keep])
         object.__setattr__(cauer, "_foster_cache", cached)
     return cached
 

@@ -13,7 +13,22 @@ from .effects import Effect
 from .files import atomic_write_text
 from .ladder import Foster
 from .model import ThermalModel
-from .spice import DIALECTS, TOPOLOGIES, Pulse, initial_conditions, render_bench, render_lib
+from .spice import (
+    DIALECTS,
+    TOPOLOGIES,
+    Pins,
+    Pulse,
+    environment,
+    initial_conditions,
+    render_bench,
+    render_lib,
+)
+
+#: The vendor network of the README's "Using the model in your circuit" example.
+VENDOR_EXAMPLE = ("vendor/infineon_optimos3_80v_thermal.lib", "IPB019N08N3")
+#: Its heatsink (base capacity J/K, resistance to ambient K/W), ambient and drive.
+HEATSINK_EXAMPLE = {"heatsink_c": 2.0, "heatsink_r": 1.0, "ambient_c": 25.0, "power_w": 20.0,
+                    "on_s": 1.0, "tstop_s": 10.0, "tmax_s": 1e-3}
 
 
 def golden_models() -> dict[str, ThermalModel]:
@@ -43,10 +58,33 @@ def _pwm_bench() -> str:
                         description="run: ngspice actuator_pwm_1khz.cir")
 
 
+def vendor_model() -> ThermalModel:
+    """The README example's vendor network, imported from the shipped excerpt."""
+    from .data import path
+    from .vendor import import_model
+
+    return import_model(path(VENDOR_EXAMPLE[0]), VENDOR_EXAMPLE[1])
+
+
+def _vendor_lib() -> str:
+    return render_lib(vendor_model(), "ngspice", "cauer", filename=f"{VENDOR_EXAMPLE[1]}.lib",
+                      pins=Pins.parse("Tj,Tcase"), temperature="absolute")
+
+
+def _heatsink_deck() -> str:
+    from . import __version__
+
+    return environment().get_template("bench/coupled.cir.j2").render(
+        name=VENDOR_EXAMPLE[1], lib_path=f"{VENDOR_EXAMPLE[1]}.lib", pins=["Tj", "Tcase"],
+        version=__version__, **HEATSINK_EXAMPLE)
+
+
 GOLDEN: dict[str, Callable[[], str]] = {
     **{f"{k}_{d}_{t}.lib": _lib(k, d, t) for k in ("actuator", "actuator_effects")
        for d in DIALECTS for t in TOPOLOGIES},
     "actuator_pwm_1khz.cir": _pwm_bench,
+    f"{VENDOR_EXAMPLE[1]}.lib": _vendor_lib,
+    f"{VENDOR_EXAMPLE[1]}_heatsink.cir": _heatsink_deck,
 }
 
 

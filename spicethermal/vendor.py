@@ -25,8 +25,7 @@ from .errors import DataFormatError
 from .ladder import Cauer, Foster
 from .model import ThermalModel
 
-_SCALE = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "mil": 25.4e-6, "m": 1e-3, "u": 1e-6,
-          "n": 1e-9, "p": 1e-12, "f": 1e-15}
+_EXPONENT = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "n": -9, "p": -12, "f": -15}
 _NUMBER = re.compile(r"([0-9]+\.?[0-9]*|\.[0-9]+)(e[+-]?[0-9]+)?(meg|mil|[tgkmunpf])?[a-z]*",
                      re.I)
 _TOKEN = re.compile(r"\s*(?:(?P<num>(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:e[+-]?[0-9]+)?"
@@ -45,14 +44,17 @@ def spice_number(text: str) -> float:
     """A SPICE number: scale suffixes (``meg``, ``k``, ``m``, ``u``, ...) in any case, trailing
     unit letters ignored.
 
-    >>> spice_number("1.51m"), spice_number("204.865u"), spice_number("2MEG"), spice_number("1uF")
-    (0.00151, 0.000204865, 2000000.0, 1e-06)
+    >>> spice_number("1.51m"), spice_number("862.111u"), spice_number("2MEG"), spice_number("1uF")
+    (0.00151, 0.000862111, 2000000.0, 1e-06)
     """
     m = _NUMBER.fullmatch(text.strip())
     if not m:
         raise ValueError(f"{text!r} is not a number")
-    value = float(m.group(1) + (m.group(2) or ""))
-    return value * _SCALE[m.group(3).lower()] if m.group(3) else value
+    exponent = int((m.group(2) or "e0")[1:])
+    suffix = (m.group(3) or "").lower()
+    if suffix == "mil":
+        return float(f"{m.group(1)}e{exponent}") * 25.4e-6
+    return float(f"{m.group(1)}e{exponent + _EXPONENT.get(suffix, 0)}")  # exact decimal
 
 
 def evaluate(expr: str, params: Mapping[str, float]) -> float:

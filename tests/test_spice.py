@@ -83,23 +83,26 @@ def test_pyspice_backend_agrees_with_batch(tmp_path, actuator):
 
 
 @pytest.mark.ngspice
+@pytest.mark.parametrize("temperature", spice.TEMPERATURES)
 @pytest.mark.parametrize("dialect", spice.DIALECTS)
 @pytest.mark.parametrize("topology", spice.TOPOLOGIES)
-def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology):
+def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology, temperature):
     ladder = Foster.from_tau([20.0, 80.0], [1e-3, 0.5])
     model = ThermalModel(ladder, (
         Effect.create("temperature-coefficient", alpha_per_k=-4e-3, t0_c=25.0),
         Effect.create("phase-change", t_c=40.0, width_k=2.0, latent_j=0.02, node=1),
     )).with_topology(topology)
-    lib = spice.export(model, tmp_path / "m.lib", dialect, topology, "NL")
-    tref, toffset = spice.reference_drive(model, 25.0)
+    lib = spice.export(model, tmp_path / "m.lib", dialect, topology, "NL",
+                       temperature=temperature)
+    # rise: TREF grounded, the ambient as TOFFSET; absolute: TREF at 25 V, no offset anywhere
+    tref, toffset = spice.reference_drive(model, 25.0) if temperature == "rise" else (25.0, None)
     net = spice.render_bench(lib, "NL", power_w=0.3, tstop_s=4.0, tmax_s=4e-3, tref_c=tref,
                              toffset_c=toffset)
     w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
     t = w.t_s[w.t_s > 1e-3]
     rise = 4e-8  # the bench's default ramp, 1e-5 of the maximum step
     py = model.simulate(t, Schedule((0.0, rise / 2), (0.0, 0.3)), tref_c=25.0).tj_k + 25.0
-    sim = w["V(TJ)"][w.t_s > 1e-3] + 25.0
+    sim = w["V(TJ)"][w.t_s > 1e-3] + 25.0 - tref
     assert np.max(np.abs(sim - py)) < 0.03  # K, of a rise of about 25 K
     lin = ThermalModel(model.ladder).simulate(t, Schedule.step(0.3)).tj_k + 25.0
     assert np.max(np.abs(lin - py)) > 1.0  # the effects matter at this strength
@@ -139,13 +142,15 @@ def test_cli_bad_input_is_one_line_without_traceback(tmp_path):
 
 
 # ------------------------------------------------------------------ names, pins, conventions
+@pytest.mark.ngspice
+@pytest.mark.parametrize("dialect", spice.DIALECTS)
 @pytest.mark.parametrize("name", ["SPD22N08S2L-50", "IPB019N08N3", "2N7002", "C3M0065090D",
                                   "GS66508B", "FDMS86181.TH", "irf540n_thermal"])
-def test_vendor_part_names_are_accepted_and_run(tmp_path, name):
+def test_vendor_part_names_are_accepted_and_run(tmp_path, name, dialect):
     model = ThermalModel(Foster.from_tau([1.0, 2.0], [1e-3, 1.0]))
-    lib = spice.export(model, tmp_path / "m.lib", "ngspice", "cauer", name)
+    lib = spice.export(model, tmp_path / "m.lib", dialect, "cauer", name)
     w = spice.NgspiceBatch().run(spice.render_bench(lib, name, power_w=1.0, tstop_s=5.0,
-                                                    tmax_s=0.05), ["V(TJ)"])
+                                                    tmax_s=0.05), ["V(TJ)"], dialect)
     assert abs(w["V(TJ)"][-1] - model.ladder.zth(5.0)) < 1e-3 * model.rth
 
 
@@ -201,6 +206,15 @@ def test_negligible_stages_are_merged_and_said_in_the_header():
     cauer, notes = spice.simulator_ready(Cauer([0.1, 1e-15, 0.2], [1e-3, 2e-3, 1.0]))
     assert cauer.r == (0.1, 0.2) and cauer.c == pytest.approx((1e-3, 1.002)) and notes
     assert spice.simulator_ready(Foster([1.0], [1.0]))[1] == []
+
+
+@pytest.mark.ngspice
+def test_merged_export_runs_where_the_exact_stages_would_not(tmp_path):
+    bad = ThermalModel(Foster([0.3, 2.4e-22, 0.5], [1e-3, 8e15, 1.0]))
+    lib = spice.export(bad, tmp_path / "m.lib", "ngspice", "foster", "D")
+    w = spice.NgspiceBatch().run(spice.render_bench(lib, "D", power_w=1.0, tstop_s=10.0,
+                                                    tmax_s=0.01), ["V(TJ)"])
+    assert abs(w["V(TJ)"][-1] - bad.ladder.zth(10.0)) < 1e-3 * bad.rth
 
 
 def test_header_states_reference_source_fit_error_and_time_range(actuator):
@@ -263,10 +277,13 @@ HEATSINKS = {"slow": (1.0, 100.0), "among": (0.2, 0.05)}
 COUPLED_TOLERANCE = {"slow": 0.02, "among": 0.05}
 
 
+PWM_PERIOD_S = 0.01
+
+
 def drive_segments(drive, power, tstop):
     if drive == "step":
         return [(0.0, np.inf, power)], f"IP 0 TJ PWL(0 0 1n {power})"
-    period = 0.01
+    period = PWM_PERIOD_S
     segs = [seg for k in range(int(tstop / period) + 2) for seg in
             ((k * period, (k + 0.5) * period, power), ((k + 0.5) * period, (k + 1) * period, 0))]
     return segs, f"IP 0 TJ PULSE(0 {power} 0 1n 1n {period / 2} {period})"
@@ -279,11 +296,12 @@ def coupled_error(lib, name, pins, resistors, capacitors, heatsink, drive, diale
     r_hs, c_hs = HEATSINKS[heatsink]
     tstop = 5 * r_hs * c_hs if heatsink == "among" else (20.0 if drive == "step" else 2.0)
     segs, source = drive_segments(drive, power, tstop)
+    tmax = tstop / 2000 if drive == "step" else min(tstop / 2000, PWM_PERIOD_S / 100)
     nodes = {"junction": "TJ", "reference": "TC", "ambient": "TA"}
     inst = " ".join(nodes[role] for role in pins.order)
     net = (f"* coupled\n.include {lib}\nX1 {inst} {name}\nCHS TC 0 {c_hs}\nRHS TC TA {r_hs}\n"
            f"VA TA 0 DC {ambient_c}\n{source}\n.options {options}\n"
-           f".tran {tstop / 2000} {tstop} 0 {tstop / 2000}\n.end\n")
+           f".tran {tmax} {tstop} 0 {tmax}\n.end\n")
     w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
     rs = [*resistors, ("TC", "TA", r_hs)]
     cs = [*capacitors, ("TC", c_hs)]
@@ -346,3 +364,29 @@ def test_three_pin_form_and_both_temperature_conventions(tmp_path, distributed, 
     err = coupled_error(lib, "DEV", pins, rs, cs, "among", "step", "pspice",
                         ambient_c=ambient_c, options="")
     assert err < COUPLED_TOLERANCE["among"]
+
+
+@pytest.mark.ngspice
+def test_absolute_temperatures_next_to_an_electrothermal_vendor_expression(tmp_path, actuator):
+    """A vendor-style electrothermal expression reads V(Tj) in degC (Rds(on) ∝ (T/298 K)^2.5,
+    as Infineon's level-3 models): with --temperature absolute it gets the junction
+    temperature, and the self-consistent steady state matches the closed loop solved here."""
+    from scipy.optimize import brentq
+
+    ladder = Foster.from_tau([2.0, 6.0], [1e-3, 0.05])  # Rth 8 K/W
+    i_a, r0, amb = 3.0, 0.5, 25.0
+
+    def power(tj_c):
+        return i_a**2 * r0 * ((tj_c + 273.15) / 298.15) ** 2.5
+
+    tj = brentq(lambda x: x - amb - ladder.rth * power(x), amb, 500.0)
+    pins = spice.Pins.parse("Tj,Tcase")
+    lib = spice.export(ThermalModel(ladder, reference="case"), tmp_path / "d.lib", "ngspice",
+                       "cauer", "DEV", pins=pins, temperature="absolute")
+    net = (f"* self-heating\n.include {lib}\nX1 TJ TC DEV\nVC TC 0 DC {amb}\n"
+           f"BPD 0 TJ I={i_a}**2*{r0}*pwr((V(TJ)+273.15)/298.15,2.5)\n"
+           ".tran 1m 1 0 1m\n.end\n")
+    w = spice.NgspiceBatch().run(net, ["V(TJ)"])
+    assert abs(w["V(TJ)"][-1] - tj) < 1e-3 * (tj - amb)
+    as_rise = brentq(lambda x: x - ladder.rth * power(x), 0.0, 500.0) + amb
+    assert abs(as_rise - tj) > 0.05 * (tj - amb)  # reading a rise as degC would be wrong

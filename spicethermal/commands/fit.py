@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import DataFormatError
@@ -40,7 +41,7 @@ def _order(text: str) -> int | str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("-o", "--output", metavar="MODEL.json", required=True,
-                        help="model file to write (spicethermal-model/1)")
+                        help="model file to write (spicethermal-model/2)")
     parser.add_argument("--order", type=_order, default="auto", metavar="N|auto",
                         help="number of RC stages, or auto (default: chosen by BIC)")
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
@@ -52,6 +53,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "datasheet and measured curves need) or absolute (K/W) residuals")
     parser.add_argument("--topology", choices=("foster", "cauer"), default="foster",
                         help="topology stored in the model file (exact conversion; default foster)")
+    parser.add_argument("--reference", choices=("case", "ambient"),
+                        help="what the curve is measured to: junction-to-case or -ambient "
+                             "(default: the bundle's reference; ambient for a CSV)")
     parser.add_argument("--plot", metavar="FIG.png",
                         help="also write the fit figure (paper Fig. 7: fit, residuals, ladder)")
     parser.add_argument("--foster-table", metavar="CSV",
@@ -119,20 +123,22 @@ def run(args: argparse.Namespace) -> int:
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
-        max_order=args.max_order, reference=reference, weighting=args.weighting,
+        max_order=args.max_order, reference=args.reference or reference, weighting=args.weighting,
         provenance={"tool": f"spicethermal {__version__} fit", "source": str(source),
                     "curve": curve.label or str(source), "early_time": early_time_json(curve)})
     fb = None
     if args.bootstrap:
         from ..bootstrap import fit_bootstrap
-        from ..model import ThermalModel
 
         fb = fit_bootstrap(result, args.bootstrap, args.seed)
         prov = dict(model.provenance)
         prov["fit"] = {**prov["fit"], "bootstrap": fb.to_dict()}
-        model = ThermalModel(model.ladder, model.effects, model.reference, prov)
+        model = replace(model, provenance=prov)
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
+    t = [float(x) for x in curve.t_s if x > 0]
+    if t:  # the data's time range, where the ladder holds: the .lib header states it
+        model = replace(model, provenance={**model.provenance, "valid_t_s": [min(t), max(t)]})
     out = model.save(args.output)
     written = [str(out)]
     if args.plot and fb is not None:

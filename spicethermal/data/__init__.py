@@ -8,6 +8,10 @@
 * ``pyrth_mosfet/`` — real cooling transients of a power MOSFET mounted dry and with a thermal
   interface material, and one T3Ster export, from the PyRth project (MIT licence, see
   ``pyrth_mosfet/README.md`` and ``pyrth_mosfet/LICENSE.txt``).
+* ``vendor/`` — vendors' thermal networks (Infineon, LT SOAtherm for Infineon, Fairchild and
+  IR parts, Fairchild): short excerpts of public SPICE libraries, sources and terms in
+  ``vendor/README.md``; read by ``spicethermal import`` in the tests and the README.
+* ``model.schema.json`` — the JSON Schema of the model file (``docs/model-format.md``).
 """
 
 from __future__ import annotations
