@@ -22,6 +22,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import logging
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
@@ -32,7 +33,7 @@ from typing import Any
 
 from ..bundle import MANIFEST
 from ..errors import DataFormatError, SpiceThermalError
-from ..files import atomic_write_text, read_json
+from ..files import atomic_open, atomic_write_text, read_json
 from .device import COLUMNS, Options, Source, characterize, make_row
 
 __all__ = ["BatchRun", "check_output", "cluster_client", "find_sources", "load_results",
@@ -153,8 +154,6 @@ def write_table(rows: Sequence[dict[str, Any]], out_dir: str | os.PathLike) -> l
         import pyarrow.parquet as pq
     except ImportError:
         return paths
-    from ..files import atomic_open
-
     table = pa.Table.from_pylist([{k: row.get(k) for k in COLUMNS} for row in rows])
     with atomic_open(out / "results.parquet", "wb") as handle:
         pq.write_table(table, handle)
@@ -170,8 +169,6 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
         from distributed import Client, LocalCluster
     except ImportError:
         raise SpiceThermalError("batch needs Dask: pip install 'spicethermal[batch]'") from None
-    import logging
-
     if scheduler:
         try:
             client = Client(scheduler, timeout="10s")
