@@ -66,7 +66,7 @@ def fig_zth_population(curves: Sequence[dict], flagged: Sequence[int], typical: 
 def fig_verdicts(counts: dict[str, int], path: Path) -> Path:
     """Bar chart of the diagnosis verdicts."""
     names = sorted(counts, key=lambda k: (-counts[k], k))
-    fig = new_figure(6.4, 0.9 + 0.3 * len(names))
+    fig = new_figure(9.0, 1.0 + 0.3 * len(names))
     ax = fig.add_subplot()
     ax.barh(names, [counts[k] for k in names], color=_BLUE)
     ax.invert_yaxis()
@@ -86,7 +86,8 @@ def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
     counts = dict(verdict_counts(rows))
     errors = [r for r in rows if r.get("error")]
     summary = [f"{len(rows)} inputs: {len(good)} characterized, {len(errors)} with an error, "
-               f"{len(outliers)} outliers (robust |z| ≥ {Z_OUTLIER:g})."]
+               f"{len(outliers)} outlier{'' if len(outliers) == 1 else 's'} (robust |z| ≥ "
+               f"{Z_OUTLIER:g})."]
     sections = []
     if good:
         med = float(np.median(rth))
