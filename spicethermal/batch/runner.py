@@ -10,8 +10,9 @@ Layout of the output directory::
                                        presence means the device is done
     OUTDIR/results.csv (+ .parquet)    one row per input (columns :data:`~.device.COLUMNS`)
 
-Resuming is keyed by the content hash of each input, not its path or name: an input whose
-bytes have a finished, error-free ``result.json`` is not recomputed; an edited input is.
+Resuming is keyed by the content hash of each input: an input whose bytes have a finished,
+error-free ``result.json`` under its name is not recomputed; an edited input is (and so is a
+renamed one, whose results would live under another name).
 A worker that dies (killed, out of memory) is replaced by its nanny and the scheduler retries
 its task on another worker, up to ``distributed.scheduler.allowed-failures`` times (Dask's
 default, 3); after that the device gets an error row.
@@ -104,10 +105,10 @@ def find_sources(paths: Sequence[str | os.PathLike], exclude: Path | None = None
     return out
 
 
-def load_results(out_dir: str | os.PathLike) -> dict[str, dict[str, Any]]:
-    """The finished results in ``out_dir/devices``, keyed by input content hash (error rows
-    are left out: they are recomputed on resume). A result file that cannot be read is
-    ignored (its device is recomputed)."""
+def load_results(out_dir: str | os.PathLike) -> dict[tuple[str, str], dict[str, Any]]:
+    """The finished results in ``out_dir/devices``, keyed by (input content hash, output
+    name): error rows are left out (they are recomputed on resume), and so is a result file
+    that cannot be read (its device is recomputed)."""
     done = {}
     for path in sorted(Path(out_dir, "devices").glob(f"*/{RESULT}")):
         try:
@@ -116,7 +117,7 @@ def load_results(out_dir: str | os.PathLike) -> dict[str, dict[str, Any]]:
         except (DataFormatError, KeyError, TypeError):
             continue
         if row.get("sha256") and not row.get("error"):
-            done[row["sha256"]] = record
+            done[row["sha256"], row["name"]] = record
     return done
 
 
@@ -223,7 +224,7 @@ def run_batch(paths: Sequence[str | os.PathLike], out_dir: str | os.PathLike, *,
     records: dict[int, dict[str, Any]] = {}
     pending = []
     for i, src in enumerate(sources):
-        old = done.get(src.sha256) if src.sha256 else None
+        old = done.get((src.sha256, src.name)) if src.sha256 else None
         if old is not None:
             old["row"].update(source=src.path)
             records[i] = old
