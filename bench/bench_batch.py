@@ -36,6 +36,7 @@ from spicethermal.batch.summary import summarize
 
 
 def timed_run(pop: Path, out: Path, workers: int, options: Options) -> dict:
+    load = os.getloadavg()[0]
     t0 = time.perf_counter()
     with cluster_client(workers=workers) as client:
         t1 = time.perf_counter()
@@ -45,7 +46,8 @@ def timed_run(pop: Path, out: Path, workers: int, options: Options) -> dict:
     return {"workers": workers, "startup_s": t1 - t0, "run_s": t2 - t1,
             "per_s": len(rows) / (t2 - t1),
             "device_s": statistics.median(r["wall_s"] for r in rows),
-            "errors": sum(1 for r in rows if r["error"]), "run": run}
+            "errors": sum(1 for r in rows if r["error"]), "run": run,
+            "load": (load, os.getloadavg()[0])}
 
 
 def main() -> int:
@@ -61,12 +63,13 @@ def main() -> int:
         planted = {d["name"] for d in truth["devices"] if d["defect"]}
         print(f"{args.n} simulated devices, {len(planted)} voided die attaches planted; "
               f"diagnosis candidates: {', '.join(args.effect) if args.effect else 'all'}; "
-              f"load average before: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+              f"{os.cpu_count()} cores", flush=True)
         runs = [timed_run(pop, Path(tmp) / f"out{w}", w, options) for w in (1, 2)]
         for r in runs:
             print(f"  {r['workers']} worker(s): {r['run_s']:7.1f} s for {args.n} devices = "
                   f"{r['per_s']:.2f} devices/s (cluster start {r['startup_s']:.1f} s), median "
-                  f"{r['device_s']:.2f} s per device on a worker, {r['errors']} errors")
+                  f"{r['device_s']:.2f} s per device on a worker, {r['errors']} errors; load "
+                  f"average {r['load'][0]:.1f} before, {r['load'][1]:.1f} after")
         speedup = runs[1]["per_s"] / runs[0]["per_s"]
         print(f"speed-up with 2 workers: {speedup:.2f}x (target >= 1.7x)")
         summary = summarize(runs[1]["run"].results, Path(tmp) / "out2")

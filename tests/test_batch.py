@@ -84,9 +84,10 @@ def test_resume_redoes_only_unfinished_and_changed_inputs(client, inputs, tmp_pa
     src = tmp_path / "src"
     for d in devices[:4]:
         device_bundle(d).write(src / d.name)
+    device_bundle(devices[0]).write(src / "twin")  # the same bytes under another name
     out = tmp_path / "out"
     first = run_batch([src], out, client=client, options=Options(diagnose=False))
-    assert first.computed == 4
+    assert first.computed == 5
     with pytest.raises(DataFormatError, match="--resume"):
         run_batch([src], out, client=client, options=Options(diagnose=False))
     # interrupted before device 2 finished: no result.json, a stale temporary file
@@ -94,11 +95,12 @@ def test_resume_redoes_only_unfinished_and_changed_inputs(client, inputs, tmp_pa
     (out / "devices" / devices[1].name / ".result.json.x.tmp").write_text("{")
     device_bundle(devices[2], seed=99).write(src / devices[2].name)  # re-measured
     again = run_batch([src], out, client=client, options=Options(diagnose=False), resume=True)
-    assert (again.computed, again.reused) == (2, 2)
-    assert [r["row"]["name"] for r in again.results] == [d.name for d in devices[:4]]
-    assert len(load_results(out)) == 4
-    assert [r["rth_k_per_w"] for r in again.rows][::3] == \
-        [r["rth_k_per_w"] for r in first.rows][::3]
+    assert (again.computed, again.reused) == (2, 3)
+    names = [d.name for d in devices[:4]] + ["twin"]
+    assert [r["row"]["name"] for r in again.results] == names
+    assert sorted(name for _, name in load_results(out)) == names
+    assert again.rows[0]["rth_k_per_w"] == first.rows[0]["rth_k_per_w"] == \
+        again.rows[4]["rth_k_per_w"]
 
 
 def _crash_once(source, options, markers):

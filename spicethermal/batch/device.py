@@ -20,7 +20,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .. import __version__
+from ..bundle import Bundle
+from ..diagnose import diagnose
 from ..errors import SpiceThermalError
+from ..fit import fit_model
+from ..sources import read_source
+from ..spice import check_name, render_lib
 
 __all__ = ["COLUMNS", "Options", "Source", "characterize", "make_row", "subckt_name"]
 
@@ -84,13 +90,17 @@ class Source:
 
 
 def subckt_name(name: str) -> str:
-    """A valid subcircuit name for a device name (letters, digits, ``_``; a letter first).
+    """A valid subcircuit name for a device name (letters, digits, ``_``; not a SPICE
+    keyword: see :func:`spicethermal.spice.check_name`).
 
-    >>> subckt_name("device-007"), subckt_name("12 V rail")
-    ('DEVICE_007', 'D_12_V_RAIL')
+    >>> subckt_name("device-007"), subckt_name("12 V rail"), subckt_name("end")
+    ('DEVICE_007', '12_V_RAIL', 'D_END')
     """
     text = re.sub(r"[^A-Za-z0-9_]", "_", name).upper()[:60] or "D"
-    return text if text[0].isalpha() else f"D_{text}"
+    try:
+        return check_name(text)
+    except SpiceThermalError:
+        return f"D_{text}"
 
 
 def make_row(source: Source, **values: Any) -> dict[str, Any]:
@@ -104,9 +114,9 @@ def make_row(source: Source, **values: Any) -> dict[str, Any]:
 def characterize(source: Source, options: Options) -> dict[str, Any]:
     """Fit, diagnose and export one device; return ``{"row", "model", "lib", "curve"}``.
 
-    ``row`` has the :data:`COLUMNS`; ``model`` is the ``spicethermal-model/1`` JSON text and
-    ``lib`` the subcircuit text (``None`` on error); ``curve`` the measured Zth(t)
-    (``t_s``, ``zth_k_per_w``, ``rth_k_per_w``) for the population's envelope.
+    ``row`` has the :data:`COLUMNS`; ``model`` is the ``spicethermal-model/1`` document (a
+    dict) and ``lib`` the subcircuit text (both ``None`` on error); ``curve`` the measured
+    Zth(t) (``t_s``, ``zth_k_per_w``, ``rth_k_per_w``) for the population's envelope.
 
     Examples
     --------
@@ -142,11 +152,6 @@ def characterize(source: Source, options: Options) -> dict[str, Any]:
 
 
 def _work(local: Path, source: Source, options: Options) -> dict[str, Any]:
-    from .. import __version__
-    from ..fit import fit_model
-    from ..sources import read_source
-    from ..spice import render_lib
-
     read = read_source(local)
     curve, held, reference = read.curve(0), read.rth_held(0), read.bundle.reference
     model, fit = fit_model(curve, max_order=options.max_order, reference=reference,
@@ -156,13 +161,9 @@ def _work(local: Path, source: Source, options: Options) -> dict[str, Any]:
     device = source.name
     verdict, improvement = "", None
     if source.kind == "bundle":
-        from ..bundle import Bundle
-
         bundle = Bundle.read(local)
         device = bundle.device or source.name
         if options.diagnose and (bundle.cooling or bundle.pwm or bundle.calibration):
-            from ..diagnose import diagnose
-
             diagnosis = diagnose(bundle, None, options.effects)
             verdict = diagnosis.verdict_effect or "none"
             best = diagnosis.best or (diagnosis.candidates[0] if diagnosis.candidates else None)
@@ -175,10 +176,10 @@ def _work(local: Path, source: Source, options: Options) -> dict[str, Any]:
     tau = fit.foster.tau
     power = getattr(curve, "power_w", None)
     row = make_row(source, device=device, rth_k_per_w=fit.rth_k_per_w, order=fit.order,
-               tau_min_s=min(tau), tau_max_s=max(tau),
-               fit_rms_k=fit.rms_k_per_w * power if power else None,
-               fit_rms_k_per_w=fit.rms_k_per_w, power_w=power, verdict=verdict,
-               improvement=improvement)
+                   tau_min_s=min(tau), tau_max_s=max(tau),
+                   fit_rms_k=fit.rms_k_per_w * power if power else None,
+                   fit_rms_k_per_w=fit.rms_k_per_w, power_w=power, verdict=verdict,
+                   improvement=improvement)
     stored = curve.resample_log(20) if len(curve) > STORED_POINTS else curve
     return {"row": row, "model": model.to_dict(), "lib": lib,
             "curve": {"t_s": stored.t_s.tolist(), "zth_k_per_w": stored.zth_k_per_w.tolist(),

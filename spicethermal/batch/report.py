@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 
 from ..files import atomic_write_text
+from ..plots import new_figure, save_figure
+from ..report import Section, render
 from .spread import PERCENTILES, Z_OUTLIER, Outlier
 
 __all__ = ["fig_rth_histogram", "fig_verdicts", "fig_zth_population", "verdict_counts",
@@ -21,8 +23,6 @@ _GREY, _RED, _BLUE = "#9aa5b1", "#c53030", "#2b6cb0"
 
 def fig_rth_histogram(rth: np.ndarray, flagged: Sequence[int], path: Path) -> Path:
     """Histogram of Rth over the population, outliers in red."""
-    from ..plots import new_figure, save_figure
-
     fig = new_figure(6.4, 3.6)
     ax = fig.add_subplot()
     bins = np.histogram_bin_edges(rth, bins=min(40, max(8, rth.size // 4)))
@@ -40,8 +40,6 @@ def fig_rth_histogram(rth: np.ndarray, flagged: Sequence[int], path: Path) -> Pa
 def fig_zth_population(curves: Sequence[dict], flagged: Sequence[int], typical: Any,
                        worst: Any, path: Path) -> Path:
     """Every measured Zth(t) (grey, outliers red) with the typical and worst-case ladders."""
-    from ..plots import new_figure, save_figure
-
     fig = new_figure(6.4, 4.2)
     ax = fig.add_subplot()
     for i, c in enumerate(curves):
@@ -67,11 +65,9 @@ def fig_zth_population(curves: Sequence[dict], flagged: Sequence[int], typical: 
 
 def fig_verdicts(counts: dict[str, int], path: Path) -> Path:
     """Bar chart of the diagnosis verdicts."""
-    from ..plots import new_figure, save_figure
-
-    fig = new_figure(6.4, 2.8)
-    ax = fig.add_subplot()
     names = sorted(counts, key=lambda k: (-counts[k], k))
+    fig = new_figure(9.0, 1.0 + 0.3 * len(names))
+    ax = fig.add_subplot()
     ax.barh(names, [counts[k] for k in names], color=_BLUE)
     ax.invert_yaxis()
     ax.set_xlabel("devices")
@@ -82,7 +78,6 @@ def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
                outliers: Sequence[Outlier], typical: Any, worst: Any,
                pwm: Sequence[dict], elapsed_s: float) -> Path:
     """Figures into ``out/figures`` and the page ``out/index.html``; returns the page."""
-    from ..report import Section, render
 
     rows = [r["row"] for r in results]
     rth = np.array([r["row"]["rth_k_per_w"] for r in good], dtype=float)
@@ -91,7 +86,8 @@ def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
     counts = dict(verdict_counts(rows))
     errors = [r for r in rows if r.get("error")]
     summary = [f"{len(rows)} inputs: {len(good)} characterized, {len(errors)} with an error, "
-               f"{len(outliers)} outliers (robust |z| ≥ {Z_OUTLIER:g})."]
+               f"{len(outliers)} outlier{'' if len(outliers) == 1 else 's'} (robust |z| ≥ "
+               f"{Z_OUTLIER:g})."]
     sections = []
     if good:
         med = float(np.median(rth))

@@ -10,8 +10,9 @@ Layout of the output directory::
                                        presence means the device is done
     OUTDIR/results.csv (+ .parquet)    one row per input (columns :data:`~.device.COLUMNS`)
 
-Resuming is keyed by the content hash of each input, not its path or name: an input whose
-bytes have a finished, error-free ``result.json`` is not recomputed; an edited input is.
+Resuming is keyed by the content hash of each input: an input whose bytes have a finished,
+error-free ``result.json`` under its name is not recomputed; an edited input is (and so is a
+renamed one, whose results would live under another name).
 A worker that dies (killed, out of memory) is replaced by its nanny and the scheduler retries
 its task on another worker, up to ``distributed.scheduler.allowed-failures`` times (Dask's
 default, 3); after that the device gets an error row.
@@ -22,6 +23,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import logging
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
@@ -32,7 +34,7 @@ from typing import Any
 
 from ..bundle import MANIFEST
 from ..errors import DataFormatError, SpiceThermalError
-from ..files import atomic_write_text, read_json
+from ..files import atomic_open, atomic_write_text, read_json
 from .device import COLUMNS, Options, Source, characterize, make_row
 
 __all__ = ["BatchRun", "check_output", "cluster_client", "find_sources", "load_results",
@@ -103,10 +105,10 @@ def find_sources(paths: Sequence[str | os.PathLike], exclude: Path | None = None
     return out
 
 
-def load_results(out_dir: str | os.PathLike) -> dict[str, dict[str, Any]]:
-    """The finished results in ``out_dir/devices``, keyed by input content hash (error rows
-    are left out: they are recomputed on resume). A result file that cannot be read is
-    ignored (its device is recomputed)."""
+def load_results(out_dir: str | os.PathLike) -> dict[tuple[str, str], dict[str, Any]]:
+    """The finished results in ``out_dir/devices``, keyed by (input content hash, output
+    name): error rows are left out (they are recomputed on resume), and so is a result file
+    that cannot be read (its device is recomputed)."""
     done = {}
     for path in sorted(Path(out_dir, "devices").glob(f"*/{RESULT}")):
         try:
@@ -115,7 +117,7 @@ def load_results(out_dir: str | os.PathLike) -> dict[str, dict[str, Any]]:
         except (DataFormatError, KeyError, TypeError):
             continue
         if row.get("sha256") and not row.get("error"):
-            done[row["sha256"]] = record
+            done[row["sha256"], row["name"]] = record
     return done
 
 
@@ -153,8 +155,6 @@ def write_table(rows: Sequence[dict[str, Any]], out_dir: str | os.PathLike) -> l
         import pyarrow.parquet as pq
     except ImportError:
         return paths
-    from ..files import atomic_open
-
     table = pa.Table.from_pylist([{k: row.get(k) for k in COLUMNS} for row in rows])
     with atomic_open(out / "results.parquet", "wb") as handle:
         pq.write_table(table, handle)
@@ -170,8 +170,6 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
         from distributed import Client, LocalCluster
     except ImportError:
         raise SpiceThermalError("batch needs Dask: pip install 'spicethermal[batch]'") from None
-    import logging
-
     if scheduler:
         try:
             client = Client(scheduler, timeout="10s")
@@ -226,7 +224,7 @@ def run_batch(paths: Sequence[str | os.PathLike], out_dir: str | os.PathLike, *,
     records: dict[int, dict[str, Any]] = {}
     pending = []
     for i, src in enumerate(sources):
-        old = done.get(src.sha256) if src.sha256 else None
+        old = done.get((src.sha256, src.name)) if src.sha256 else None
         if old is not None:
             old["row"].update(source=src.path)
             records[i] = old

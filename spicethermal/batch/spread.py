@@ -46,13 +46,19 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from scipy.stats import norm
 
+from .. import __version__
+from ..curves import ZthCurve
 from ..errors import DataFormatError
+from ..fit import fit_model
+from ..model import ThermalModel
+from ..pwm import steady_state
+from ..structure import StructureFunction
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from ..model import ThermalModel
 
 __all__ = ["PERCENTILES", "RESOLUTION", "Z_OUTLIER", "Outlier", "envelopes", "find_outliers",
            "fit_envelope", "path_limit", "pwm_peaks", "robust_z"]
@@ -97,8 +103,6 @@ class Outlier:
 
 
 def _structures(ladders: Sequence[Any]) -> list[Any]:
-    from ..structure import StructureFunction
-
     return [StructureFunction.from_ladder(lad) for lad in ladders]
 
 
@@ -172,8 +176,6 @@ def path_limit(levels: int) -> float:
     >>> round(path_limit(1), 6) == Z_OUTLIER, round(path_limit(37), 2)
     (True, 4.37)
     """
-    from scipy.stats import norm
-
     return float(norm.isf(norm.sf(Z_OUTLIER) / levels))
 
 
@@ -227,10 +229,6 @@ def envelopes(curves: Sequence[Mapping[str, Any]], points_per_decade: int = 10
 def fit_envelope(t_s: NDArray, zth_k_per_w: NDArray, rth_k_per_w: float, label: str
                  ) -> ThermalModel:
     """An envelope curve fitted like any curve: automatic order, ΣR = ``rth_k_per_w``."""
-    from .. import __version__
-    from ..curves import ZthCurve
-    from ..fit import fit_model
-
     curve = ZthCurve.from_points(t_s, zth_k_per_w, rth_k_per_w=rth_k_per_w, label=label)
     model, _ = fit_model(curve, rth_k_per_w=rth_k_per_w,
                          provenance={"tool": f"spicethermal {__version__} batch",
@@ -249,8 +247,6 @@ def pwm_peaks(ladders: Sequence[Any], power_w: float, freqs_hz: Sequence[float],
     >>> round(rows[0]["peak_p50_k"], 3), round(rows[0]["peak_max_k"], 3)  # D·P·R at 1 MHz
     (1.0, 1.5)
     """
-    from ..pwm import steady_state
-
     if not ladders:
         raise DataFormatError("no device model for the PWM table")
     rows = []

@@ -20,6 +20,9 @@ from typing import Any
 import numpy as np
 
 from ..files import atomic_write_text
+from ..model import ThermalModel
+from ..spice import export
+from .report import write_page
 from .spread import PERCENTILES, Outlier, envelopes, find_outliers, fit_envelope, pwm_peaks
 
 __all__ = ["Summary", "summarize"]
@@ -57,9 +60,6 @@ def summarize(results: Sequence[dict[str, Any]], out_dir: str | Path, *, power_w
     """Outliers, envelope ladders, PWM table and report of a batch's ``results`` (records
     ``{"row", "model", "curve"}`` as :func:`~.runner.run_batch` returns them) into ``out_dir``.
     """
-    from ..model import ThermalModel
-    from ..spice import export
-
     out = Path(out_dir)
     good = [r for r in results if not r["row"].get("error") and r.get("model")]
     models = [ThermalModel.from_dict(r["model"], r["row"]["name"]) for r in good]
@@ -88,7 +88,6 @@ def summarize(results: Sequence[dict[str, Any]], out_dir: str | Path, *, power_w
     header = ["freq_hz", "duty", "power_w", "devices",
               *[f"peak_p{p}_k" for p in PERCENTILES], "peak_max_k"]
     atomic_write_text(out / "pwm_peaks.csv", _csv(pwm, header))
-    from .report import write_page
 
     page = write_page(out, results, good, outliers, typical, worst, pwm, elapsed_s)
     return Summary(outliers, names, typical, worst, pwm, page)

@@ -106,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
     errors = sum(1 for r in batch.rows if r.get("error"))
     if not args.quiet:
         print(f"{len(batch.rows)} inputs ({batch.computed} computed, {batch.reused} reused), "
-              f"{errors} with an error, {len(summary.outliers)} outliers")
+              f"{errors} with an error, {len(summary.outliers)} outlier"
+              f"{'' if len(summary.outliers) == 1 else 's'}")
         for o in summary.outliers:
             print(f"  outlier {summary.names[o.index]}: {o.reason}")
         print(f"wrote {out / 'results.csv'} and {summary.page}")
