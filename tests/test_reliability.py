@@ -295,3 +295,13 @@ def test_written_files_follow_the_umask(tmp_path: Path, mask: int, file_mode: in
     assert (out.stat().st_mode & 0o777) == dir_mode
     for p in (out / "bundle.json", out / "cooling_1.csv", tmp_path / "m.json"):
         assert (p.stat().st_mode & 0o777) == file_mode, p
+
+
+# ------------------------------------------------------------------------ bench limits
+def test_a_settle_time_above_the_devices_limit_is_refused_before_heating(tmp_path) -> None:
+    with pytest.raises(DataFormatError, match="settle time 90000 s is above the limit of "
+                                              "86400 s that the device reports"):
+        run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("rth",), settle_s=9e4)
+    with pytest.raises(DataFormatError, match="above the device's limit of 2000 s"):
+        run_bench("sim://actuator?seed=1", tmp_path / "c", actions=("cooling",),
+                  cooling_t_last_s=2500.0)

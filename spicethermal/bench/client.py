@@ -16,7 +16,7 @@ Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 >>> # a simulated bench, quickly: just the handshake
 >>> with BenchClient("sim://actuator?seed=1") as bench:
 ...     bench.info.name, bench.info.firmware
-('actuator', '1.0.0')
+('actuator', '1.1.0')
 """
 
 from __future__ import annotations
@@ -436,25 +436,39 @@ class BenchClient:
         self.command(p.Abort())
 
     # -- procedures ------------------------------------------------------------------------
+    def _settle_ms(self, settle_s: float) -> int:
+        """``settle_s`` in ms, within the limit the device reports in INFO."""
+        ms = _ms(settle_s)
+        if ms > self.info.settle_max_ms:
+            raise DataFormatError(f"settle time {settle_s:g} s is above the limit of "
+                                  f"{self.info.settle_max_ms / 1e3:g} s that the device "
+                                  f"reports")
+        return ms
+
     def calibrate(self, setpoint_c: float, settle_s: float, n: int, interval_s: float) -> Run:
-        return self._collect(p.Calibrate(round(setpoint_c * 1e3), _ms(settle_s), _u16(n, "n"),
+        return self._collect(p.Calibrate(round(setpoint_c * 1e3), self._settle_ms(settle_s),
+                                         _u16(n, "n"),
                                          _u16(round(interval_s * 1e3), "interval_ms")),
                              p.PROC_CAL)
 
     def rth(self, power_w: float, settle_s: float, window_s: float, n: int) -> Run:
-        return self._collect(p.Rth(_uw(power_w), _ms(settle_s), _us16(window_s), _u16(n, "n")),
+        return self._collect(p.Rth(_uw(power_w), self._settle_ms(settle_s), _us16(window_s),
+                                   _u16(n, "n")),
                              p.PROC_RTH)
 
     def cooling(self, power_w: float, settle_s: float, window_s: float, n: int,
                 t_first_s: float, t_last_s: float, per_decade: int) -> Run:
-        return self._collect(p.Cooling(_uw(power_w), _ms(settle_s), _us16(window_s),
+        if t_last_s * 1e3 > p.CURVE_MAX_MS:
+            raise DataFormatError(f"cooling curve: last sample at {t_last_s:g} s is above the "
+                                  f"device's limit of {p.CURVE_MAX_MS / 1e3:g} s after the cut")
+        return self._collect(p.Cooling(_uw(power_w), self._settle_ms(settle_s), _us16(window_s),
                                        _u16(n, "n"), round(t_first_s * 1e6), _ms(t_last_s),
                                        int(per_decade)), p.PROC_COOLING)
 
     def pwm(self, power_w: float, freq_hz: float, duty: float, settle_s: float,
             window_s: float, n: int, interval_s: float) -> Run:
         return self._collect(p.Pwm(_uw(power_w), round(freq_hz * 1e3), round(duty * 1e6),
-                                   _ms(settle_s), _us16(window_s), _u16(n, "n"),
+                                   self._settle_ms(settle_s), _us16(window_s), _u16(n, "n"),
                                    _u16(round(interval_s * 1e3), "interval_ms")), p.PROC_PWM)
 
 

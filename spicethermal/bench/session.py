@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import DataFormatError, InstrumentError
+from ..errors import DataFormatError, InstrumentError, SpiceThermalError
 from ..files import clean_leftovers, locked
 from . import protocol as p
 from .client import ACTIONS, BenchClient, Run
@@ -269,11 +269,11 @@ class Session:
                                 bench.abort()  # heater off
                             except Exception:
                                 pass
-            except InstrumentError as exc:
+            except SpiceThermalError as exc:
                 raw = raw_dir / "raw_frames.bin"
                 if raw.exists() and raw.stat().st_size:
-                    raise InstrumentError(f"{exc} (raw data of this session kept in "
-                                          f"{raw_dir})") from None
+                    raise type(exc)(f"{exc} (raw data of this session kept in {raw_dir})"
+                                    ) from None
                 shutil.rmtree(raw_dir, ignore_errors=True)
                 if created:
                     shutil.rmtree(out, ignore_errors=True)

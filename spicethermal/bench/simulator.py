@@ -97,6 +97,7 @@ def firmware_library() -> ctypes.CDLL:
     lib.hh_blocked.argtypes = [ctypes.c_void_p]
     lib.hh_blocked.restype = ctypes.c_uint32
     lib.hh_set_version.argtypes = [ctypes.c_uint8] * 3
+    lib.built_version = tuple((ctypes.c_uint8 * 3).in_dll(lib, "st_fw_version"))
     return lib
 
 
@@ -136,7 +137,7 @@ class SimulatedDevice:
         self.frontend = Frontend(self.preset, self.effects, noise_k, self.rng)
         self.ideal_hold = "sample-window" not in self.effects
         self._lib = firmware_library()
-        self._version = firmware_version or (1, 0, 0)
+        self._version = firmware_version or self._lib.built_version
         self._dev = self._lib.hh_new()
         if not self._dev:
             raise InstrumentError("simulated bench: out of memory")
