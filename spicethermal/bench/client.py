@@ -28,7 +28,7 @@ import sys
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO
 
@@ -83,6 +83,10 @@ class RawLog:
 # --------------------------------------------------------------------------- link
 @dataclass
 class LinkStats:
+    """Counters of one link: ``frames`` delivered in order, ``received`` blocks of any kind
+    (``received_bytes`` on the wire), ``corrupt`` ones (CRC or framing), and the recovery
+    traffic."""
+
     frames: int = 0
     corrupt: int = 0
     duplicates: int = 0
@@ -91,6 +95,32 @@ class LinkStats:
     acks: int = 0
     command_resends: int = 0
     timeouts: int = 0
+    received: int = 0
+    received_bytes: int = 0
+
+    @property
+    def byte_error_rate(self) -> float:
+        """Per-byte error rate that explains the corrupt fraction of received frames, if each
+        byte fails independently: a frame of ``L`` bytes survives with ``(1 - p)^L``.
+
+        >>> round(LinkStats(corrupt=64, received=100, received_bytes=5000).byte_error_rate, 4)
+        0.0202
+        """
+        if not self.received:
+            return 0.0
+        survived = 1.0 - self.corrupt / self.received
+        mean_len = self.received_bytes / self.received
+        return 1.0 - survived ** (1.0 / mean_len) if survived > 0 else 1.0
+
+    def describe(self) -> str:
+        """One phrase for messages: how many frames failed and the byte-error rate."""
+        return (f"{self.corrupt} of {self.received} frames received failed their check (CRC "
+                f"or framing), {self.naks} resends requested: a byte-error rate of about "
+                f"{self.byte_error_rate:.1e} (a sound serial line has below 1e-6)")
+
+    def report(self) -> dict:
+        """The counters and the byte-error rate, for the bundle's ``bench.link``."""
+        return {**asdict(self), "byte_error_rate": float(f"{self.byte_error_rate:.3g}")}
 
 
 class Link:
@@ -101,16 +131,21 @@ class Link:
     port : an open pyserial port (its ``timeout`` is the unit of waiting).
     log : where raw bytes and frames go.
     nak_after_s : silence after which the host sends NAK (asks for a resend or a SYNC).
-    silent_after_s : silence after which the device is declared silent (an error).
+    silent_after_s : silence after which the device is declared silent (an error: "no
+        response").
+    max_rounds : resend requests in a row that bring bytes but no good frame, after which
+        the line is declared too noisy (an error naming the measured byte-error rate).
     name : how messages name the port.
     """
 
     def __init__(self, port, log: RawLog, *, nak_after_s: float = 0.5,
-                 silent_after_s: float = 5.0, name: str = "port") -> None:
+                 silent_after_s: float = 5.0, max_rounds: int = 40,
+                 name: str = "port") -> None:
         self.port = port
         self.log = log
         self.nak_after_s = nak_after_s
         self.silent_after_s = silent_after_s
+        self.max_rounds = max_rounds
         self.name = name
         self.reader = p.FrameReader()
         self.expected = 0
@@ -124,6 +159,8 @@ class Link:
         self._since_ack = 0
         self._idle_s = 0.0
         self._naks_in_silence = 0
+        self._rounds = 0  # resend requests since the last good frame, while bytes came
+        self._noise = False  # bytes but no good frame since the last resend request
 
     # -- sending -----------------------------------------------------------------------
     def _write(self, wire: bytes, frame: p.Frame) -> None:
@@ -176,6 +213,9 @@ class Link:
         if not data:
             self._on_silence()
             return
+        self._idle_s = 0.0  # the line is alive, if perhaps noisy: a new silence begins
+        self._naks_in_silence = 0
+        self._noise = True
         for block, item in self.reader.feed(data):
             self._on_block(block, item)
         if self._since_ack >= max(1, self.ring // 4):
@@ -185,19 +225,41 @@ class Link:
         self.stats.timeouts += 1
         self._idle_s += float(self.port.timeout or 0.05)
         if self._idle_s >= self.silent_after_s:
+            if self._rounds or self._noise:  # garbled bytes came since the last good frame
+                self._noisy(f"then the device was silent for {self.silent_after_s:g} s")
+            before = f"; the line was noisy before: {self.stats.describe()}" if (
+                self.stats.byte_error_rate > 1e-4) else ""
             raise InstrumentError(
                 f"{self.name}: no response from the device for {self.silent_after_s:g} s "
-                f"(is it connected and powered, is this the bench's port?)")
+                f"(is it connected and powered, is this the bench's port?){before}")
         if self._idle_s >= self.nak_after_s * (self._naks_in_silence + 1):
             self._naks_in_silence += 1
+            if self._noise:
+                self._rounds += 1
+                self._noise = False
+                if self._rounds >= self.max_rounds:
+                    self._noisy("")
             self._nak_sent = False
             self._nak()
+
+    def _noisy(self, then: str) -> None:
+        raise InstrumentError(
+            f"{self.name}: noisy line, not a silent device: {self._rounds} resend requests in "
+            f"a row brought no intact frame{', ' + then if then else ''}; "
+            f"{self.stats.describe()}; check the cable (length, shielding, ground), the "
+            f"connectors and the baud rate")
 
     def _alive(self) -> None:
         self._idle_s = 0.0
         self._naks_in_silence = 0
+        self._rounds = 0
+        self._noise = False
+        self._rounds = 0  # resend requests since the last good frame, while bytes came
+        self._noise = False  # bytes but no good frame since the last resend request
 
     def _on_block(self, block: bytes, item: p.Frame | p.FrameError) -> None:
+        self.stats.received += 1
+        self.stats.received_bytes += len(block) + 1  # with the delimiter
         if isinstance(item, p.FrameError):
             self.stats.corrupt += 1
             self.log.frame("rx", block, item.reason)

@@ -296,7 +296,7 @@ class Session:
     def _bench_info(self, bench: BenchClient, plan: Plan, raw: str) -> dict:
         return {"port": self.url, "board": bench.info.name, "firmware": bench.info.firmware,
                 "protocol": bench.info.proto, "raw": raw,
-                "link": asdict(bench.link.stats), "plan": asdict(plan)}
+                "link": bench.link.stats.report(), "plan": asdict(plan)}
 
     # -- measuring -------------------------------------------------------------------------
     def _measure(self, bench: BenchClient, plan: Plan, actions: Sequence[str],
