@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -305,3 +306,69 @@ def test_a_settle_time_above_the_devices_limit_is_refused_before_heating(tmp_pat
     with pytest.raises(DataFormatError, match="above the device's limit of 2000 s"):
         run_bench("sim://actuator?seed=1", tmp_path / "c", actions=("cooling",),
                   cooling_t_last_s=2500.0)
+
+
+# ------------------------------------------------------------------------ every writer
+#: Places that write files without spicethermal.files, each with its reason.
+DIRECT_WRITES = {
+    ("spice.py", '(work / ".spiceinit").write_text('): "private temporary directory",
+    ("spice.py", '(work / "deck.cir").write_text('): "private temporary directory",
+    ("pwmsim.py", "lib.write_text("): "private temporary directory",
+    ("bundle.py", 'with open(tmp / name, "w"'): "inside Bundle.write's temporary directory",
+    ("bench/client.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
+    ("bench/client.py", 'open(directory / "frames.jsonl", "a"'): "append-only raw log",
+}
+WRITE_CALL = re.compile(r"\.write_(text|bytes)\(|\bopen\([^)]*['\"][wax]b?['\"]|\.savefig\(|"
+                        r"shutil\.copy|np\.save|\.to_csv\(")
+
+
+def test_every_output_file_is_written_through_files_py() -> None:
+    package = Path(files.__file__).parent
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        rel = str(path.relative_to(package))
+        if rel == "files.py":
+            continue
+        for lineno, line in enumerate(path.read_text().splitlines(), start=1):
+            code = line.split("#", 1)[0]
+            if ">>>" in line or "..." in line.strip()[:3] or not WRITE_CALL.search(code):
+                continue
+            if "atomic_open" in code or any(rel == f and snippet in code
+                                            for f, snippet in DIRECT_WRITES):
+                continue
+            if ".savefig(handle" in code:  # into an atomic_open handle (plots.save)
+                continue
+            found.append(f"{rel}:{lineno}: {line.strip()}")
+    assert not found, ("write these through spicethermal.files (atomic_write_text, "
+                       "atomic_open, write_json) or add them to DIRECT_WRITES with the "
+                       "reason:\n" + "\n".join(found))
+
+
+def test_an_interrupted_write_leaves_the_old_file(tmp_path: Path) -> None:
+    target = tmp_path / "model.json"
+    files.write_json(target, {"v": 1})
+    with pytest.raises(RuntimeError):
+        with files.atomic_open(target) as handle:
+            handle.write('{"v": 2, "trunc')
+            raise RuntimeError("killed mid-write")
+    assert json.loads(target.read_text()) == {"v": 1}
+    assert sorted(os.listdir(tmp_path)) == ["model.json"]
+
+
+def test_raw_bytes_are_fsynced_before_they_are_used(tmp_path: Path, monkeypatch) -> None:
+    from spicethermal.bench.client import RawLog
+
+    synced = []
+    real_fsync = os.fsync
+
+    def fsync(fd: int) -> None:
+        real_fsync(fd)
+        synced.append(os.fstat(fd).st_size)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    log = RawLog(tmp_path / "raw")
+    log.received(b"\x01\x02\x03")
+    assert synced == [3]  # on disk when received() returns, before the link decodes it
+    log.received(b"\x04")
+    assert synced == [3, 4]
+    log.close()
