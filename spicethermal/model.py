@@ -375,7 +375,7 @@ class ThermalModel:
                 f"{source}: format {data.get('format')!r} is not {MODEL_FORMAT!r}")
         topology = data.get("topology")
         kinds = {"foster": Foster, "cauer": Cauer}
-        if topology not in kinds:
+        if not isinstance(topology, str) or topology not in kinds:
             raise DataFormatError(f"{source}: topology {topology!r} must be foster or cauer")
         stages = data.get("stages")
         if not isinstance(stages, list) or not stages:
