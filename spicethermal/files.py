@@ -223,7 +223,7 @@ _HELD: dict[str, tuple[int, int]] = {}  # lock file -> (fd, depth), for re-entry
 def lock_path(path: str | os.PathLike) -> Path:
     """The lock file of directory ``path``: ``.NAME.lock`` beside it (beside, not inside, so
     that one lock guards every version of a directory that :func:`replace_dir` replaces)."""
-    path = Path(os.path.abspath(path))
+    path = Path(os.path.realpath(path))  # one lock whatever link leads to the directory
     return path.parent / f".{path.name}.lock"
 
 

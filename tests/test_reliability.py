@@ -372,3 +372,13 @@ def test_raw_bytes_are_fsynced_before_they_are_used(tmp_path: Path, monkeypatch)
     log.received(b"\x04")
     assert synced == [3, 4]
     log.close()
+
+
+def test_a_bundle_reached_through_a_link_is_updated_in_place(tmp_path: Path) -> None:
+    real = Bundle(device="v1").write(tmp_path / "run5")
+    (tmp_path / "current").symlink_to("run5")
+    assert files.lock_path(tmp_path / "current") == files.lock_path(real)
+    Bundle(device="v2").write(tmp_path / "current")
+    assert (tmp_path / "current").is_symlink()
+    assert Bundle.read(real).device == "v2"
+    assert sorted(os.listdir(tmp_path)) == ["current", "run5"]
