@@ -104,7 +104,7 @@ def test_pwm_readings_match_the_analytic_steady_state(exact_run):
 
 
 def test_ideal_hold_records_a_zero_window(tmp_path):
-    with pytest.raises(InstrumentError, match="needs a calibration"):
+    with pytest.raises(DataFormatError, match="needs a calibration"):
         run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b", actions=("pwm",))
     path = run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b",
                         actions=("calibrate", "pwm"), calibration_c=(25.0, 45.0),

@@ -299,13 +299,23 @@ def test_written_files_follow_the_umask(tmp_path: Path, mask: int, file_mode: in
 
 
 # ------------------------------------------------------------------------ bench limits
+def test_a_procedure_that_needs_a_calibration_is_refused_before_measuring(tmp_path) -> None:
+    for action in ("cooling", "pwm"):
+        with pytest.raises(DataFormatError, match=f"bench {action}: needs a calibration"):
+            run_bench("sim://actuator?seed=1", tmp_path / "b", actions=(action,))
+    assert not (tmp_path / "b").exists()  # nothing measured, nothing left
+
+
 def test_a_settle_time_above_the_devices_limit_is_refused_before_heating(tmp_path) -> None:
     with pytest.raises(DataFormatError, match="settle time 90000 s is above the limit of "
                                               "86400 s that the device reports"):
         run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("rth",), settle_s=9e4)
     with pytest.raises(DataFormatError, match="above the device's limit of 2000 s"):
-        run_bench("sim://actuator?seed=1", tmp_path / "c", actions=("cooling",),
-                  cooling_t_last_s=2500.0)
+        run_bench("sim://actuator?seed=1", tmp_path / "c", actions=("calibrate", "cooling"),
+                  calibration_c=(25.0, 45.0), cooling_t_last_s=2500.0)
+    raw = next((tmp_path / "c" / "raw").iterdir()) / "frames.jsonl"
+    types = {json.loads(r).get("type") for r in raw.read_text().splitlines()}
+    assert 0x80 in types and not types & {0x10, 0x11, 0x12, 0x13}  # after INFO, no procedure
 
 
 # ------------------------------------------------------------------------ every writer
@@ -355,23 +365,37 @@ def test_an_interrupted_write_leaves_the_old_file(tmp_path: Path) -> None:
     assert sorted(os.listdir(tmp_path)) == ["model.json"]
 
 
-def test_raw_bytes_are_fsynced_before_they_are_used(tmp_path: Path, monkeypatch) -> None:
-    from spicethermal.bench.client import RawLog
+def test_raw_bytes_are_on_disk_before_the_device_forgets_them(tmp_path: Path,
+                                                              monkeypatch) -> None:
+    """Every ACK or NAK the host sends (the device then drops the frames it covers) comes
+    after an fsync of every raw byte received before it; so does the end of a procedure."""
+    from spicethermal.bench import client
 
-    synced = []
-    real_fsync = os.fsync
+    raw = tmp_path / "raw"
+    events: list[tuple[str, int]] = []
+    real_fsync, real_send = os.fsync, client.Link._send
 
     def fsync(fd: int) -> None:
         real_fsync(fd)
-        synced.append(os.fstat(fd).st_size)
+        if os.fstat(fd).st_size and os.path.samefile(f"/proc/self/fd/{fd}",
+                                                     raw / "raw_frames.bin"):
+            events.append(("fsync", os.fstat(fd).st_size))
+
+    def send(self, msg, seq):
+        if isinstance(msg, (client.p.Ack, client.p.Nak)):
+            events.append(("ack", self.log._bin.tell()))
+        return real_send(self, msg, seq)
 
     monkeypatch.setattr(os, "fsync", fsync)
-    log = RawLog(tmp_path / "raw")
-    log.received(b"\x01\x02\x03")
-    assert synced == [3]  # on disk when received() returns, before the link decodes it
-    log.received(b"\x04")
-    assert synced == [3, 4]
-    log.close()
+    monkeypatch.setattr(client.Link, "_send", send)
+    with client.BenchClient("sim://actuator?seed=3&faults=1e-3", raw) as bench:
+        bench.rth(0.094, 5.0, 1e-4, 8)
+        synced = max(n for e, n in events if e == "fsync")
+        assert synced == (raw / "raw_frames.bin").stat().st_size  # all, at DONE
+    acks = [(k, n) for k, (e, n) in enumerate(events) if e == "ack"]
+    assert len(acks) >= 3
+    for k, received in acks:
+        assert max((n for e, n in events[:k] if e == "fsync"), default=0) >= received
 
 
 def test_a_bundle_reached_through_a_link_is_updated_in_place(tmp_path: Path) -> None:

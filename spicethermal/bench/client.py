@@ -2,9 +2,9 @@
 
 Layers, bottom up:
 
-* :class:`RawLog` — every byte read from the port is appended (and fsynced) to
-  ``raw_frames.bin`` *before* it is processed; every frame, both directions, gets a line in
-  ``frames.jsonl`` with what the link made of it (ok, crc, duplicate, gap, ...).
+* :class:`RawLog` — every byte read from the port is appended to ``raw_frames.bin``
+  *before* it is processed, and fsynced before the host acknowledges it; every frame, both
+  directions, gets a line in ``frames.jsonl`` with what the link made of it (ok, crc, gap...).
 * :class:`Link` — the host side of the protocol (firmware/PROTOCOL.md §4): in-order, exactly-once
   delivery of device frames with cumulative ACKs, NAK/resend on a bad frame or a gap, command
   resend when SYNC shows the device never got it, timeouts and a silent-device error.
@@ -27,7 +27,7 @@ import secrets
 import sys
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO
@@ -41,24 +41,36 @@ ACTIONS = ("calibrate", "rth", "cooling", "pwm")
 
 # --------------------------------------------------------------------------- raw log
 class RawLog:
-    """Append-only raw records of a session in ``directory`` (created)."""
+    """Append-only raw records of a session in ``directory`` (created).
+
+    Received bytes are written to the file (they survive a crash of this process) before
+    the link decodes them, and fsynced (:meth:`sync`) before the host acknowledges them to
+    the device, which then forgets them: no frame is lost from both sides at once.
+    """
 
     def __init__(self, directory: Path | None) -> None:
         self.directory = directory
         self._bin: IO[bytes] | None = None
         self._jsonl: IO[str] | None = None
         self._t0 = time.monotonic()
+        self._unsynced = False
         if directory is not None:
             directory.mkdir(parents=True, exist_ok=True)
             self._bin = open(directory / "raw_frames.bin", "ab")
             self._jsonl = open(directory / "frames.jsonl", "a", encoding="utf-8")
 
     def received(self, data: bytes) -> None:
-        """Append ``data`` to ``raw_frames.bin`` and fsync it: on disk before it is used."""
+        """Append ``data`` to ``raw_frames.bin``, written through to the kernel."""
         if self._bin is not None and data:
             self._bin.write(data)
             self._bin.flush()
+            self._unsynced = True
+
+    def sync(self) -> None:
+        """fsync what was received so far (before acknowledging it to the device)."""
+        if self._bin is not None and self._unsynced:
             os.fsync(self._bin.fileno())
+            self._unsynced = False
 
     def frame(self, direction: str, block: bytes, status: str, frame: p.Frame | None = None
               ) -> None:
@@ -188,10 +200,12 @@ class Link:
         return seq
 
     def _nak(self) -> None:
+        self.log.sync()  # a NAK acknowledges what came before it
         self._send(p.Nak(self.expected), 0)
         self.stats.naks += 1
 
     def _ack(self) -> None:
+        self.log.sync()
         self._send(p.Ack(self.expected), 0)
         self.stats.acks += 1
         self._since_ack = 0
@@ -482,6 +496,7 @@ class BenchClient:
                     self.on_status(m)
             elif isinstance(m, p.Done):
                 self.link.flush_ack()
+                self.log.sync()  # the samples become a data set only once they are on disk
                 if m.status != 0:
                     raise InstrumentError(f"{self.url}: {p.PROC_NAMES[proc]} failed: "
                                           f"{p.DONE_STATUS.get(m.status, m.status)}")
@@ -498,14 +513,22 @@ class BenchClient:
         self.command(p.Abort())
 
     # -- procedures ------------------------------------------------------------------------
+    def check_limits(self, settles_s: Sequence[float] = (), t_last_s: float | None = None
+                     ) -> None:
+        """Settle times within the limit the device reports in INFO, a cooling curve's last
+        sample within the protocol's; a :class:`DataFormatError` naming the limit."""
+        for settle_s in settles_s:
+            if _ms(settle_s) > self.info.settle_max_ms:
+                raise DataFormatError(f"settle time {settle_s:g} s is above the limit of "
+                                      f"{self.info.settle_max_ms / 1e3:g} s that the device "
+                                      f"reports")
+        if t_last_s is not None and _ms(t_last_s) > p.CURVE_MAX_MS:
+            raise DataFormatError(f"cooling curve: last sample at {t_last_s:g} s is above the "
+                                  f"device's limit of {p.CURVE_MAX_MS / 1e3:g} s after the cut")
+
     def _settle_ms(self, settle_s: float) -> int:
-        """``settle_s`` in ms, within the limit the device reports in INFO."""
-        ms = _ms(settle_s)
-        if ms > self.info.settle_max_ms:
-            raise DataFormatError(f"settle time {settle_s:g} s is above the limit of "
-                                  f"{self.info.settle_max_ms / 1e3:g} s that the device "
-                                  f"reports")
-        return ms
+        self.check_limits([settle_s])
+        return _ms(settle_s)
 
     def calibrate(self, setpoint_c: float, settle_s: float, n: int, interval_s: float) -> Run:
         return self._collect(p.Calibrate(round(setpoint_c * 1e3), self._settle_ms(settle_s),
@@ -520,9 +543,7 @@ class BenchClient:
 
     def cooling(self, power_w: float, settle_s: float, window_s: float, n: int,
                 t_first_s: float, t_last_s: float, per_decade: int) -> Run:
-        if t_last_s * 1e3 > p.CURVE_MAX_MS:
-            raise DataFormatError(f"cooling curve: last sample at {t_last_s:g} s is above the "
-                                  f"device's limit of {p.CURVE_MAX_MS / 1e3:g} s after the cut")
+        self.check_limits(t_last_s=t_last_s)
         return self._collect(p.Cooling(_uw(power_w), self._settle_ms(settle_s), _us16(window_s),
                                        _u16(n, "n"), round(t_first_s * 1e6), _ms(t_last_s),
                                        int(per_decade)), p.PROC_COOLING)

@@ -252,6 +252,12 @@ class Session:
             else:
                 previous = Bundle()
             self._check_replace(previous, actions)
+            if previous.calibration is None and "calibrate" not in actions:
+                needs = [a for a in actions if a in ("cooling", "pwm")]
+                if needs:  # said now, not after the measurement
+                    raise DataFormatError(f"bench {needs[0]}: needs a calibration (run 'bench "
+                                          f"calibrate' into the same bundle first, or 'bench "
+                                          f"run')")
             if created:  # the raw log needs a home that is a valid bundle at every instant
                 previous.write(out)
             raw_dir = self._raw_dir("-".join(actions) if len(actions) < 4 else "run")
@@ -260,6 +266,8 @@ class Session:
                     plan = self.plan_given or PLANS.get(bench.info.name, Plan())
                     if self.overrides:
                         plan = replace(plan, **self.overrides)
+                    bench.check_limits([plan.settle_s, plan.calibration_settle_s,
+                                        plan.pwm_settle_s], plan.cooling_t_last_s)
                     try:
                         new = self._measure(bench, plan, actions, previous)
                     finally:
@@ -412,13 +420,10 @@ class Session:
                             tref_steady_c=round(_mean(steady, "tamb_c"), 4),
                             file=f"cooling_{k}.csv", extra=extra, **kw)
 
-    def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion | None, step,
+    def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion, step,
              ambient: list[float]):
         from ..bundle import PwmTable
 
-        if conv is None:
-            raise InstrumentError("bench pwm: needs a calibration (run 'bench calibrate' into "
-                                  "the same bundle first, or 'bench run')")
         rows = []
         for duty in plan.pwm_duties:
             for freq in plan.pwm_freqs_hz:
