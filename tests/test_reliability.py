@@ -196,6 +196,15 @@ def test_reruns_add_data_sets_and_replace_is_explicit(base: Path, capsys) -> Non
     assert "measures no cooling data set" in capsys.readouterr().err
 
 
+def test_raw_logs_that_an_older_version_moved_out_come_back(base: Path) -> None:
+    old = base.parent / "b.raw" / "20250101T000000-cooling"
+    old.mkdir(parents=True)
+    (old / "raw_frames.bin").write_bytes(b"\x00\x01")
+    run_bench("sim://actuator?seed=4", base, actions=("rth",))
+    assert (base / "raw" / old.name / "raw_frames.bin").read_bytes() == b"\x00\x01"
+    assert sorted(os.listdir(base.parent)) == ["b"]
+
+
 def test_a_write_never_overwrites_a_file_the_manifest_does_not_list(tmp_path: Path) -> None:
     out = tmp_path / "b"
     Bundle(device="d").write(out)

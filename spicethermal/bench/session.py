@@ -17,6 +17,7 @@ by the board name the device reports; every value can be overridden.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import sys
@@ -222,6 +223,20 @@ class Session:
             run_dir = raw / f"{stamp}-{action}-{k}"
         return run_dir
 
+    def _adopt_old_raw_logs(self) -> None:
+        """Move raw logs that spicethermal 0.1 left in ``BUNDLE.raw/`` (a run killed while
+        its logs were moved out) back into the bundle's ``raw/``."""
+        old = self.out_dir.parent / f"{self.out_dir.name}.raw"
+        if not old.is_dir() or old.is_symlink() or not self.out_dir.is_dir():
+            return
+        (self.out_dir / "raw").mkdir(exist_ok=True)
+        for entry in sorted(old.iterdir()):
+            target = self.out_dir / "raw" / entry.name
+            if not target.exists():
+                os.rename(entry, target)
+        with contextlib.suppress(OSError):
+            old.rmdir()
+
     def _check_replace(self, previous: Bundle, actions: Sequence[str]) -> None:
         measured = {SECTIONS[a] for a in actions if a in SECTIONS}
         kinds = {t.file: s for s, ts in (("calibration", [previous.calibration]),
@@ -251,6 +266,7 @@ class Session:
                 raise DataFormatError(f"{out}: exists and is not a bundle; not writing into it")
             else:
                 previous = Bundle()
+            self._adopt_old_raw_logs()
             self._check_replace(previous, actions)
             if previous.calibration is None and "calibrate" not in actions:
                 needs = [a for a in actions if a in ("cooling", "pwm")]
