@@ -415,3 +415,10 @@ def test_a_bundle_reached_through_a_link_is_updated_in_place(tmp_path: Path) -> 
     assert (tmp_path / "current").is_symlink()
     assert Bundle.read(real).device == "v2"
     assert sorted(os.listdir(tmp_path)) == ["current", "run5"]
+
+
+def test_cleaning_leftovers_touches_only_this_bundles(tmp_path: Path) -> None:
+    mine = files.temp_dir_for(tmp_path / "b")
+    other = files.temp_dir_for(tmp_path / "b.x")  # another bundle's write in progress
+    assert files.clean_leftovers(tmp_path / "b") == [mine]
+    assert other.is_dir() and not mine.exists()
