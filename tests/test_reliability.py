@@ -422,3 +422,12 @@ def test_cleaning_leftovers_touches_only_this_bundles(tmp_path: Path) -> None:
     other = files.temp_dir_for(tmp_path / "b.x")  # another bundle's write in progress
     assert files.clean_leftovers(tmp_path / "b") == [mine]
     assert other.is_dir() and not mine.exists()
+
+
+@pytest.mark.parametrize("settle_s", [0.1, 0.5])
+def test_a_short_settle_does_not_freeze_the_bench(tmp_path: Path, settle_s: float) -> None:
+    # an ADC due at the same instant as a stale heartbeat used to make the core busy-poll
+    # and the simulated bench wait forever (found by the fuzz: bench rth --settle-s 0.5)
+    out = run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("rth",),
+                    settle_s=settle_s)
+    assert Bundle.read(out).extra["rth"]["readings"] == 16

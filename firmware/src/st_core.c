@@ -550,6 +550,11 @@ void st_core_poll(st_core_t *c)
     if (c->p.state != S_IDLE) {
         uint32_t now = hal_now_us();
         uint32_t w = c->p.t_status;
+        if (c->p.state == S_POWER || c->p.state == S_WINDOW) {
+            /* waiting for the ADC interrupt, no heartbeat in these states: a stale t_status
+             * would make the core busy-poll (and froze the simulator at a float tie) */
+            w = now + ST_STATUS_MS * 1000U;
+        }
         if ((c->p.state == S_SETTLE || c->p.state == S_GAP) && !c->p.adc_armed &&
             elapsed(c->p.t_next, w) < 0) {
             w = c->p.t_next;

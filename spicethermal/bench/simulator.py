@@ -206,7 +206,8 @@ class SimulatedDevice:
         while self._state.tx_len == 0 and events < max_events:
             if self._lib.hh_blocked(self._dev):
                 break  # the host must acknowledge first; its reads take no simulated time
-            if self.adc_at is not None and (self.wake is None or self.adc_at <= self.wake):
+            if self.adc_at is not None and (self.wake is None or self.adc_at <= self.wake
+                                            or self.wake <= self.t):  # a busy-poll: go on
                 self._convert()
             elif self.wake is not None:
                 self.advance_to(self.wake)
