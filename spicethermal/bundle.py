@@ -886,11 +886,12 @@ class Bundle:
         replaced (unless ``overwrite`` is false); an existing directory that is not a bundle
         is never touched.
         """
-        path = Path(path)
+        given = path = Path(path)
         named = self._named_tables()
         for name, _ in named:
             if Path(name).name != name or name in (MANIFEST, "", ".", ".."):
                 raise DataFormatError(f"{MANIFEST}: file name {name!r} must be a plain name")
+        path = Path(os.path.realpath(path))  # a link to the bundle stays a link to it
         with locked(path, wait=wait):
             clean_leftovers(path)
             keep: list[str] = []
@@ -923,7 +924,7 @@ class Bundle:
             except BaseException:
                 shutil.rmtree(tmp, ignore_errors=True)
                 raise
-        return path
+        return given
 
     def with_(self, **changes: Any) -> Bundle:
         """A copy with some fields replaced (the bundle itself is immutable)."""

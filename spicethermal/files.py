@@ -21,6 +21,7 @@ import fcntl
 import json
 import math
 import os
+import re
 import shutil
 import stat
 import tempfile
@@ -174,26 +175,19 @@ def clean_leftovers(path: str | os.PathLike) -> list[Path]:
     ``path`` (restoring the old directory first if ``path`` itself went missing); returns
     the paths removed. Call it only while holding :func:`locked` for ``path``."""
     path = Path(path)
-    removed = []
+    removed: list[Path] = []
     if not path.parent.is_dir():
         return removed
-    for entry in sorted(path.parent.glob(f".{glob_escape(path.name)}.*")):
-        if entry.suffix not in (".tmp", ".old") or not entry.is_dir() or entry.is_symlink():
+    ours = re.compile(rf"\.{re.escape(path.name)}\.[a-z0-9_]{{8}}\.(tmp|old)")  # mkdtemp's
+    for name in sorted(os.listdir(path.parent)):
+        entry = path.parent / name
+        if not ours.fullmatch(name) or not entry.is_dir() or entry.is_symlink():
             continue
         if entry.suffix == ".old" and not path.exists() and (entry / "dir").is_dir():
             os.rename(entry / "dir", path)  # pragma: no cover - fallback of replace_dir
         shutil.rmtree(entry, ignore_errors=True)
         removed.append(entry)
     return removed
-
-
-def glob_escape(name: str) -> str:
-    """``name`` with glob's special characters quoted.
-
-    >>> glob_escape("run[1]*")
-    'run[[]1[]][*]'
-    """
-    return "".join(f"[{c}]" if c in "*?[]" else c for c in name)
 
 
 def link_tree(src: str | os.PathLike, dst: str | os.PathLike, names: list[str]) -> None:
@@ -223,7 +217,7 @@ _HELD: dict[str, tuple[int, int]] = {}  # lock file -> (fd, depth), for re-entry
 def lock_path(path: str | os.PathLike) -> Path:
     """The lock file of directory ``path``: ``.NAME.lock`` beside it (beside, not inside, so
     that one lock guards every version of a directory that :func:`replace_dir` replaces)."""
-    path = Path(os.path.abspath(path))
+    path = Path(os.path.realpath(path))  # one lock whatever link leads to the directory
     return path.parent / f".{path.name}.lock"
 
 

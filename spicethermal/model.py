@@ -404,7 +404,7 @@ class ThermalModel:
                                   f"{', '.join(MODEL_FORMATS_READ)}")
         topology = data.get("topology")
         kinds = {"foster": Foster, "cauer": Cauer}
-        if topology not in kinds:
+        if not isinstance(topology, str) or topology not in kinds:
             raise DataFormatError(f"{source}: topology {topology!r} must be foster or cauer")
         stages = data.get("stages")
         if not isinstance(stages, list) or not stages:

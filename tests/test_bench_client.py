@@ -104,7 +104,7 @@ def test_pwm_readings_match_the_analytic_steady_state(exact_run):
 
 
 def test_ideal_hold_records_a_zero_window(tmp_path):
-    with pytest.raises(InstrumentError, match="needs a calibration"):
+    with pytest.raises(DataFormatError, match="needs a calibration"):
         run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b", actions=("pwm",))
     path = run_bench("sim://actuator?seed=2&effects=none", tmp_path / "b",
                         actions=("calibrate", "pwm"), calibration_c=(25.0, 45.0),
@@ -139,13 +139,27 @@ def test_link_faults_lose_nothing_and_change_nothing(clean_small, tmp_path):
         assert (faulty / name).read_bytes() == (clean_small / name).read_bytes(), name
 
 
-def test_heavy_link_faults_still_lose_nothing(clean_small, tmp_path):
-    faulty = run_bench("sim://actuator?seed=11&faults=1e-2", tmp_path / "f",
-                          actions=("calibrate", "cooling", "pwm"), **SMALL)
+@pytest.mark.parametrize("rate", [1e-2, 2e-2])
+def test_heavy_link_faults_still_lose_nothing(clean_small, tmp_path, rate):
+    faulty = run_bench(f"sim://actuator?seed=11&faults={rate}", tmp_path / "f",
+                       actions=("calibrate", "cooling", "pwm"), **SMALL)
     link = json.loads((faulty / "bundle.json").read_text())["bench"]["link"]
     assert link["corrupt"] > 50
+    # the rate measured from the share of corrupt frames is the rate injected per byte
+    assert rate / 1.5 < link["byte_error_rate"] < rate * 1.5
     for name in CSVS:
         assert (faulty / name).read_bytes() == (clean_small / name).read_bytes(), name
+
+
+def test_a_noisy_line_is_not_reported_as_a_silent_device(tmp_path):
+    # 10 % of the bytes damaged: after the handshake no 50-byte frame gets through intact
+    with pytest.raises(InstrumentError, match=r"noisy line, not a silent device: 40 resend "
+                                              r"requests .*byte-error rate of about \d\.\de-0[12]"):
+        with bc.BenchClient("sim://actuator?seed=2&faults=0.1") as bench:
+            bench.rth(0.094, 10.0, 1e-4, 16)
+    with pytest.raises(InstrumentError, match="no response from the device") as info:
+        run_bench("sim://actuator?mute=1", tmp_path / "m", actions=("rth",))
+    assert "noisy" not in str(info.value)
 
 
 class FrameMangler:

@@ -36,6 +36,9 @@ def test_protocol_constants_agree_between_c_and_python():
     assert define("ST_PROTO_VERSION") == p.PROTOCOL_VERSION
     assert define("ST_MAX_PAYLOAD") == p.MAX_PAYLOAD
     assert define("ST_LEN_SAMPLE") == len(p.Sample().payload())
+    assert define("ST_LEN_INFO_FIXED") == len(p.Info().payload())  # name empty
+    assert define("ST_SETTLE_MAX_MS") == p.Info().settle_max_ms
+    assert define("ST_CURVE_MAX_MS") == p.CURVE_MAX_MS
     for c_name, cls in [("ST_CMD_HELLO", p.Hello), ("ST_CMD_ACK", p.Ack), ("ST_CMD_NAK", p.Nak),
                         ("ST_CMD_ABORT", p.Abort), ("ST_CMD_CALIBRATE", p.Calibrate),
                         ("ST_CMD_RTH", p.Rth), ("ST_CMD_COOLING", p.Cooling),

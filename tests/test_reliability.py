@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -195,6 +196,15 @@ def test_reruns_add_data_sets_and_replace_is_explicit(base: Path, capsys) -> Non
     assert "measures no cooling data set" in capsys.readouterr().err
 
 
+def test_raw_logs_that_an_older_version_moved_out_come_back(base: Path) -> None:
+    old = base.parent / "b.raw" / "20250101T000000-cooling"
+    old.mkdir(parents=True)
+    (old / "raw_frames.bin").write_bytes(b"\x00\x01")
+    run_bench("sim://actuator?seed=4", base, actions=("rth",))
+    assert (base / "raw" / old.name / "raw_frames.bin").read_bytes() == b"\x00\x01"
+    assert sorted(os.listdir(base.parent)) == ["b"]
+
+
 def test_a_write_never_overwrites_a_file_the_manifest_does_not_list(tmp_path: Path) -> None:
     out = tmp_path / "b"
     Bundle(device="d").write(out)
@@ -295,3 +305,130 @@ def test_written_files_follow_the_umask(tmp_path: Path, mask: int, file_mode: in
     assert (out.stat().st_mode & 0o777) == dir_mode
     for p in (out / "bundle.json", out / "cooling_1.csv", tmp_path / "m.json"):
         assert (p.stat().st_mode & 0o777) == file_mode, p
+
+
+# ------------------------------------------------------------------------ bench limits
+def test_a_procedure_that_needs_a_calibration_is_refused_before_measuring(tmp_path) -> None:
+    for action in ("cooling", "pwm"):
+        with pytest.raises(DataFormatError, match=f"bench {action}: needs a calibration"):
+            run_bench("sim://actuator?seed=1", tmp_path / "b", actions=(action,))
+    assert not (tmp_path / "b").exists()  # nothing measured, nothing left
+
+
+def test_a_settle_time_above_the_devices_limit_is_refused_before_heating(tmp_path) -> None:
+    with pytest.raises(DataFormatError, match="settle time 90000 s is above the limit of "
+                                              "86400 s that the device reports"):
+        run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("rth",), settle_s=9e4)
+    with pytest.raises(DataFormatError, match="above the device's limit of 2000 s"):
+        run_bench("sim://actuator?seed=1", tmp_path / "c", actions=("calibrate", "cooling"),
+                  calibration_c=(25.0, 45.0), cooling_t_last_s=2500.0)
+    raw = next((tmp_path / "c" / "raw").iterdir()) / "frames.jsonl"
+    types = {json.loads(r).get("type") for r in raw.read_text().splitlines()}
+    assert 0x80 in types and not types & {0x10, 0x11, 0x12, 0x13}  # after INFO, no procedure
+
+
+# ------------------------------------------------------------------------ every writer
+#: Places that write files without spicethermal.files, each with its reason.
+DIRECT_WRITES = {
+    ("spice.py", '(work / ".spiceinit").write_text('): "private temporary directory",
+    ("spice.py", '(work / "deck.cir").write_text('): "private temporary directory",
+    ("pwmsim.py", "lib.write_text("): "private temporary directory",
+    ("bundle.py", 'with open(tmp / name, "w"'): "inside Bundle.write's temporary directory",
+    ("bench/client.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
+    ("bench/client.py", 'open(directory / "frames.jsonl", "a"'): "append-only raw log",
+    ("bench/client.py", "json.dumps(rec)"): "raw log records: times and hex strings only",
+}
+WRITE_CALL = re.compile(r"\.write_(text|bytes)\(|\bopen\([^)]*['\"][wax]b?['\"]|\.savefig\(|"
+                        r"shutil\.copy|np\.save|\.to_csv\(|json\.dumps?\(")
+
+
+def test_every_output_file_is_written_through_files_py() -> None:
+    package = Path(files.__file__).parent
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        rel = str(path.relative_to(package))
+        if rel == "files.py":
+            continue
+        for lineno, line in enumerate(path.read_text().splitlines(), start=1):
+            code = line.split("#", 1)[0]
+            if ">>>" in line or "..." in line.strip()[:3] or not WRITE_CALL.search(code):
+                continue
+            if "atomic_open" in code or any(rel == f and snippet in code
+                                            for f, snippet in DIRECT_WRITES):
+                continue
+            if ".savefig(handle" in code:  # into an atomic_open handle (plots.save)
+                continue
+            found.append(f"{rel}:{lineno}: {line.strip()}")
+    assert not found, ("write these through spicethermal.files (atomic_write_text, "
+                       "atomic_open, write_json; JSON text through dumps_json) or add them "
+                       "to DIRECT_WRITES with the reason:\n" + "\n".join(found))
+
+
+def test_an_interrupted_write_leaves_the_old_file(tmp_path: Path) -> None:
+    target = tmp_path / "model.json"
+    files.write_json(target, {"v": 1})
+    with pytest.raises(RuntimeError):
+        with files.atomic_open(target) as handle:
+            handle.write('{"v": 2, "trunc')
+            raise RuntimeError("killed mid-write")
+    assert json.loads(target.read_text()) == {"v": 1}
+    assert sorted(os.listdir(tmp_path)) == ["model.json"]
+
+
+def test_raw_bytes_are_on_disk_before_the_device_forgets_them(tmp_path: Path,
+                                                              monkeypatch) -> None:
+    """Every ACK or NAK the host sends (the device then drops the frames it covers) comes
+    after an fsync of every raw byte received before it; so does the end of a procedure."""
+    from spicethermal.bench import client
+
+    raw = tmp_path / "raw"
+    events: list[tuple[str, int]] = []
+    real_fsync, real_send = os.fsync, client.Link._send
+
+    def fsync(fd: int) -> None:
+        real_fsync(fd)
+        if os.fstat(fd).st_size and os.path.samefile(f"/proc/self/fd/{fd}",
+                                                     raw / "raw_frames.bin"):
+            events.append(("fsync", os.fstat(fd).st_size))
+
+    def send(self, msg, seq):
+        if isinstance(msg, (client.p.Ack, client.p.Nak)):
+            events.append(("ack", self.log._bin.tell()))
+        return real_send(self, msg, seq)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    monkeypatch.setattr(client.Link, "_send", send)
+    with client.BenchClient("sim://actuator?seed=3&faults=1e-3", raw) as bench:
+        bench.rth(0.094, 5.0, 1e-4, 8)
+        synced = max(n for e, n in events if e == "fsync")
+        assert synced == (raw / "raw_frames.bin").stat().st_size  # all, at DONE
+    acks = [(k, n) for k, (e, n) in enumerate(events) if e == "ack"]
+    assert len(acks) >= 3
+    for k, received in acks:
+        assert max((n for e, n in events[:k] if e == "fsync"), default=0) >= received
+
+
+def test_a_bundle_reached_through_a_link_is_updated_in_place(tmp_path: Path) -> None:
+    real = Bundle(device="v1").write(tmp_path / "run5")
+    (tmp_path / "current").symlink_to("run5")
+    assert files.lock_path(tmp_path / "current") == files.lock_path(real)
+    Bundle(device="v2").write(tmp_path / "current")
+    assert (tmp_path / "current").is_symlink()
+    assert Bundle.read(real).device == "v2"
+    assert sorted(os.listdir(tmp_path)) == ["current", "run5"]
+
+
+def test_cleaning_leftovers_touches_only_this_bundles(tmp_path: Path) -> None:
+    mine = files.temp_dir_for(tmp_path / "b")
+    other = files.temp_dir_for(tmp_path / "b.x")  # another bundle's write in progress
+    assert files.clean_leftovers(tmp_path / "b") == [mine]
+    assert other.is_dir() and not mine.exists()
+
+
+@pytest.mark.parametrize("settle_s", [0.1, 0.5])
+def test_a_short_settle_does_not_freeze_the_bench(tmp_path: Path, settle_s: float) -> None:
+    # an ADC due at the same instant as a stale heartbeat used to make the core busy-poll
+    # and the simulated bench wait forever (found by the fuzz: bench rth --settle-s 0.5)
+    out = run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("rth",),
+                    settle_s=settle_s)
+    assert Bundle.read(out).extra["rth"]["readings"] == 16

@@ -61,13 +61,14 @@ static void send_info(st_core_t *c)
     b[4] = bd->adc_bits;
     b[5] = (uint8_t)ST_RING_FRAMES;
     st_put_u16(b + 6, bd->caps);
+    st_put_u32(b + 8, ST_SETTLE_MAX_MS);
     for (i = 0; i < sizeof bd->name && bd->name[i]; i++) {
         b[n++] = (uint8_t)bd->name[i];
     }
     push(c, ST_MSG_INFO, b, n);
 }
 
-static void send_status(st_core_t *c, uint32_t now)
+static void send_status(st_core_t *c)
 {
     uint8_t b[10];
     if (ring_free(c) <= ST_RESERVE) {
@@ -77,7 +78,7 @@ static void send_status(st_core_t *c, uint32_t now)
     b[1] = c->p.state;
     st_put_u16(b + 2, c->p.k);
     st_put_u16(b + 4, c->p.total);
-    st_put_u32(b + 6, (uint32_t)elapsed(now, c->p.t_start) / 1000U);
+    st_put_u32(b + 6, c->p.run_ms);
     push(c, ST_MSG_STATUS, b, 10);
 }
 
@@ -213,7 +214,8 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
         p->settle_ms = st_get_u32(b + 4);
         p->n = st_get_u16(b + 8);
         p->interval_ms = st_get_u16(b + 10);
-        if (p->n == 0 || p->setpoint_mc < bd->fixture_min_mc || p->setpoint_mc > bd->fixture_max_mc)
+        if (p->n == 0 || p->setpoint_mc < bd->fixture_min_mc ||
+            p->setpoint_mc > bd->fixture_max_mc || p->settle_ms > ST_SETTLE_MAX_MS)
             return ST_E_PARAM;
         {
             int32_t span = bd->fixture_max_mc - bd->fixture_min_mc;
@@ -233,7 +235,8 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
         /* 99.9 % duty: the off-phase of each period is the sample window */
         p->period_ns = (uint32_t)p->window_us * 1000000U;
         p->on_ns = p->period_ns - (uint32_t)p->window_us * 1000U;
-        if (p->window_us < 10 || p->window_us > 4000 || p->n == 0 || p->power_uw == 0)
+        if (p->window_us < 10 || p->window_us > 4000 || p->n == 0 || p->power_uw == 0 ||
+            p->settle_ms > ST_SETTLE_MAX_MS)
             return ST_E_PARAM;
         break;
     case ST_CMD_COOLING:
@@ -250,7 +253,8 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
         p->period_ns = 1000000U; /* dc: on-time = period */
         p->on_ns = p->period_ns;
         if (p->power_uw == 0 || p->per_decade == 0 || p->t_first_us < 10 ||
-            p->t_last_ms > 4000000U || p->t_last_ms * 1000U < p->t_first_us)
+            p->t_last_ms > ST_CURVE_MAX_MS || p->t_last_ms * 1000U < p->t_first_us ||
+            p->settle_ms > ST_SETTLE_MAX_MS)
             return ST_E_PARAM;
         p->total = st_log_count(p->t_first_us, p->per_decade, p->t_last_ms * 1000U);
         break;
@@ -266,7 +270,7 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
         p->n = st_get_u16(b + 18);
         p->interval_ms = st_get_u16(b + 20);
         if (f < 1000U || f > 200000000U || d == 0 || d > 1000000U || p->n == 0 ||
-            p->power_uw == 0 || p->window_us > 4000)
+            p->power_uw == 0 || p->window_us > 4000 || p->settle_ms > ST_SETTLE_MAX_MS)
             return ST_E_PARAM;
         p->period_ns = st_period_ns(f);
         p->on_ns = st_on_ns(p->period_ns, d);
@@ -285,6 +289,7 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
     }
     c->f_dropped = 0;
     p->t_start = now;
+    p->t_clock = now;
     p->t_status = now + ST_STATUS_MS * 1000U;
     p->t_next = now + ST_CONTROL_TICK_MS * 1000U;
     if (p->proc != ST_PROC_COOLING) {
@@ -391,6 +396,17 @@ static void next_reading(st_core_t *c, uint32_t now)
     p->state = S_POWER;
 }
 
+/* Advance the procedure's run time. Polls come at least every ST_STATUS_MS, so the unsigned
+ * difference never wraps; the total counts milliseconds (49 days) and never wraps with the
+ * microsecond clock (71.6 min). */
+static void advance(st_proc_t *p, uint32_t now)
+{
+    p->run_us += now - p->t_clock;
+    p->t_clock = now;
+    p->run_ms += p->run_us / 1000U;
+    p->run_us %= 1000U;
+}
+
 static void step(st_core_t *c)
 {
     st_proc_t *p = &c->p;
@@ -398,9 +414,10 @@ static void step(st_core_t *c)
     if (p->state == S_IDLE) {
         return;
     }
+    advance(p, now);
     if (p->state == S_SETTLE || p->state == S_GAP || p->state == S_CAL || p->state == S_CURVE) {
         if (due(now, p->t_status)) {
-            send_status(c, now);
+            send_status(c);
             p->t_status = now + ST_STATUS_MS * 1000U;
         }
     }
@@ -411,7 +428,7 @@ static void step(st_core_t *c)
             p->adc_armed = 0;
             regulate(c);
         }
-        if (elapsed(now, p->t_start) >= (int32_t)(p->settle_ms * 1000U)) {
+        if (p->run_ms >= p->settle_ms) {
             if (p->proc == ST_PROC_CAL) {
                 p->state = S_CAL;
                 p->k = 0;
@@ -533,12 +550,19 @@ void st_core_poll(st_core_t *c)
     if (c->p.state != S_IDLE) {
         uint32_t now = hal_now_us();
         uint32_t w = c->p.t_status;
+        if (c->p.state == S_POWER || c->p.state == S_WINDOW) {
+            /* waiting for the ADC interrupt, no heartbeat in these states: a stale t_status
+             * would make the core busy-poll (and froze the simulator at a float tie) */
+            w = now + ST_STATUS_MS * 1000U;
+        }
         if ((c->p.state == S_SETTLE || c->p.state == S_GAP) && !c->p.adc_armed &&
             elapsed(c->p.t_next, w) < 0) {
             w = c->p.t_next;
         }
-        if (c->p.state == S_SETTLE && !c->p.adc_armed) {
-            uint32_t end = c->p.t_start + c->p.settle_ms * 1000U;
+        if (c->p.state == S_SETTLE && !c->p.adc_armed &&
+            c->p.settle_ms - c->p.run_ms < ST_STATUS_MS) {
+            /* settling ends before the next heartbeat: wake for it */
+            uint32_t end = c->p.t_clock + (c->p.settle_ms - c->p.run_ms) * 1000U - c->p.run_us;
             if (elapsed(end, w) < 0) w = end;
         }
         if (elapsed(w, now) < 0) w = now;

@@ -33,6 +33,7 @@ typedef struct {
     /* state machine */
     uint8_t state;
     uint32_t t_start, t_next, t_status, t_cut;
+    uint32_t t_clock, run_ms, run_us; /* time since t_start: run_ms + run_us / 1000 ms */
     uint16_t k, total;
     uint8_t adc_armed, adc_ready, adc_kind;
     uint32_t adc_t_us;

@@ -6,9 +6,9 @@
 #define ST_PROTO_H
 #include <stdint.h>
 
-#define ST_PROTO_VERSION 1u
+#define ST_PROTO_VERSION 2u
 #define ST_FW_MAJOR 1u
-#define ST_FW_MINOR 0u
+#define ST_FW_MINOR 1u
 #define ST_FW_PATCH 0u
 
 #define ST_MAX_PAYLOAD 48u
@@ -30,7 +30,7 @@
 
 /* device -> host */
 #define ST_MSG_INFO 0x80u   /* proto u8, fw_major u8, fw_minor u8, fw_patch u8, adc_bits u8,
-                               ring u8, caps u16, name (ASCII, rest of payload) */
+                               ring u8, caps u16, settle_max_ms u32, name (ASCII, rest) */
 #define ST_MSG_ACK 0x81u    /* cmd_seq u16, cmd_type u8, status u8 */
 #define ST_MSG_SAMPLE 0x82u /* proc u8, kind u8, index u32, t_us u32, v_tsp_uv i32, v_d_uv i32,
                                i_ua i32, tamb_mc i32, taux_mc i32, code[5] u16 */
@@ -40,7 +40,14 @@
 #define ST_MSG_ERROR 0x86u  /* code u8, detail u16 */
 
 #define ST_LEN_SAMPLE 40u
-#define ST_LEN_INFO_FIXED 8u
+#define ST_LEN_INFO_FIXED 12u
+
+/* Limits the device enforces (a longer time is refused with ST_E_PARAM). Settling is timed in
+ * milliseconds, immune to the 32-bit microsecond clock's wrap; ST_SETTLE_MAX_MS is reported
+ * in INFO. Cooling-curve instants are absolute clock times compared by signed difference, so
+ * the curve must end within 2^31 us (2147 s) of the cut. */
+#define ST_SETTLE_MAX_MS 86400000UL /* 24 h */
+#define ST_CURVE_MAX_MS 2000000UL   /* 2000 s */
 
 /* ACK status */
 #define ST_OK 0u

@@ -262,8 +262,10 @@ static void test_core(void)
     CHECK(fr.f[0].type == ST_MSG_ACK && fr.f[0].seq == 0 && st_get_u16(fr.f[0].payload) == 77 &&
               fr.f[0].payload[3] == ST_OK,
           "ack of hello");
-    CHECK(fr.f[1].type == ST_MSG_INFO && fr.f[1].seq == 1 && fr.f[1].payload[0] == 1 &&
-              fr.f[1].payload[1] == ST_FW_MAJOR && memcmp(fr.f[1].payload + 8, "test", 4) == 0,
+    CHECK(fr.f[1].type == ST_MSG_INFO && fr.f[1].seq == 1 &&
+              fr.f[1].payload[0] == ST_PROTO_VERSION && fr.f[1].payload[1] == ST_FW_MAJOR &&
+              st_get_u32(fr.f[1].payload + 8) == ST_SETTLE_MAX_MS &&
+              memcmp(fr.f[1].payload + ST_LEN_INFO_FIXED, "test", 4) == 0,
           "info");
     /* the same command again is not executed twice */
     send(d, ST_CMD_HELLO, 77, pl, 1);
@@ -377,12 +379,83 @@ static void test_core(void)
     hh_free(d);
 }
 
+/* Settling longer than the 32-bit microsecond clock's signed range (2147.48 s) and its wrap
+ * (4294.97 s): an RTH run must report STATUS heartbeats up to the full settle time before its
+ * first sample (32-bit arithmetic used to skip settling above 2147 s). */
+static uint32_t settle_then_first_sample(uint32_t settle_ms, uint32_t *before_ms)
+{
+    hh_device_t *d = hh_new();
+    static frames_t fr;
+    uint8_t pl[12];
+    int i, chunk;
+    uint32_t status_ms = 0, first = 0;
+    board(d);
+    hh_init(d);
+    d->s.now_us = 0xFFF00000U; /* just before the clock wraps */
+    pl[0] = ST_PROTO_VERSION;
+    send(d, ST_CMD_HELLO, 1, pl, 1);
+    st_put_u32(pl, 94000);
+    st_put_u32(pl + 4, settle_ms);
+    st_put_u16(pl + 8, 100);
+    st_put_u16(pl + 10, 2);
+    send(d, ST_CMD_RTH, 2, pl, 12);
+    for (chunk = 0; chunk < 10000 && !first; chunk++) { /* frames_t holds 512 frames */
+        fr.n = 0;
+        run(d, &fr, 0, 200);
+        for (i = 0; i < fr.n && !first; i++) {
+            if (fr.f[i].type == ST_MSG_STATUS) status_ms = st_get_u32(fr.f[i].payload + 6);
+            if (fr.f[i].type == ST_MSG_ACK && st_get_u16(fr.f[i].payload) == 2) {
+                CHECK(fr.f[i].payload[3] == ST_OK, "rth with settle %u ms accepted", settle_ms);
+            }
+            if (fr.f[i].type == ST_MSG_SAMPLE) first = 1;
+        }
+    }
+    CHECK(first, "samples after a settle of %u ms", settle_ms);
+    *before_ms = status_ms;
+    hh_free(d);
+    return status_ms;
+}
+
+static void test_long_settle(void)
+{
+    static const uint32_t settle[] = {2147000U, 2148000U, 2200000U, 4295000U, 5000000U};
+    hh_device_t *d = hh_new();
+    static frames_t fr;
+    uint8_t pl[12];
+    unsigned i;
+    for (i = 0; i < sizeof settle / sizeof settle[0]; i++) {
+        uint32_t last;
+        settle_then_first_sample(settle[i], &last);
+        CHECK(last + ST_STATUS_MS >= settle[i] && last <= settle[i],
+              "settle %u ms: last heartbeat before the first sample at %u ms", settle[i], last);
+    }
+    /* the limit INFO reports: at it accepted, above it refused */
+    board(d);
+    hh_init(d);
+    pl[0] = ST_PROTO_VERSION;
+    send(d, ST_CMD_HELLO, 1, pl, 1);
+    st_put_u32(pl, 94000);
+    st_put_u32(pl + 4, ST_SETTLE_MAX_MS + 1U);
+    st_put_u16(pl + 8, 100);
+    st_put_u16(pl + 10, 2);
+    send(d, ST_CMD_RTH, 2, pl, 12);
+    st_put_u32(pl + 4, ST_SETTLE_MAX_MS);
+    send(d, ST_CMD_RTH, 3, pl, 12);
+    fr.n = 0;
+    collect(d, &fr);
+    CHECK(fr.n >= 4 && fr.f[2].type == ST_MSG_ACK && fr.f[2].payload[3] == ST_E_PARAM &&
+              fr.f[3].type == ST_MSG_ACK && fr.f[3].payload[3] == ST_OK,
+          "settle limit %lu ms: above refused, at accepted", (unsigned long)ST_SETTLE_MAX_MS);
+    hh_free(d);
+}
+
 int main(int argc, char **argv)
 {
     test_vectors(argc > 1 ? argv[1] : "protocol_vectors.json");
     test_fixed();
     test_ring();
     test_core();
+    test_long_settle();
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }

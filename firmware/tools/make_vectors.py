@@ -47,7 +47,7 @@ def main() -> None:
         cobs.append({"kind": "cobs", "raw_hex": raw, "encoded_hex": enc})
 
     messages = [
-        ("hello", 0x1234, p.Hello(1)),
+        ("hello", 0x1234, p.Hello(2)),
         ("ack", 7, p.Ack(0x0102)),
         ("nak", 8, p.Nak(0xFFFF)),
         ("abort", 9, p.Abort()),
@@ -56,7 +56,7 @@ def main() -> None:
         ("rth", 12, p.Rth(94000, 120000, 100, 16)),
         ("cooling", 13, p.Cooling(94000, 120000, 100, 16, 100, 60000, 10)),
         ("pwm", 14, p.Pwm(94000, 25000000, 200000, 60000, 100, 8, 100)),
-        ("info", 1, p.Info(1, 1, 0, 0, 10, 32, 1, "actuator")),
+        ("info", 1, p.Info(2, 1, 1, 0, 10, 32, 1, 86_400_000, "actuator")),
         ("command_ack", 0, p.CommandAck(0x1234, 0x01, 0)),
         ("command_ack_busy", 65535, p.CommandAck(13, 0x12, 1)),
         ("sample", 300, p.Sample(3, 0, 123456, 100, -27400, 641000, 134000, 25012, 24950,

@@ -2,9 +2,9 @@
 
 Layers, bottom up:
 
-* :class:`RawLog` — every byte read from the port is appended (and fsynced) to
-  ``raw_frames.bin`` *before* it is processed; every frame, both directions, gets a line in
-  ``frames.jsonl`` with what the link made of it (ok, crc, duplicate, gap, ...).
+* :class:`RawLog` — every byte read from the port is appended to ``raw_frames.bin``
+  *before* it is processed, and fsynced before the host acknowledges it; every frame, both
+  directions, gets a line in ``frames.jsonl`` with what the link made of it (ok, crc, gap...).
 * :class:`Link` — the host side of the protocol (firmware/PROTOCOL.md §4): in-order, exactly-once
   delivery of device frames with cumulative ACKs, NAK/resend on a bad frame or a gap, command
   resend when SYNC shows the device never got it, timeouts and a silent-device error.
@@ -16,7 +16,7 @@ Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 >>> # a simulated bench, quickly: just the handshake
 >>> with BenchClient("sim://actuator?seed=1") as bench:
 ...     bench.info.name, bench.info.firmware
-('actuator', '1.0.0')
+('actuator', '1.1.0')
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ import secrets
 import sys
 import time
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO
 
@@ -41,24 +41,36 @@ ACTIONS = ("calibrate", "rth", "cooling", "pwm")
 
 # --------------------------------------------------------------------------- raw log
 class RawLog:
-    """Append-only raw records of a session in ``directory`` (created)."""
+    """Append-only raw records of a session in ``directory`` (created).
+
+    Received bytes are written to the file (they survive a crash of this process) before
+    the link decodes them, and fsynced (:meth:`sync`) before the host acknowledges them to
+    the device, which then forgets them: no frame is lost from both sides at once.
+    """
 
     def __init__(self, directory: Path | None) -> None:
         self.directory = directory
         self._bin: IO[bytes] | None = None
         self._jsonl: IO[str] | None = None
         self._t0 = time.monotonic()
+        self._unsynced = False
         if directory is not None:
             directory.mkdir(parents=True, exist_ok=True)
             self._bin = open(directory / "raw_frames.bin", "ab")
             self._jsonl = open(directory / "frames.jsonl", "a", encoding="utf-8")
 
     def received(self, data: bytes) -> None:
-        """Append ``data`` to ``raw_frames.bin`` and fsync it: on disk before it is used."""
+        """Append ``data`` to ``raw_frames.bin``, written through to the kernel."""
         if self._bin is not None and data:
             self._bin.write(data)
             self._bin.flush()
+            self._unsynced = True
+
+    def sync(self) -> None:
+        """fsync what was received so far (before acknowledging it to the device)."""
+        if self._bin is not None and self._unsynced:
             os.fsync(self._bin.fileno())
+            self._unsynced = False
 
     def frame(self, direction: str, block: bytes, status: str, frame: p.Frame | None = None
               ) -> None:
@@ -83,6 +95,10 @@ class RawLog:
 # --------------------------------------------------------------------------- link
 @dataclass
 class LinkStats:
+    """Counters of one link: ``frames`` delivered in order, ``received`` blocks of any kind
+    (``received_bytes`` on the wire), ``corrupt`` ones (CRC or framing), and the recovery
+    traffic."""
+
     frames: int = 0
     corrupt: int = 0
     duplicates: int = 0
@@ -91,6 +107,32 @@ class LinkStats:
     acks: int = 0
     command_resends: int = 0
     timeouts: int = 0
+    received: int = 0
+    received_bytes: int = 0
+
+    @property
+    def byte_error_rate(self) -> float:
+        """Per-byte error rate that explains the corrupt fraction of received frames, if each
+        byte fails independently: a frame of ``L`` bytes survives with ``(1 - p)^L``.
+
+        >>> round(LinkStats(corrupt=64, received=100, received_bytes=5000).byte_error_rate, 4)
+        0.0202
+        """
+        if not self.received:
+            return 0.0
+        survived = 1.0 - self.corrupt / self.received
+        mean_len = self.received_bytes / self.received
+        return 1.0 - survived ** (1.0 / mean_len) if survived > 0 else 1.0
+
+    def describe(self) -> str:
+        """One phrase for messages: how many frames failed and the byte-error rate."""
+        return (f"{self.corrupt} of {self.received} frames received failed their check (CRC "
+                f"or framing), {self.naks} resends requested: a byte-error rate of about "
+                f"{self.byte_error_rate:.1e} (a sound serial line has below 1e-6)")
+
+    def report(self) -> dict:
+        """The counters and the byte-error rate, for the bundle's ``bench.link``."""
+        return {**asdict(self), "byte_error_rate": float(f"{self.byte_error_rate:.3g}")}
 
 
 class Link:
@@ -101,16 +143,21 @@ class Link:
     port : an open pyserial port (its ``timeout`` is the unit of waiting).
     log : where raw bytes and frames go.
     nak_after_s : silence after which the host sends NAK (asks for a resend or a SYNC).
-    silent_after_s : silence after which the device is declared silent (an error).
+    silent_after_s : silence after which the device is declared silent (an error: "no
+        response").
+    max_rounds : resend requests in a row that bring bytes but no good frame, after which
+        the line is declared too noisy (an error naming the measured byte-error rate).
     name : how messages name the port.
     """
 
     def __init__(self, port, log: RawLog, *, nak_after_s: float = 0.5,
-                 silent_after_s: float = 5.0, name: str = "port") -> None:
+                 silent_after_s: float = 5.0, max_rounds: int = 40,
+                 name: str = "port") -> None:
         self.port = port
         self.log = log
         self.nak_after_s = nak_after_s
         self.silent_after_s = silent_after_s
+        self.max_rounds = max_rounds
         self.name = name
         self.reader = p.FrameReader()
         self.expected = 0
@@ -124,6 +171,8 @@ class Link:
         self._since_ack = 0
         self._idle_s = 0.0
         self._naks_in_silence = 0
+        self._rounds = 0  # resend requests since the last good frame, while bytes came
+        self._noise = False  # bytes but no good frame since the last resend request
 
     # -- sending -----------------------------------------------------------------------
     def _write(self, wire: bytes, frame: p.Frame) -> None:
@@ -151,10 +200,12 @@ class Link:
         return seq
 
     def _nak(self) -> None:
+        self.log.sync()  # a NAK acknowledges what came before it
         self._send(p.Nak(self.expected), 0)
         self.stats.naks += 1
 
     def _ack(self) -> None:
+        self.log.sync()
         self._send(p.Ack(self.expected), 0)
         self.stats.acks += 1
         self._since_ack = 0
@@ -176,6 +227,9 @@ class Link:
         if not data:
             self._on_silence()
             return
+        self._idle_s = 0.0  # the line is alive, if perhaps noisy: a new silence begins
+        self._naks_in_silence = 0
+        self._noise = True
         for block, item in self.reader.feed(data):
             self._on_block(block, item)
         if self._since_ack >= max(1, self.ring // 4):
@@ -185,19 +239,41 @@ class Link:
         self.stats.timeouts += 1
         self._idle_s += float(self.port.timeout or 0.05)
         if self._idle_s >= self.silent_after_s:
+            if self._rounds or self._noise:  # garbled bytes came since the last good frame
+                self._noisy(f"then the device was silent for {self.silent_after_s:g} s")
+            before = f"; the line was noisy before: {self.stats.describe()}" if (
+                self.stats.byte_error_rate > 1e-4) else ""
             raise InstrumentError(
                 f"{self.name}: no response from the device for {self.silent_after_s:g} s "
-                f"(is it connected and powered, is this the bench's port?)")
+                f"(is it connected and powered, is this the bench's port?){before}")
         if self._idle_s >= self.nak_after_s * (self._naks_in_silence + 1):
             self._naks_in_silence += 1
+            if self._noise:
+                self._rounds += 1
+                self._noise = False
+                if self._rounds >= self.max_rounds:
+                    self._noisy("")
             self._nak_sent = False
             self._nak()
+
+    def _noisy(self, then: str) -> None:
+        raise InstrumentError(
+            f"{self.name}: noisy line, not a silent device: {self._rounds} resend requests in "
+            f"a row brought no intact frame{', ' + then if then else ''}; "
+            f"{self.stats.describe()}; check the cable (length, shielding, ground), the "
+            f"connectors and the baud rate")
 
     def _alive(self) -> None:
         self._idle_s = 0.0
         self._naks_in_silence = 0
+        self._rounds = 0
+        self._noise = False
+        self._rounds = 0  # resend requests since the last good frame, while bytes came
+        self._noise = False  # bytes but no good frame since the last resend request
 
     def _on_block(self, block: bytes, item: p.Frame | p.FrameError) -> None:
+        self.stats.received += 1
+        self.stats.received_bytes += len(block) + 1  # with the delimiter
         if isinstance(item, p.FrameError):
             self.stats.corrupt += 1
             self.log.frame("rx", block, item.reason)
@@ -420,6 +496,7 @@ class BenchClient:
                     self.on_status(m)
             elif isinstance(m, p.Done):
                 self.link.flush_ack()
+                self.log.sync()  # the samples become a data set only once they are on disk
                 if m.status != 0:
                     raise InstrumentError(f"{self.url}: {p.PROC_NAMES[proc]} failed: "
                                           f"{p.DONE_STATUS.get(m.status, m.status)}")
@@ -436,25 +513,45 @@ class BenchClient:
         self.command(p.Abort())
 
     # -- procedures ------------------------------------------------------------------------
+    def check_limits(self, settles_s: Sequence[float] = (), t_last_s: float | None = None
+                     ) -> None:
+        """Settle times within the limit the device reports in INFO, a cooling curve's last
+        sample within the protocol's; a :class:`DataFormatError` naming the limit."""
+        for settle_s in settles_s:
+            if _ms(settle_s) > self.info.settle_max_ms:
+                raise DataFormatError(f"settle time {settle_s:g} s is above the limit of "
+                                      f"{self.info.settle_max_ms / 1e3:g} s that the device "
+                                      f"reports")
+        if t_last_s is not None and _ms(t_last_s) > p.CURVE_MAX_MS:
+            raise DataFormatError(f"cooling curve: last sample at {t_last_s:g} s is above the "
+                                  f"device's limit of {p.CURVE_MAX_MS / 1e3:g} s after the cut")
+
+    def _settle_ms(self, settle_s: float) -> int:
+        self.check_limits([settle_s])
+        return _ms(settle_s)
+
     def calibrate(self, setpoint_c: float, settle_s: float, n: int, interval_s: float) -> Run:
-        return self._collect(p.Calibrate(round(setpoint_c * 1e3), _ms(settle_s), _u16(n, "n"),
+        return self._collect(p.Calibrate(round(setpoint_c * 1e3), self._settle_ms(settle_s),
+                                         _u16(n, "n"),
                                          _u16(round(interval_s * 1e3), "interval_ms")),
                              p.PROC_CAL)
 
     def rth(self, power_w: float, settle_s: float, window_s: float, n: int) -> Run:
-        return self._collect(p.Rth(_uw(power_w), _ms(settle_s), _us16(window_s), _u16(n, "n")),
+        return self._collect(p.Rth(_uw(power_w), self._settle_ms(settle_s), _us16(window_s),
+                                   _u16(n, "n")),
                              p.PROC_RTH)
 
     def cooling(self, power_w: float, settle_s: float, window_s: float, n: int,
                 t_first_s: float, t_last_s: float, per_decade: int) -> Run:
-        return self._collect(p.Cooling(_uw(power_w), _ms(settle_s), _us16(window_s),
+        self.check_limits(t_last_s=t_last_s)
+        return self._collect(p.Cooling(_uw(power_w), self._settle_ms(settle_s), _us16(window_s),
                                        _u16(n, "n"), round(t_first_s * 1e6), _ms(t_last_s),
                                        int(per_decade)), p.PROC_COOLING)
 
     def pwm(self, power_w: float, freq_hz: float, duty: float, settle_s: float,
             window_s: float, n: int, interval_s: float) -> Run:
         return self._collect(p.Pwm(_uw(power_w), round(freq_hz * 1e3), round(duty * 1e6),
-                                   _ms(settle_s), _us16(window_s), _u16(n, "n"),
+                                   self._settle_ms(settle_s), _us16(window_s), _u16(n, "n"),
                                    _u16(round(interval_s * 1e3), "interval_ms")), p.PROC_PWM)
 
 

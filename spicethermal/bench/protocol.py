@@ -25,7 +25,9 @@ from typing import ClassVar
 
 from ..errors import InstrumentError
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
+#: Last cooling-curve sample the device accepts, ms after the cut (ST_CURVE_MAX_MS).
+CURVE_MAX_MS = 2_000_000
 MAX_PAYLOAD = 48
 CRC_INIT = 0xFFFF
 
@@ -305,7 +307,7 @@ class Pwm(Message):
 @dataclass(frozen=True)
 class Info(Message):
     TYPE: ClassVar[int] = 0x80
-    FORMAT: ClassVar[str] = "<BBBBBBH"
+    FORMAT: ClassVar[str] = "<BBBBBBHI"
     proto: int = PROTOCOL_VERSION
     fw_major: int = 1
     fw_minor: int = 0
@@ -313,6 +315,7 @@ class Info(Message):
     adc_bits: int = 10
     ring: int = 32
     caps: int = 0
+    settle_max_ms: int = 86_400_000
     name: str = ""
 
     @property
@@ -321,7 +324,8 @@ class Info(Message):
 
     def payload(self) -> bytes:
         return struct.pack(self.FORMAT, self.proto, self.fw_major, self.fw_minor, self.fw_patch,
-                           self.adc_bits, self.ring, self.caps) + self.name.encode("ascii")
+                           self.adc_bits, self.ring, self.caps, self.settle_max_ms
+                           ) + self.name.encode("ascii")
 
     @classmethod
     def from_payload(cls, payload: bytes, seq: int) -> Info:

@@ -17,6 +17,7 @@ by the board name the device reports; every value can be overridden.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import sys
@@ -28,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import DataFormatError, InstrumentError
+from ..errors import DataFormatError, InstrumentError, SpiceThermalError
 from ..files import clean_leftovers, locked
 from . import protocol as p
 from .client import ACTIONS, BenchClient, Run
@@ -222,6 +223,20 @@ class Session:
             run_dir = raw / f"{stamp}-{action}-{k}"
         return run_dir
 
+    def _adopt_old_raw_logs(self) -> None:
+        """Move raw logs that spicethermal 0.1 left in ``BUNDLE.raw/`` (a run killed while
+        its logs were moved out) back into the bundle's ``raw/``."""
+        old = self.out_dir.parent / f"{self.out_dir.name}.raw"
+        if not old.is_dir() or old.is_symlink() or not self.out_dir.is_dir():
+            return
+        (self.out_dir / "raw").mkdir(exist_ok=True)
+        for entry in sorted(old.iterdir()):
+            target = self.out_dir / "raw" / entry.name
+            if not target.exists():
+                os.rename(entry, target)
+        with contextlib.suppress(OSError):
+            old.rmdir()
+
     def _check_replace(self, previous: Bundle, actions: Sequence[str]) -> None:
         measured = {SECTIONS[a] for a in actions if a in SECTIONS}
         kinds = {t.file: s for s, ts in (("calibration", [previous.calibration]),
@@ -251,7 +266,14 @@ class Session:
                 raise DataFormatError(f"{out}: exists and is not a bundle; not writing into it")
             else:
                 previous = Bundle()
+            self._adopt_old_raw_logs()
             self._check_replace(previous, actions)
+            if previous.calibration is None and "calibrate" not in actions:
+                needs = [a for a in actions if a in ("cooling", "pwm")]
+                if needs:  # said now, not after the measurement
+                    raise DataFormatError(f"bench {needs[0]}: needs a calibration (run 'bench "
+                                          f"calibrate' into the same bundle first, or 'bench "
+                                          f"run')")
             if created:  # the raw log needs a home that is a valid bundle at every instant
                 previous.write(out)
             raw_dir = self._raw_dir("-".join(actions) if len(actions) < 4 else "run")
@@ -260,6 +282,8 @@ class Session:
                     plan = self.plan_given or PLANS.get(bench.info.name, Plan())
                     if self.overrides:
                         plan = replace(plan, **self.overrides)
+                    bench.check_limits([plan.settle_s, plan.calibration_settle_s,
+                                        plan.pwm_settle_s], plan.cooling_t_last_s)
                     try:
                         new = self._measure(bench, plan, actions, previous)
                     finally:
@@ -269,11 +293,11 @@ class Session:
                                 bench.abort()  # heater off
                             except Exception:
                                 pass
-            except InstrumentError as exc:
+            except SpiceThermalError as exc:
                 raw = raw_dir / "raw_frames.bin"
                 if raw.exists() and raw.stat().st_size:
-                    raise InstrumentError(f"{exc} (raw data of this session kept in "
-                                          f"{raw_dir})") from None
+                    raise type(exc)(f"{exc} (raw data of this session kept in {raw_dir})"
+                                    ) from None
                 shutil.rmtree(raw_dir, ignore_errors=True)
                 if created:
                     shutil.rmtree(out, ignore_errors=True)
@@ -296,7 +320,7 @@ class Session:
     def _bench_info(self, bench: BenchClient, plan: Plan, raw: str) -> dict:
         return {"port": self.url, "board": bench.info.name, "firmware": bench.info.firmware,
                 "protocol": bench.info.proto, "raw": raw,
-                "link": asdict(bench.link.stats), "plan": asdict(plan)}
+                "link": bench.link.stats.report(), "plan": asdict(plan)}
 
     # -- measuring -------------------------------------------------------------------------
     def _measure(self, bench: BenchClient, plan: Plan, actions: Sequence[str],
@@ -412,13 +436,10 @@ class Session:
                             tref_steady_c=round(_mean(steady, "tamb_c"), 4),
                             file=f"cooling_{k}.csv", extra=extra, **kw)
 
-    def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion | None, step,
+    def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion, step,
              ambient: list[float]):
         from ..bundle import PwmTable
 
-        if conv is None:
-            raise InstrumentError("bench pwm: needs a calibration (run 'bench calibrate' into "
-                                  "the same bundle first, or 'bench run')")
         rows = []
         for duty in plan.pwm_duties:
             for freq in plan.pwm_freqs_hz:

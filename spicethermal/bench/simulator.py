@@ -97,6 +97,7 @@ def firmware_library() -> ctypes.CDLL:
     lib.hh_blocked.argtypes = [ctypes.c_void_p]
     lib.hh_blocked.restype = ctypes.c_uint32
     lib.hh_set_version.argtypes = [ctypes.c_uint8] * 3
+    lib.built_version = tuple((ctypes.c_uint8 * 3).in_dll(lib, "st_fw_version"))
     return lib
 
 
@@ -136,7 +137,7 @@ class SimulatedDevice:
         self.frontend = Frontend(self.preset, self.effects, noise_k, self.rng)
         self.ideal_hold = "sample-window" not in self.effects
         self._lib = firmware_library()
-        self._version = firmware_version or (1, 0, 0)
+        self._version = firmware_version or self._lib.built_version
         self._dev = self._lib.hh_new()
         if not self._dev:
             raise InstrumentError("simulated bench: out of memory")
@@ -205,7 +206,8 @@ class SimulatedDevice:
         while self._state.tx_len == 0 and events < max_events:
             if self._lib.hh_blocked(self._dev):
                 break  # the host must acknowledge first; its reads take no simulated time
-            if self.adc_at is not None and (self.wake is None or self.adc_at <= self.wake):
+            if self.adc_at is not None and (self.wake is None or self.adc_at <= self.wake
+                                            or self.wake <= self.t):  # a busy-poll: go on
                 self._convert()
             elif self.wake is not None:
                 self.advance_to(self.wake)
