@@ -337,6 +337,10 @@ DIRECT_WRITES = {
     ("bench/client.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
     ("bench/client.py", 'open(directory / "frames.jsonl", "a"'): "append-only raw log",
     ("bench/client.py", "json.dumps(rec)"): "raw log records: times and hex strings only",
+    ("batch/device.py", "(local / file).write_bytes(data)"): "worker's private temporary copy",
+    ("batch/device.py", "local.write_bytes(next(iter(source.files.values())))"):
+        "worker's private temporary copy",
+    ("predict.py", "lib.write_text("): "private temporary directory",
 }
 WRITE_CALL = re.compile(r"\.write_(text|bytes)\(|\bopen\([^)]*['\"][wax]b?['\"]|\.savefig\(|"
                         r"shutil\.copy|np\.save|\.to_csv\(|json\.dumps?\(")

@@ -25,7 +25,6 @@ the bundles, never into them.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -34,7 +33,7 @@ import numpy as np
 
 from ..bundle import Bundle, CoolingTable
 from ..errors import DataFormatError
-from ..files import atomic_write_text
+from ..files import atomic_write_text, dumps_json
 from ..ladder import Cauer
 from ..synthetic import synthetic_cooling
 
@@ -161,5 +160,5 @@ def write_population(out_dir: str | os.PathLike, n: int, seed: int = 0, *,
     truth = {"format": "spicethermal-population/1", "seed": seed, "spread": spread,
              "power_w": power_w, "noise_k": noise_k, "defect_layer": LAYERS[DEFECT_LAYER][0],
              "devices": [d.to_dict() for d in devices]}
-    atomic_write_text(out / "population.json", json.dumps(truth, indent=1) + "\n")
+    atomic_write_text(out / "population.json", dumps_json(truth, indent=1) + "\n")
     return devices

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import logging
 import os
 import sys
@@ -34,7 +33,7 @@ from typing import Any
 
 from ..bundle import MANIFEST
 from ..errors import DataFormatError, SpiceThermalError
-from ..files import atomic_open, atomic_write_text, read_json
+from ..files import atomic_open, atomic_write_text, dumps_json, read_json
 from .device import COLUMNS, Options, Source, characterize, make_row
 
 __all__ = ["BatchRun", "check_output", "cluster_client", "find_sources", "load_results",
@@ -133,11 +132,11 @@ def _save(out: Path, result: dict[str, Any]) -> dict[str, Any]:
     row = result["row"]
     folder = out / "devices" / row["name"]
     if result.get("model") is not None:
-        atomic_write_text(folder / "model.json", json.dumps(result["model"], indent=2) + "\n")
+        atomic_write_text(folder / "model.json", dumps_json(result["model"], indent=2) + "\n")
     if result.get("lib") is not None:
         atomic_write_text(folder / f"{row['name']}.lib", result["lib"])
     record = {"row": row, "model": result.get("model"), "curve": result.get("curve")}
-    atomic_write_text(folder / RESULT, json.dumps(record) + "\n")
+    atomic_write_text(folder / RESULT, dumps_json(record) + "\n")
     return record
 
 
