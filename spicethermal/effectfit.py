@@ -47,9 +47,13 @@ band) and ``sample-window`` (cooling curves are not affected).
 
 from __future__ import annotations
 
+import contextvars
 import math
-from collections.abc import Callable, Mapping, Sequence
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -68,11 +72,48 @@ if TYPE_CHECKING:  # pragma: no cover
 #: band's capacity, :meth:`~spicethermal.effects.Effect.extra_capacitance`, is below 1e-6 of
 #: its peak there).
 BAND_REACH = 8.0
-#: Iterations allowed to a least-squares fit that includes the ladder (each iteration costs
-#: 2·order + k evaluations); enough for the catalogued effects, a bound on hopeless fits.
-MAX_NFEV_WITH_LADDER = 40
+#: Evaluations allowed to one least-squares fit: a bound on hopeless fits only; fits stop on
+#: their tolerance or on the wall-clock budget of :func:`time_limit`.
+MAX_NFEV = 2000
+#: Relative tolerance on the cost, the step and the gradient at which a fit stops.
+FIT_TOL = 1e-8
+#: Numerical failures that make a trial point of a fit (or a whole candidate) fail.
+NUMERICAL_ERRORS = (ArithmeticError, ValueError, np.linalg.LinAlgError)
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
 TRANSIENT_RATE = 5.0
+
+_DEADLINE: contextvars.ContextVar[float] = contextvars.ContextVar("deadline", default=math.inf)
+
+
+class TimeLimitError(SimulationError):
+    """The wall-clock budget of :func:`time_limit` ran out."""
+
+
+@contextmanager
+def time_limit(seconds: float) -> Iterator[None]:
+    """A wall-clock budget for the fits and integrations run inside the block: past it,
+    :func:`check_time` raises :class:`TimeLimitError` (fits then return their best point so far,
+    integrations fail). Nested budgets keep the earlier deadline.
+
+    >>> with time_limit(0.0):
+    ...     check_time()
+    Traceback (most recent call last):
+    ...
+    spicethermal.effectfit.TimeLimitError: wall-clock budget exhausted
+    """
+    deadline = min(_DEADLINE.get(), time.monotonic() + seconds)
+    token = _DEADLINE.set(deadline)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def check_time() -> None:
+    """Raise :class:`TimeLimitError` when the current :func:`time_limit` has run out."""
+    deadline = _DEADLINE.get()
+    if time.monotonic() > deadline:
+        raise TimeLimitError("wall-clock budget exhausted")
 
 
 # --------------------------------------------------------------------------------------------
@@ -142,9 +183,13 @@ class BundleData:
     @classmethod
     def from_bundle(cls, bundle: Bundle) -> BundleData:
         ambient = bundle.ambient_c if bundle.ambient_c is not None else 25.0
+        # curves in volts go through the *linear* calibration, as the calibration data set
+        # does: a curvature of the TSP then shows once, as tsp-nonlinearity, never twice
+        line = bundle.calibration.fit(1) if bundle.calibration is not None else None
         curves = []
         for i, c in enumerate(bundle.cooling):
-            tj = np.asarray(bundle.cooling_tj_c(i), dtype=float)
+            tj = np.asarray(c.tj_c if c.tj_c is not None else line.temperature(c.v_tsp_v),
+                            dtype=float)
             rows, steady = bundle.cooling_reference_c(i)
             if steady is None:
                 steady = float(rows[0]) if rows is not None else ambient
@@ -163,8 +208,7 @@ class BundleData:
                           np.asarray(p.powers_w, float), tref, np.asarray(p.tj_c, float),
                           float(p.sample_window_s))
         cal = None
-        if bundle.calibration is not None and np.unique(bundle.calibration.temp_c).size >= 3:
-            line = bundle.calibration.fit(1)
+        if line is not None and np.unique(bundle.calibration.temp_c).size >= 3:
             cal = CalData(np.asarray(bundle.calibration.temp_c, float),
                           np.asarray(line.temperature(bundle.calibration.v_tsp_v), float))
         return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle")
@@ -331,6 +375,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
         return cy - cx * ce * cy[node] / (1 + cx * ce[node])
 
     def rhs(_t: float, theta: NDArray) -> NDArray:
+        check_time()
         return minv(theta, -g @ theta / scale(theta))
 
     def jac(_t: float, theta: NDArray) -> NDArray:  # the resistance's own slope left out
@@ -394,30 +439,79 @@ def _effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
 
 
 def tsp_reading(temp_c: ArrayLike, effect: Effect | None) -> NDArray:
-    """What a linear-calibrated TSP reads at true temperature ``temp_c``."""
+    """What a linear-calibrated TSP reads at true temperature ``temp_c``:
+    ``T + q (T − T_cal)² + c (T − T_cal)³`` (``c`` in the cubic form only).
+
+    >>> e = Effect.create("tsp-nonlinearity", "cubic", quad_k_per_k2=1e-3, cub_k_per_k3=1e-5)
+    >>> round(float(tsp_reading(35.0, e)), 9)
+    35.11
+    """
     t = np.asarray(temp_c, dtype=float)
     if effect is None:
         return t
-    return t + effect.params["quad_k_per_k2"] * (t - effect.params["t_cal_c"]) ** 2
+    p = effect.params
+    d = t - p["t_cal_c"]
+    out = t + p["quad_k_per_k2"] * d ** 2
+    if effect.form == "cubic":
+        out = out + p["cub_k_per_k3"] * d ** 3
+    return out
 
 
 def tsp_true(read_c: ArrayLike, effect: Effect | None) -> NDArray:
-    """Inverse of :func:`tsp_reading` (the root on the calibrated branch)."""
+    """Inverse of :func:`tsp_reading` (the root on the calibrated branch; Newton steps from the
+    quadratic root for the cubic form)."""
     r = np.asarray(read_c, dtype=float)
-    if effect is None or effect.params["quad_k_per_k2"] == 0:
+    if effect is None:
         return r
     q, tc = effect.params["quad_k_per_k2"], effect.params["t_cal_c"]
-    disc = np.clip(1 + 4 * q * (r - tc), 0.0, None)
-    return tc + 2 * (r - tc) / (1 + np.sqrt(disc))
+    t = r
+    if q != 0:
+        disc = np.clip(1 + 4 * q * (r - tc), 0.0, None)
+        t = tc + 2 * (r - tc) / (1 + np.sqrt(disc))
+    c = effect.params["cub_k_per_k3"] if effect.form == "cubic" else 0.0
+    if c != 0:
+        for _ in range(30):
+            d = t - tc
+            slope = np.maximum(1 + 2 * q * d + 3 * c * d * d, 0.05)
+            step = (t + q * d * d + c * d ** 3 - r) / slope
+            t = t - step
+            if np.all(np.abs(step) < 1e-12 * (1 + np.abs(t))):
+                break
+    return t
 
 
-def transient_offset(t_s: ArrayLike, effect: Effect | None) -> NDArray:
-    """Reading error (K) of the electrical transient at ``t_s`` after the cut."""
+def transient_offset(t_s: ArrayLike, effect: Effect | None, power_w: float = 0.0) -> NDArray:
+    """Reading error (K) of the electrical transient at ``t_s`` after cutting ``power_w``.
+
+    >>> e = Effect.create("electrical-transient", "power", k_per_w=-10.0, masked_s=1e-4)
+    >>> round(float(transient_offset(0.0, e, 0.3)), 9)
+    -3.0
+    """
     t = np.asarray(t_s, dtype=float)
     if effect is None or effect.params["masked_s"] <= 0:
         return np.zeros(t.shape)
     p = effect.params
-    return p["amplitude_k"] * np.exp(-TRANSIENT_RATE * t / p["masked_s"])
+    amp = p["k_per_w"] * power_w if effect.form == "power" else p["amplitude_k"]
+    out = amp * np.exp(-TRANSIENT_RATE * t / p["masked_s"])
+    if effect.form == "ringing":
+        out = out * np.cos(2 * math.pi * p["ring_hz"] * t)
+    return out
+
+
+def calibration_reading(temp_c: NDArray, effect: Effect | None) -> NDArray:
+    """What the least-squares linear calibration of the points at ``temp_c`` reads there when
+    the TSP reads :func:`tsp_reading` through its true tangent: the straight line of ``T``
+    against that reading absorbs the straight part of the nonlinearity, leaving the bow.
+
+    >>> t = np.array([20.0, 40.0, 60.0, 80.0])
+    >>> e = Effect.create("tsp-nonlinearity", quad_k_per_k2=1e-3, t_cal_c=20.0)
+    >>> [round(float(x - y), 4) for x, y in zip(calibration_reading(t, e), t)]
+    [0.3858, -0.3744, -0.3801, 0.3687]
+    """
+    if effect is None:
+        return temp_c.copy()
+    r = tsp_reading(temp_c, effect)
+    return np.polyval(np.polyfit(r, temp_c, 1), r)
 
 
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
@@ -444,6 +538,7 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
     tc, pc, sw = (fx.get(n) for n in ("temperature-coefficient", "phase-change",
                                       "sample-window"))
     window = float(sw.params["window_s"]) if sw is not None else data.window_s
+    average = sw is not None and sw.form == "average" and window > 0
     out = np.empty(data.freq_hz.size)
     for i, (f, d, p, tref) in enumerate(zip(data.freq_hz, data.duty, data.power_w, data.tref_c,
                                             strict=True)):
@@ -453,8 +548,31 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
                                    p * d)
         if pc is not None and _band_reached(pc, tref, tref + p * _foster(lad).rth):
             lad = pc_frozen_ladder(lad, pc, tref, p * d)
-        out[i] = tref + steady_state(lad, p, f, d, window).reading_k
+        if average:
+            out[i] = tref + window_average_k(lad, p, f, d, window)
+        else:
+            out[i] = tref + steady_state(lad, p, f, d, window).reading_k
     return out
+
+
+def window_average_k(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: float,
+                     window_s: float) -> float:
+    """Mean junction rise (K) over a power-off window of ``window_s`` that starts when an
+    on-phase of the periodic steady state ends: each Foster stage starts at its peak ``pᵢ``
+    and decays, so the mean is ``Σ pᵢ τᵢ/w (1 − e^{−w/τᵢ})``.
+
+    >>> lad = Foster.from_tau([10.0], [1e-3])
+    >>> round(window_average_k(lad, 1.0, 1e6, 0.5, 1e-3), 3) == round(5 * (1 - math.exp(-1)), 3)
+    True
+    """
+    from .pwm import steady_state
+
+    f = _foster(ladder)
+    total = 0.0
+    for r, tau in zip(f.r, f.tau, strict=True):
+        peak = steady_state(Foster.from_tau([r], [tau]), power_w, freq_hz, duty).peak_k
+        total += peak * tau / window_s * -math.expm1(-window_s / tau)
+    return total
 
 
 def predict(data: BundleData, ladder: Foster | Cauer,
@@ -472,17 +590,11 @@ def predict(data: BundleData, ladder: Foster | Cauer,
     out: dict[str, NDArray] = {}
     for c in data.cooling:
         out[c.name] = tsp_reading(cooling_true_c(c, ladder, effects), tsp) + \
-            transient_offset(c.t_s, tr)
+            transient_offset(c.t_s, tr, c.power_w)
     if data.pwm is not None:
         out["pwm"] = tsp_reading(pwm_true_c(data.pwm, ladder, effects), tsp)
     if data.calibration is not None:
-        cal = data.calibration
-        model = cal.temp_c.copy()
-        if tsp is not None:
-            q = tsp.params["quad_k_per_k2"]
-            basis, b_u = cal.curvature_basis(tsp.params["t_cal_c"])
-            model = model + q * basis / (1 + q * b_u)
-        out["calibration"] = model
+        out["calibration"] = calibration_reading(data.calibration.temp_c, tsp)
     return out
 
 
@@ -559,24 +671,55 @@ def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
 
 def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
          hi: Sequence[float], **kw: Any):
+    """:func:`scipy.optimize.least_squares` made robust: a trial point whose forward model
+    fails numerically (overflow, no convergence, a :class:`~spicethermal.errors.SimulationError`)
+    gets a large residual; past the :func:`time_limit` the best point so far is returned (its
+    ``status`` is ``-9``). Raises :class:`~spicethermal.errors.FitError` when the start fails."""
     from scipy.optimize import least_squares
 
     lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     x0 = np.asarray(x0, dtype=float)
     pad = 1e-9 * np.maximum(1.0, np.abs(x0))
     x0 = np.clip(x0, lo_a + pad, hi_a - pad)
-    size = fun(x0).size
+    best = SimpleNamespace(x=x0, cost=math.inf, fun=None, status=-9, nfev=0)
+
+    def evaluate(x: NDArray) -> NDArray:
+        check_time()
+        with np.errstate(over="raise", invalid="raise", divide="raise"):
+            return np.asarray(fun(x), dtype=float)
+
+    try:
+        r0 = evaluate(x0)
+    except (SimulationError, DataFormatError, *NUMERICAL_ERRORS) as exc:
+        raise FitError(f"the forward model fails at the start point: {exc}") from None
+    if not np.all(np.isfinite(r0)):
+        raise FitError("the forward model is not finite at the start point")
+    size = r0.size
 
     def safe(x: NDArray) -> NDArray:
         try:
-            with np.errstate(over="raise", invalid="raise"):
-                r = fun(x)
-        except (SimulationError, FloatingPointError, DataFormatError, ValueError,
-                np.linalg.LinAlgError):
+            r = evaluate(x)
+        except TimeLimitError:
+            raise
+        except (SimulationError, DataFormatError, *NUMERICAL_ERRORS):
             return np.full(size, 1e6)
-        return r if np.all(np.abs(r) < 1e6) else np.full(size, 1e6)
+        if not np.all(np.abs(r) < 1e6):
+            return np.full(size, 1e6)
+        cost = 0.5 * float(r @ r)
+        best.nfev += 1
+        if cost < best.cost:
+            best.x, best.cost, best.fun = np.array(x), cost, r
+        return r
 
-    return least_squares(safe, x0, bounds=(lo_a, hi_a), x_scale="jac", **kw)
+    kw.setdefault("max_nfev", MAX_NFEV)
+    for key in ("ftol", "xtol", "gtol"):
+        kw.setdefault(key, FIT_TOL)
+    try:
+        return least_squares(safe, x0, bounds=(lo_a, hi_a), x_scale="jac", **kw)
+    except TimeLimitError:
+        if best.fun is None:
+            raise
+        return best
 
 
 def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
@@ -617,14 +760,12 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
             parts.append(tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
         return np.concatenate(parts)
 
-    if max_nfev is None and m:
-        max_nfev = MAX_NFEV_WITH_LADDER
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
     big = np.full(2 * m, np.inf)
     res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
                np.concatenate([-big, np.asarray(lo, float)]),
-               np.concatenate([big, np.asarray(hi, float)]), max_nfev=max_nfev,
-               diff_step=diff_step)
+               np.concatenate([big, np.asarray(hi, float)]),
+               **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step)
     lad, xe = split(res.x)
     return lad, build(xe), res
 
