@@ -30,9 +30,13 @@ from typing import Any
 from .measure import Bench, Record, Transient, Tsp, measure
 from .network import LatentHeat, Network, ResistanceLaw
 
-__all__ = ["DEVICES", "FORMS", "STRENGTHS", "Case", "Device", "case", "catalogue"]
+__all__ = ["DEVICES", "FAST", "FORMS", "STRENGTHS", "Case", "Device", "case", "catalogue"]
 
 STRENGTHS = ("weak", "medium", "strong")
+#: A fast subset (seconds to simulate): a clean bundle and one strong case per effect that
+#: the diagnosis names today (tests/test_validation.py runs it).
+FAST = ("clean/mosfet-2", "temperature-coefficient/local-linear/strong",
+        "electrical-transient/fixed/strong", "tsp-nonlinearity/quadratic/strong")
 
 
 @dataclass(frozen=True)
@@ -113,19 +117,19 @@ def _laws(dev: Device, law: ResistanceLaw, layers: range | None = None) -> tuple
 
 
 def _tc_junction(dev: Device, s: int) -> tuple[dict, dict, dict]:
-    alpha = (-1e-3, -3e-3, -6e-3)[s]
+    alpha = (-3e-4, -2e-3, -6e-3)[s]
     return ({"laws": _laws(dev, ResistanceLaw("linear", alpha)), "control": "junction"}, {},
             {"alpha_per_k": alpha, "t0_c": 25.0, "layers": "all", "control": "junction"})
 
 
 def _tc_local(dev: Device, s: int) -> tuple[dict, dict, dict]:
-    alpha = (1.5e-3, 3e-3, 6e-3)[s]
+    alpha = (4e-4, 2e-3, 6e-3)[s]
     return ({"laws": _laws(dev, ResistanceLaw("linear", alpha))}, {},
             {"alpha_per_k": alpha, "t0_c": 25.0, "layers": "all", "control": "local"})
 
 
 def _tc_power(dev: Device, s: int) -> tuple[dict, dict, dict]:
-    n_exp, beta = (0.6, 1.3, 2.5)[s], (1e-3, 2e-3, 3e-3)[s]
+    n_exp, beta = (0.2, 1.3, 2.5)[s], (3e-4, 1.5e-3, 3e-3)[s]
     nodes = len(dev.r_k_per_w)
     return ({"laws": _laws(dev, ResistanceLaw("power", exponent=n_exp)),
              "c_slope_per_k": (beta,) * nodes}, {},
@@ -134,7 +138,7 @@ def _tc_power(dev: Device, s: int) -> tuple[dict, dict, dict]:
 
 
 def _tc_outer(dev: Device, s: int) -> tuple[dict, dict, dict]:
-    alpha = (-2e-3, -5e-3, -1e-2)[s]
+    alpha = (-6e-4, -3e-3, -1e-2)[s]
     n = len(dev.r_k_per_w)
     return ({"laws": _laws(dev, ResistanceLaw("linear", alpha), range(n - 2, n))}, {},
             {"alpha_per_k": alpha, "t0_c": 25.0, "layers": f"{n - 2}..{n - 1}",
@@ -147,9 +151,9 @@ def _latent(shape: str, where: str) -> Form:
         rise = dev.node_rise_k(node)
         t_c = dev.bench.tref_c + 0.6 * rise
         width = {"gaussian": 0.04, "logistic": 0.05, "plateau": 0.15}[shape] * rise
-        frac = (0.05, 0.15, 0.4)[s]
-        # latent heat as a fraction of the heat the node and the next one store over the rise
-        sensible = sum(dev.c_j_per_k[node:node + 2]) * rise
+        frac = (0.015, 0.1, 0.4)[s]
+        # latent heat as a fraction of the heat the node and the next two store over the rise
+        sensible = sum(dev.c_j_per_k[node:node + 3]) * rise
         latent = LatentHeat(node, frac * sensible, t_c, width, shape)
         return ({"latent": (latent,)}, {},
                 {"node": node, "latent_j": latent.latent_j, "t_c": round(t_c, 3),
@@ -242,10 +246,10 @@ def _uncatalogued(i: int) -> list[Case]:
         ("remounted-contact-diode", dio, dio.network(), _bench(dio, var, contact_k_per_w=0.2),
          {"contact_k_per_w": 0.2, "note": "second cooling curve after remounting"}),
         ("convection-switch", act,
-         act.network(laws=_laws(act, ResistanceLaw("switch", t0_c=45.0, drop=0.2, width_k=1.5),
+         act.network(laws=_laws(act, ResistanceLaw("switch", t0_c=34.0, drop=0.3, width_k=1.5),
                                 range(3, 4))), _bench(act, var),
-         {"drop": 0.2, "t_switch_c": 45.0, "width_k": 1.5,
-          "note": "outer convection resistance drops 20 % above 45 degC"}),
+         {"drop": 0.3, "t_switch_c": 34.0, "width_k": 1.5,
+          "note": "outer convection resistance drops 30 % above 34 degC (layer mean)"}),
     ]
     return [Case(f"uncatalogued/{name}", "uncatalogued", (), dev.name, net, bench, 3000 + i + k,
                  name, "", truth) for k, (name, dev, net, bench, truth) in enumerate(out)]

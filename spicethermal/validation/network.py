@@ -16,10 +16,10 @@ ground. In absolute temperatures (°C), with heat flows ``q_i = (T_i − T_{i+1}
 * the heater may sag with temperature, ``P(T_0) = P (1 − γ (T_0 − T0))`` (an effect that is in
   no catalogue).
 
-Time integration is stiff (``scipy.integrate.solve_ivp``, Radau by default) with the analytic
-Jacobian of the right-hand side (:meth:`Network.jacobian`); integration runs on the deviation
-from the starting state so that the tolerance applies to the change, not to the absolute
-temperature. The linear network also has an exact Foster form (:meth:`Network.foster`).
+Time integration is stiff (``scipy.integrate.solve_ivp``, BDF by default, Radau on request)
+with the analytic Jacobian of the right-hand side (:meth:`Network.jacobian`); it integrates the
+deviation from the starting state, so that the tolerance applies to the change, not to the
+absolute temperature. The linear network also has an exact Foster form (:meth:`Network.foster`).
 
 >>> net = Network((1.0, 2.0), (1e-3, 1e-1))
 >>> r, tau = net.foster()
@@ -168,7 +168,7 @@ class Network:
     latent: Sequence[LatentHeat] = ()
     power_slope_per_k: float = 0.0
     t0_c: float = 25.0
-    method: str = field(default="Radau", repr=False)
+    method: str = field(default="BDF", repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.r_k_per_w)

@@ -28,7 +28,7 @@ from .network import Network
 __all__ = ["foster_reading", "periodic_start", "pwm_reading"]
 
 #: Shooting stops when one period changes no node by more than this (K).
-SHOOT_TOL_K = 1e-9
+SHOOT_TOL_K = 1e-7
 MAX_SHOTS = 30
 
 
