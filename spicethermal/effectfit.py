@@ -73,10 +73,14 @@ if TYPE_CHECKING:  # pragma: no cover
 #: its peak there).
 BAND_REACH = 8.0
 #: Evaluations allowed to one least-squares fit: a bound on hopeless fits only; fits stop on
-#: their tolerance or on the wall-clock budget of :func:`time_limit`.
-MAX_NFEV = 2000
+#: their tolerance or on the time budget of :func:`time_limit`.
+MAX_NFEV = 400
 #: Relative tolerance on the cost, the step and the gradient at which a fit stops.
-FIT_TOL = 1e-8
+FIT_TOL = 1e-6
+#: The phase-change fit (an integration per evaluation) stops at this looser tolerance.
+PC_FIT_TOL = 1e-5
+#: A form other than an effect's default is kept only when it lowers the BIC by more than this.
+FORM_BIC_MARGIN = 10.0
 #: Numerical failures that make a trial point of a fit (or a whole candidate) fail.
 NUMERICAL_ERRORS = (ArithmeticError, ValueError, np.linalg.LinAlgError)
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
@@ -86,22 +90,24 @@ _DEADLINE: contextvars.ContextVar[float] = contextvars.ContextVar("deadline", de
 
 
 class TimeLimitError(SimulationError):
-    """The wall-clock budget of :func:`time_limit` ran out."""
+    """The time budget of :func:`time_limit` ran out."""
 
 
 @contextmanager
 def time_limit(seconds: float) -> Iterator[None]:
-    """A wall-clock budget for the fits and integrations run inside the block: past it,
+    """A time budget for the fits and integrations run inside the block: past it,
     :func:`check_time` raises :class:`TimeLimitError` (fits then return their best point so far,
-    integrations fail). Nested budgets keep the earlier deadline.
+    integrations fail). Nested budgets keep the earlier deadline. The clock is the process's
+    CPU time (:func:`time.process_time`): a numerical hang is caught the same way on a busy
+    machine as on an idle one, and the verdict does not depend on the machine's load.
 
     >>> with time_limit(0.0):
     ...     check_time()
     Traceback (most recent call last):
     ...
-    spicethermal.effectfit.TimeLimitError: wall-clock budget exhausted
+    spicethermal.effectfit.TimeLimitError: time budget exhausted
     """
-    deadline = min(_DEADLINE.get(), time.monotonic() + seconds)
+    deadline = min(_DEADLINE.get(), time.process_time() + seconds)
     token = _DEADLINE.set(deadline)
     try:
         yield
@@ -112,8 +118,8 @@ def time_limit(seconds: float) -> Iterator[None]:
 def check_time() -> None:
     """Raise :class:`TimeLimitError` when the current :func:`time_limit` has run out."""
     deadline = _DEADLINE.get()
-    if time.monotonic() > deadline:
-        raise TimeLimitError("wall-clock budget exhausted")
+    if time.process_time() > deadline:
+        raise TimeLimitError("time budget exhausted")
 
 
 # --------------------------------------------------------------------------------------------
@@ -179,6 +185,13 @@ class BundleData:
     calibration: CalData | None = None
     ambient_c: float = 25.0
     source: str = "bundle"
+    #: Noise scale (K) of each data set: the fits weigh its residuals by 1/scale (1 K when
+    #: absent); the diagnosis sets them to its noise estimates.
+    scales: Mapping[str, float] = field(default_factory=dict)
+
+    def scale(self, name: str) -> float:
+        """Noise scale (K) of data set ``name`` (1 when not set)."""
+        return float(self.scales.get(name, 1.0))
 
     @classmethod
     def from_bundle(cls, bundle: Bundle) -> BundleData:
@@ -369,8 +382,10 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     def scale(theta: NDArray) -> float:
         return max(0.05, 1.0 + alpha * (tref_c + float(theta[0]) - t0))
 
+    capacity = CATALOGUE[effect.name].extra_capacitance
+
     def minv(theta: NDArray, y: NDArray) -> NDArray:
-        cx = effect.extra_capacitance(node, tref_c + float(theta[node]))
+        cx = capacity(effect, node, tref_c + float(theta[node]))
         cy = cinv @ y
         return cy - cx * ce * cy[node] / (1 + cx * ce[node])
 
@@ -500,18 +515,20 @@ def transient_offset(t_s: ArrayLike, effect: Effect | None, power_w: float = 0.0
 
 def calibration_reading(temp_c: NDArray, effect: Effect | None) -> NDArray:
     """What the least-squares linear calibration of the points at ``temp_c`` reads there when
-    the TSP reads :func:`tsp_reading` through its true tangent: the straight line of ``T``
-    against that reading absorbs the straight part of the nonlinearity, leaving the bow.
+    the TSP reads :func:`tsp_reading` through its true tangent: the calibration regresses the
+    TSP (here that reading) on ``T`` and inverts the line, which absorbs the straight part of
+    the nonlinearity and leaves the bow (``q (u − P u)/(1 + q b_u)`` for the quadratic form).
 
     >>> t = np.array([20.0, 40.0, 60.0, 80.0])
     >>> e = Effect.create("tsp-nonlinearity", quad_k_per_k2=1e-3, t_cal_c=20.0)
     >>> [round(float(x - y), 4) for x, y in zip(calibration_reading(t, e), t)]
-    [0.3858, -0.3744, -0.3801, 0.3687]
+    [0.3774, -0.3774, -0.3774, 0.3774]
     """
     if effect is None:
         return temp_c.copy()
     r = tsp_reading(temp_c, effect)
-    return np.polyval(np.polyfit(r, temp_c, 1), r)
+    slope, offset = np.polyfit(temp_c, r, 1)
+    return (r - offset) / slope
 
 
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
@@ -666,7 +683,7 @@ def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
     return BundleData(tuple(c for c in data.cooling if c.name in names),
                       data.pwm if "pwm" in names else None,
                       data.calibration if "calibration" in names else None,
-                      data.ambient_c, data.source)
+                      data.ambient_c, data.source, data.scales)
 
 
 def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
@@ -726,20 +743,23 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
               fit_ladder: bool, x0: Sequence[float], lo: Sequence[float], hi: Sequence[float],
               build: Callable[[NDArray], list[Effect]], *,
               exclude: Mapping[str, float] | None = None,
+              keep_before: Mapping[str, float] | None = None,
               max_nfev: int | None = None,
-              diff_step: float | None = None) -> tuple[Foster, list[Effect], Any]:
+              diff_step: float | None = None,
+              tol: float = FIT_TOL) -> tuple[Foster, list[Effect], Any]:
     """Least squares of the readings of data sets ``names`` over the effect parameters
     ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
     ``log R`` and ``log τ`` (same order). Cooling points before ``exclude[name]`` s are left
-    out. When the ladder is fitted, each curve's steady reading just before the cut is a data
+    out, and so are those at or after ``keep_before[name]`` s. When the ladder is fitted, each curve's steady reading just before the cut is a data
     point too (it pins Rth). ``diff_step`` is the relative finite-difference step (larger than
     the default for forward models solved by an adaptive integrator). Returns the ladder, the
     effects and scipy's result."""
     f = _foster(ladder)
     m = f.order if fit_ladder else 0
     sub = _subset(data, names)
-    keep = {n: (sub.curve(n).t_s >= (exclude or {}).get(n, 0.0)) if n.startswith("cooling")
-            else slice(None) for n in names}
+    keep = {n: ((sub.curve(n).t_s >= (exclude or {}).get(n, 0.0))
+                & (sub.curve(n).t_s < (keep_before or {}).get(n, math.inf)))
+            if n.startswith("cooling") else slice(None) for n in names}
     meas = {n: data.measured(n)[keep[n]] for n in names}
 
     def split(x: NDArray) -> tuple[Foster, NDArray]:
@@ -753,11 +773,12 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         lad, xe = split(x)
         effects = build(xe)
         pred = predict(sub, lad, effects)
-        parts = [pred[n][keep[n]] - meas[n] for n in names]
+        parts = [(pred[n][keep[n]] - meas[n]) / data.scale(n) for n in names]
         tsp = _effects_map(effects).get("tsp-nonlinearity")
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
-            parts.append(tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
+            parts.append((tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
+                         / data.scale(c.name))
         return np.concatenate(parts)
 
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
@@ -765,7 +786,8 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
                np.concatenate([-big, np.asarray(lo, float)]),
                np.concatenate([big, np.asarray(hi, float)]),
-               **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step)
+               **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step,
+               ftol=tol, xtol=tol, gtol=tol)
     lad, xe = split(res.x)
     return lad, build(xe), res
 
@@ -775,30 +797,34 @@ def _others(effects: Sequence[Effect], name: str) -> list[Effect]:
 
 
 def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
-                      effects: Sequence[Effect] = ()) -> EffectFit:
-    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected)."""
+                      effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected), for
+    each form (reading at the end of the window, averaged over it); three starts each."""
     if data.pwm is None:
         raise FitError("sample-window needs a PWM data set")
     base = _others(effects, "sample-window")
-
-    def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("sample-window", window_s=float(x[0]) * 1e-6)]
-
     hi_us = 1e6 * min(1.0, 20.0 / float(np.min(data.pwm.freq_hz)))
-    best = None
-    for s in (10.0, 100.0, 1000.0):
-        if s < hi_us:
-            r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
-            if best is None or r[2].cost < best[2].cost:
-                best = r
-    lad, effs, _ = best
-    return EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s})
+    out = []
+    for form in CATALOGUE["sample-window"].forms:
+        def build(x: NDArray, form: str = form) -> list[Effect]:
+            return [*base, Effect.create("sample-window", form, window_s=float(x[0]) * 1e-6)]
+
+        best = None
+        for s in (10.0, 100.0, 1000.0):
+            if s < hi_us:
+                r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
+                if best is None or r[2].cost < best[2].cost:
+                    best = r
+        lad, effs, _ = best
+        out.append(EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s}))
+    return out
 
 
 def fit_temperature_coefficient(data: BundleData, ladder: Foster | Cauer,
-                                effects: Sequence[Effect] = ()) -> EffectFit:
+                                effects: Sequence[Effect] = ()) -> list[EffectFit]:
     """α (``t0_c`` = the reference temperature) jointly with the ladder at ``T0`` from every
-    cooling curve; the initial α from ``1/Rth(P) = 1/Rth0 − α P`` across the curves."""
+    cooling curve; two starts: α from ``1/Rth(P) = 1/Rth0 − α P`` across the curves, and the
+    given (linear) ladder with α = 0, so the result never fits worse than that ladder."""
     if not data.cooling:
         raise FitError("temperature-coefficient needs cooling curves")
     f = _foster(ladder)
@@ -825,10 +851,13 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster | Cauer,
         return [*base, Effect.create("temperature-coefficient", alpha_per_k=float(x[0]) * 1e-3,
                                      t0_c=t0)]
 
-    lad, effs, _ = joint_fit(data, names, start, True, [alpha0 * 1e3], [-15.0], [15.0], build,
-                             exclude=transient_spans(data) if "electrical-transient" not in
-                             _effects_map(base) else None)
-    return EffectFit(effs[-1], lad, 1, {"powers_w": powers, "rth_k_per_w": rths})
+    exclude = transient_spans(data) if "electrical-transient" not in _effects_map(base) \
+        else None
+    fits = [joint_fit(data, names, lad0, True, [a0 * 1e3], [-15.0], [15.0], build,
+                      exclude=exclude)
+            for lad0, a0 in ([(start, alpha0)] if alpha0 else []) + [(f, 0.0)]]
+    lad, effs, _ = min(fits, key=lambda r: r[2].cost)
+    return [EffectFit(effs[-1], lad, 1, {"powers_w": powers, "rth_k_per_w": rths})]
 
 
 def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]) -> float:
@@ -843,8 +872,9 @@ def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]
 
 
 def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
-                     effects: Sequence[Effect] = ()) -> EffectFit:
-    """Latent heat, band centre and width (at the junction node) from the cooling curves,
+                     effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Latent heat, band centre, width and node (the best node of the grid) from the cooling
+    curves,
     with the ladder of the lowest-power curve held: the band is sought above that curve's
     temperatures (a band it crossed would be in its ladder), up to the hottest reading.
     Start: the best point of a grid of latent heats × centres (where the hottest curve's
@@ -869,9 +899,11 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     span = t_hi - t_lo
     c_scale = float(max(ref.c))
 
+    node = 0
+
     def build(x: NDArray) -> list[Effect]:
         return [*base, Effect.create("phase-change", latent_j=math.exp(x[0]) * c_scale,
-                                     t_c=float(x[1]), width_k=float(x[2]), node=0)]
+                                     t_c=float(x[1]), width_k=float(x[2]), node=node)]
 
     centres = [float(np.clip(_band_start(data, ref, base), t_lo + 0.02 * span,
                              t_hi - 0.02 * span))]
@@ -883,35 +915,42 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     hi = [math.log(10.0), t_hi, max(0.3, span / 4)]
     width0 = float(np.clip(1.5, lo[2] * 1.01, hi[2] * 0.99))
     sub = _subset(data, names)
-    meas = np.concatenate([data.measured(n) for n in names])
 
     def cost(x: Sequence[float]) -> float:
         try:
-            pred = predict(sub, ref, build(np.asarray(x, dtype=float)))
-        except SimulationError:
+            return sse(sub, ref, build(np.asarray(x, dtype=float)))
+        except TimeLimitError:
+            raise
+        except (SimulationError, *NUMERICAL_ERRORS):
             return math.inf
-        return float(np.sum((np.concatenate([pred[n] for n in names]) - meas) ** 2))
 
-    # coarse grid over (centre, latent heat), then least squares from the best point
-    grid = [(cost([math.log(fr), tc, width0]), [math.log(fr), tc, width0])
-            for tc in centres for fr in (1e-3, 1e-2, 3e-2, 1e-1, 3e-1)]
-    x0 = min(grid, key=lambda g: g[0])[1]
-    lad, effs, res = joint_fit(data, names, ref, False, x0, lo, hi, build, max_nfev=40,
-                               diff_step=1e-3)
-    pred = predict(sub, ladder, base)
-    held = 0.5 * float(np.sum((np.concatenate([pred[n] for n in names]) - meas) ** 2))
+    # coarse grid over (node, centre, latent heat), then least squares from the best point
+    grid = []
+    for node in range(ref.order):
+        fracs = (1e-3, 1e-2, 1e-1) if node == 0 else (1e-2, 1e-1, 1.0)
+        grid += [(cost([math.log(fr), tc, width0]), node, [math.log(fr), tc, width0])
+                 for tc in (centres if node == 0 else centres[:3]) for fr in fracs]
+    junction = min((g for g in grid if g[1] == 0), key=lambda g: g[0])
+    outer = min(grid, key=lambda g: g[0])
+    fits = []
+    for _, node, x0 in [junction] + ([outer] if outer[1] != 0 else []):
+        fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
+                              tol=PC_FIT_TOL))
+    lad, effs, res = min(fits, key=lambda r: r[2].cost)
+    held = 0.5 * sse(sub, ladder, base)
     if res.cost >= held:  # no band does better than the given ladder without one
         p = effs[-1].params
-        return EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
-                                       width_k=p["width_k"], node=0), _foster(ladder), 3,
-                         {"t_range_c": (t_lo, t_hi), "no_gain": True})
-    return EffectFit(effs[-1], lad, 3, {"t_range_c": (t_lo, t_hi)})
+        return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
+                                        width_k=p["width_k"], node=0), _foster(ladder), 4,
+                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
+    return [EffectFit(effs[-1], lad, 4, {"t_range_c": (t_lo, t_hi)})]
 
 
 def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
-                             effects: Sequence[Effect] = ()) -> EffectFit:
-    """Amplitude and span of the transient jointly with the ladder, from every point of every
-    cooling curve (the early ones included)."""
+                             effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Each form of the transient: its parameters first on the early points of every cooling
+    curve with the ladder held (a multi-start), then jointly with the ladder from every point
+    of every cooling curve (the early ones included)."""
     if not data.cooling:
         raise FitError("electrical-transient needs cooling curves")
     names = [c.name for c in data.cooling]
@@ -919,22 +958,52 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
     first = min(float(c.t_s[0]) for c in data.cooling)
     pred = predict(_subset(data, names), ladder, base)
     amp0 = float(np.mean([data.measured(n)[0] - pred[n][0] for n in names]))
+    per_w0 = float(np.mean([(data.measured(c.name)[0] - pred[c.name][0]) / c.power_w
+                            for c in data.cooling]))
     spans = [s for s in transient_spans(data).values() if s > 0]
     span0 = max(float(np.median(spans)) if spans else 1e-4, 10 * first)
+    lspan = math.log10(span0)
+    lo_s, hi_s = math.log10(first) - 1, 0.0
+    forms = {  # form: (starts, lower, upper, parameters from x)
+        "fixed": ([[amp0, lspan]], [-1e3, lo_s], [1e3, hi_s],
+                  lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1]}),
+        "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
+                  lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
+        "ringing": ([[amp0, lspan, lf - lspan] for lf in (0.0, 0.5)],
+                    [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
+                    lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
+                               "ring_hz": 10 ** (x[2] - x[1])}),
+    }
+    early = {n: 10 * span0 for n in names}
+    n_early = sum(int(np.sum(c.t_s < early[c.name])) for c in data.cooling)
+    held = {}
+    for form, (starts, lo, hi, params) in forms.items():
+        def build(x: NDArray, form: str = form, params=params) -> list[Effect]:
+            return [*base, Effect.create("electrical-transient", form,
+                                         **{k: float(v) for k, v in params(x).items()})]
 
-    def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("electrical-transient", amplitude_k=float(x[0]),
-                                     masked_s=10 ** float(x[1]))]
-
-    lad, effs, _ = joint_fit(data, names, ladder, True, [amp0, math.log10(span0)],
-                             [-1e3, math.log10(first) - 1], [1e3, 0.0], build)
-    return EffectFit(effs[-1], lad, 2, {})
+        res = min((joint_fit(data, names, ladder, False, x0, lo, hi, build,
+                             keep_before=early)[2] for x0 in starts), key=lambda r: r.cost)
+        held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
+    # the ladder is refitted with the default form and with the best other form when the
+    # early points prefer it decisively
+    best = min(held, key=lambda k: held[k][0])
+    refine = ["fixed"] + ([best] if best != "fixed" and held[best][0] < held["fixed"][0] - 10
+                          else [])
+    out = []
+    for form in refine:
+        _, x0, build = held[form]
+        lo, hi = forms[form][1], forms[form][2]
+        lad, effs, _ = joint_fit(data, names, ladder, True, list(x0), lo, hi, build)
+        out.append(EffectFit(effs[-1], lad, len(lo), {}))
+    return out
 
 
 def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
-                         effects: Sequence[Effect] = ()) -> EffectFit:
-    """``q`` and ``t_cal_c`` jointly with the ladder from every data set: the calibration
-    residuals fix ``q``, the readings of the curves and the PWM grid ``t_cal_c``."""
+                         effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """``q`` and ``t_cal_c`` (and, in the cubic form, ``c``) jointly with the ladder from every
+    data set: the calibration residuals fix the curvature, the readings of the curves and the
+    PWM grid ``t_cal_c``. The cubic form starts from the quadratic fit."""
     names = list(data.datasets)
     if not names:
         raise FitError("tsp-nonlinearity needs data")
@@ -948,20 +1017,30 @@ def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
     temps = np.concatenate([data.measured(n) for n in names])
     lo_t, hi_t = float(np.min(temps)) - 50, float(np.max(temps)) + 50
     qmax = 1e4 * 0.2 / max(hi_t - lo_t, 1.0)
+    cmax = 1e6 * 0.2 / max(hi_t - lo_t, 1.0) ** 2
+    exclude = transient_spans(data) if "electrical-transient" not in _effects_map(base) \
+        else None
 
     def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("tsp-nonlinearity", quad_k_per_k2=float(x[0]) * 1e-4,
-                                     t_cal_c=float(x[1]))]
+        cubic = {"cub_k_per_k3": float(x[2]) * 1e-6} if len(x) > 2 else {}
+        return [*base, Effect.create("tsp-nonlinearity", "cubic" if cubic else "quadratic",
+                                     quad_k_per_k2=float(x[0]) * 1e-4, t_cal_c=float(x[1]),
+                                     **cubic)]
 
     x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]
-    lad, effs, _ = joint_fit(data, names, ladder, bool(data.cooling), x0, [-qmax, lo_t],
-                             [qmax, hi_t], build,
-                             exclude=transient_spans(data) if "electrical-transient" not in
-                             _effects_map(base) else None)
-    return EffectFit(effs[-1], lad, 2, {})
+    fit_ladder = bool(data.cooling)
+    lad, effs, res = joint_fit(data, names, ladder, fit_ladder, x0, [-qmax, lo_t], [qmax, hi_t],
+                               build, exclude=exclude)
+    out = [EffectFit(effs[-1], lad, 2, {})]
+    q = effs[-1].params
+    x1 = [q["quad_k_per_k2"] * 1e4, q["t_cal_c"], 0.0]
+    lad3, effs3, _ = joint_fit(data, names, lad, fit_ladder, x1, [-qmax, lo_t, -cmax],
+                               [qmax, hi_t, cmax], build, exclude=exclude)
+    out.append(EffectFit(effs3[-1], lad3, 3, {}))
+    return out
 
 
-FITTERS: Mapping[str, Callable[..., EffectFit]] = {
+FITTERS: Mapping[str, Callable[..., list[EffectFit]]] = {
     "temperature-coefficient": fit_temperature_coefficient,
     "phase-change": fit_phase_change,
     "sample-window": fit_sample_window,
@@ -980,9 +1059,62 @@ def needs(name: str, data: BundleData) -> str:
     return ""
 
 
+def switched_off(name: str, form: str, data: BundleData) -> Effect:
+    """Effect ``name`` at its neutral parameters (no latent heat, no α, no error; the declared
+    sample window): what a nested model reduces to.
+
+    >>> switched_off("temperature-coefficient", "junction", BundleData()).params["alpha_per_k"]
+    0.0
+    """
+    if name == "sample-window":
+        return Effect.create(name, form, window_s=data.pwm.window_s if data.pwm else 0.0)
+    return Effect.create(name, form)
+
+
+def sse(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Effect]) -> float:
+    """Sum of squared residuals over every point of every data set, each data set's divided
+    by its noise scale squared (K² when no scale is set)."""
+    pred = predict(data, ladder, effects)
+    return float(sum(np.sum((pred[n] - data.measured(n)) ** 2) / data.scale(n) ** 2
+                     for n in data.datasets))
+
+
+def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
+                     effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Every form of effect ``name`` fitted on top of ``ladder`` and ``effects``.
+
+    A nested model never fits worse than the model it extends: a form whose fit leaves a
+    larger squared error than ``ladder`` and ``effects`` alone is replaced by the effect
+    switched off (:func:`switched_off`) on ``ladder`` (``facts["no_gain"]``). Raises
+    :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
+    """
+    if name not in FITTERS:
+        from .effects import spec
+
+        spec(name)  # the catalogue's error for an unknown name
+        raise FitError(f"effect {name!r} has no fit")
+    why = needs(name, data)
+    if why:
+        raise FitError(f"cannot fit {name}: {why}")
+    others = _others(effects, name)
+    off = sse(data, ladder, others)
+    out = []
+    for fit in FITTERS[name](data, ladder, effects):
+        try:
+            worse = sse(data, fit.ladder, [*others, fit.effect]) > off
+        except (SimulationError, *NUMERICAL_ERRORS):
+            worse = True
+        if worse:
+            fit = EffectFit(switched_off(name, fit.effect.form, data), _foster(ladder),
+                            fit.n_params, {**fit.facts, "no_gain": True})
+        out.append(fit)
+    return out
+
+
 def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
                effects: Sequence[Effect] = ()) -> EffectFit:
-    """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``.
+    """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``: the form
+    with the lowest ``N ln(SSE/N) + k ln N`` over every point (see :func:`fit_effect_forms`).
 
     Raises :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
 
@@ -991,18 +1123,30 @@ def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
     >>> from spicethermal.scenarios import scenario_bundle
     >>> data = BundleData.from_bundle(scenario_bundle("temperature-coefficient", seed=0))
     >>> fit = fit_effect(data, baseline_ladder(data), "temperature-coefficient")
-    >>> round(fit.effect.params["alpha_per_k"], 4), fit.n_params
-    (-0.003, 1)
+    >>> round(fit.effect.params["alpha_per_k"], 4), fit.n_params, fit.effect.form
+    (-0.003, 1, 'junction')
     """
-    if name not in FITTERS:
-        from .effects import spec
+    fits = fit_effect_forms(data, ladder, name, effects)
+    n = max(sum(data.measured(d).size for d in data.datasets), 2)
+    others = _others(effects, name)
 
-        spec(name)  # the catalogue's error for an unknown name
-        raise FitError(f"effect {name!r} has no fit")  # pragma: no cover
-    why = needs(name, data)
-    if why:
-        raise FitError(f"cannot fit {name}: {why}")
-    return FITTERS[name](data, ladder, effects)
+    def bic(fit: EffectFit) -> float:
+        err = max(sse(data, fit.ladder, [*others, fit.effect]), 1e-300)
+        return n * math.log(err / n) + fit.n_params * math.log(n)
+
+    return fits[choose_form([bic(f) for f in fits])]
+
+
+def choose_form(bics: Sequence[float]) -> int:
+    """Index of the form to keep among forms with criteria ``bics`` (first = the default
+    form): the default unless another lowers the criterion by more than
+    :data:`FORM_BIC_MARGIN`.
+
+    >>> choose_form([100.0, 95.0]), choose_form([100.0, 80.0, 85.0])
+    (0, 1)
+    """
+    low = min(range(len(bics)), key=lambda i: bics[i])
+    return low if bics[low] < bics[0] - FORM_BIC_MARGIN else 0
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str], order: int | str = "auto",

@@ -52,7 +52,7 @@ def test_clean_data_have_no_verdict(seed):
     d = _diagnosis("clean", seed)
     assert d.verdict_effect is None
     assert "no effect is missing" in d.verdict_reason
-    assert all(c.improvement < MIN_IMPROVEMENT for c in d.candidates)
+    assert not d.steps and all(c.improvement < MIN_IMPROVEMENT for c in d.candidates)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -74,7 +74,7 @@ def test_localise_names_frequency_and_duty():
 def test_document_follows_the_contract():
     d = _diagnosis("temperature-coefficient", 0)
     doc = json.loads(json.dumps(d.to_json()))
-    assert set(doc) == {"format", "baseline", "candidates", "verdict"}
+    assert set(doc) == {"format", "baseline", "candidates", "steps", "verdict"}
     assert doc["format"] == DIAGNOSIS_FORMAT
     assert set(doc["baseline"]) == {"rms_k", "max_abs_k", "worst"}
     assert doc["baseline"]["worst"] and all(set(w) == {"dataset", "at", "residual_k"}
@@ -83,10 +83,16 @@ def test_document_follows_the_contract():
     assert worst == sorted(worst, reverse=True) and worst[0] == doc["baseline"]["max_abs_k"]
     assert {c["effect"] for c in doc["candidates"]} == set(known_names())
     for c in doc["candidates"]:
-        assert set(c) == {"effect", "params", "rms_k", "improvement", "evidence"}
+        assert set(c) == {"effect", "form", "params", "rms_k", "improvement", "explained",
+                          "evidence"}
         assert c["improvement"] == pytest.approx(doc["baseline"]["rms_k"] / c["rms_k"])
         assert isinstance(c["evidence"], str) and c["evidence"].count(". ") == 0
     assert doc["verdict"]["effect"] == "temperature-coefficient"
+    assert doc["verdict"]["effects"] == ["temperature-coefficient"]
+    assert set(doc["verdict"]) == {"effect", "effects", "reason"}
+    assert [set(s) for s in doc["steps"]] == [{"effect", "form", "params", "rms_k",
+                                               "improvement"}]
+    assert doc["steps"][0]["rms_k"] == doc["candidates"][0]["rms_k"]
     assert doc["candidates"][0]["effect"] == "temperature-coefficient"
     alpha = doc["candidates"][0]["params"]["alpha_per_k"]
     assert alpha == pytest.approx(-3e-3, rel=0.03)
