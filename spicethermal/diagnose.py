@@ -5,7 +5,7 @@ the error falls when it is added.
 PWM grid, the calibration), localises the misfit (time decade, frequency, duty, temperature
 band), fits every candidate effect of the catalogue (:mod:`spicethermal.effectfit`) and ranks
 them. The result (:class:`Diagnosis`) prints as a short report and serialises to the
-``spicethermal-diagnosis/1`` document of DESIGN.md.
+``spicethermal-diagnosis/2`` document (docs/diagnosis-json.md).
 
 Criterion (stated)
 ------------------
@@ -425,7 +425,9 @@ def _evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Comparis
     if e.name == "phase-change":
         hot = [c.name for c in data.cooling if float(np.max(c.tj_c)) > p["t_c"] - p["width_k"]]
         node = int(p["node"])
-        return (f"{', '.join(hot) or 'no curve'} crosses {p['t_c']:.4g} ± {p['width_k']:.2g} °C; "
+        cross = f"{', '.join(hot)} cross" if len(hot) > 1 else f"{hot[0]} crosses" if hot \
+            else "no curve crosses"
+        return (f"{cross} {p['t_c']:.4g} ± {p['width_k']:.2g} °C; "
                 f"a latent heat of {p['latent_j'] * 1e3:.3g} mJ at ladder node {node}"
                 f"{' (the junction)' if node == 0 else ''} {verdict} ({gain})")
     if e.name == "sample-window":
@@ -687,10 +689,10 @@ def _reason(base: Comparison, final: Comparison, noise: Mapping[str, float],
                    f"drop of {MIN_BIC_DROP:g}; it gives {bic_drop(c, base, noise):.0f})")
         else:
             why = "no candidate effect could be fitted"
-        located = localise(final, noise)
+        located = localise(final, noise) or localise(final)
         return (f"no catalogued effect explains the misfit: {why}; not in the catalogue: the "
-                f"error sits in {located[0] if located else 'every data set alike'}")
-    located = localise(final, noise)
+                f"error sits in {located[0]}")
+    located = localise(final, noise) or localise(final)
     return ("; then ".join(parts) + "; a structured residual remains that no catalogued effect "
             f"explains (not in the catalogue): {located[0] if located else ', '.join(left)}")
 

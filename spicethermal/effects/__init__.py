@@ -12,6 +12,13 @@ module or an :class:`EffectSpec`), loaded the first time the catalogue is read.
 'quadratic'
 """
 
+from . import (  # built-in effects register themselves on import
+    electrical_transient,
+    phase_change,
+    sample_window,
+    temperature_coefficient,
+    tsp_nonlinearity,
+)
 from .catalogue import (
     CATALOGUE,
     DEVICE,
@@ -24,13 +31,7 @@ from .catalogue import (
     register,
     spec,
 )
-from . import (  # noqa: E402,F401  built-in effects register themselves
-    electrical_transient,
-    phase_change,
-    sample_window,
-    temperature_coefficient,
-    tsp_nonlinearity,
-)
 
 __all__ = ["CATALOGUE", "DEVICE", "ENTRY_POINT_GROUP", "MEASUREMENT", "Effect", "EffectSpec",
-           "Param", "known_names", "register", "spec"]
+           "Param", "electrical_transient", "known_names", "phase_change", "register",
+           "sample_window", "spec", "temperature_coefficient", "tsp_nonlinearity"]
