@@ -345,7 +345,7 @@ def tc_frozen_ladder(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: 
 
 def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     p = effect.params
-    return (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
+    return p["latent_j"] > 0 and (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
             and t_lo_c < p["t_c"] + BAND_REACH * p["width_k"])
 
 
@@ -692,8 +692,8 @@ def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
                       data.ambient_c, data.source, data.scales)
 
 
-def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
-         hi: Sequence[float], **kw: Any):
+def robust_lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
+               hi: Sequence[float], **kw: Any) -> Any:
     """:func:`scipy.optimize.least_squares` made robust: a trial point whose forward model
     fails numerically (overflow, no convergence, a :class:`~spicethermal.errors.SimulationError`)
     gets a large residual; past the :func:`time_limit` the best point so far is returned (its
@@ -735,10 +735,11 @@ def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[fl
         return r
 
     kw.setdefault("max_nfev", MAX_NFEV)
+    kw.setdefault("x_scale", "jac")
     for key in ("ftol", "xtol", "gtol"):
         kw.setdefault(key, FIT_TOL)
     try:
-        return least_squares(safe, x0, bounds=(lo_a, hi_a), x_scale="jac", **kw)
+        return least_squares(safe, x0, bounds=(lo_a, hi_a), **kw)
     except TimeLimitError:
         if best.fun is None:
             raise
@@ -790,7 +791,7 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
 
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
     big = np.full(2 * m, np.inf)
-    res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
+    res = robust_lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
                np.concatenate([-big, np.asarray(lo, float)]),
                np.concatenate([big, np.asarray(hi, float)]),
                **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step,
