@@ -71,7 +71,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["DIAGNOSIS_FORMAT", "Candidate", "Diagnosis", "Step", "TableAnalysis",
            "analyse_table", "comparison_of", "diagnose", "diagnose_table", "fit_with_effects",
-           "localise", "noise_estimates", "runs_z", "write_report"]
+           "evidence", "explained_fraction", "localise", "noise_estimates", "runs_z",
+           "structured", "write_report"]
 
 #: The document's format. Version 2 adds ``steps``, ``verdict.effects``, the candidates'
 #: ``form`` and ``explained`` (docs/diagnosis-json.md); every key of version 1 is kept.
@@ -189,10 +190,19 @@ def _groupings(sub: Comparison, name: str) -> list[list[tuple[str, NDArray]]]:
 
 
 def _time(t: float) -> str:
+    """A time in s, ms, µs or ns, without scientific notation (``_time(1e-4) == "100 µs"``)."""
     for unit, scale in (("s", 1.0), ("ms", 1e-3), ("µs", 1e-6), ("ns", 1e-9)):
         if t >= scale * 0.999:
-            return f"{t / scale:g} {unit}"
-    return f"{t:g} s"
+            return f"{_fmt(t / scale)} {unit}"
+    return f"{_fmt(t / 1e-9)} ns"
+
+
+def _fmt(x: float, digits: int = 3) -> str:
+    """``x`` to ``digits`` significant digits, positional (never ``1e-05``), ``−`` for minus."""
+    x = float(x) if abs(x) >= 1e-9 else 0.0  # below a nano-unit: nothing to show
+    text = np.format_float_positional(x, precision=digits, unique=False, fractional=False,
+                                      trim="-")
+    return text.replace("-", "−")
 
 
 def localise(comparison: Comparison, noise: Mapping[str, float] | None = None) -> list[str]:
@@ -393,69 +403,94 @@ def _most_improved(base: Comparison, cand: Comparison) -> tuple[str, float, floa
 
 def _offset(t_c: float) -> str:
     """``T − 25 °C`` / ``T + 24.9 °C``: the difference written with its true sign."""
-    return f"T − {t_c:.4g} °C" if t_c >= 0 else f"T + {-t_c:.4g} °C"
+    return f"T − {_fmt(t_c, 4)} °C" if t_c >= 0 else f"T + {_fmt(-t_c, 4)} °C"
 
 
 def _signed(x: float, unit: str) -> str:
-    return f"{'+' if x >= 0 else '−'} {abs(x):.3g} {unit}"
+    return f"{'+' if x >= 0 else '−'} {_fmt(abs(x))} {unit}"
 
 
-def _evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Comparison,
+def _neutral(effect: Effect) -> bool:
+    """True when ``effect`` has no size (no latent heat, no α, no error, no curvature)."""
+    p = effect.params
+    sizes = {"temperature-coefficient": ("alpha_per_k",), "phase-change": ("latent_j",),
+             "electrical-transient": ("k_per_w",) if effect.form == "power" else ("amplitude_k",),
+             "tsp-nonlinearity": ("quad_k_per_k2", "cub_k_per_k3") if effect.form == "cubic"
+             else ("quad_k_per_k2",)}.get(effect.name)
+    return sizes is not None and all(p[k] == 0 for k in sizes)
+
+
+def evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Comparison,
               noise: Mapping[str, float]) -> str:
     """One sentence from checked numbers: what the data show, the effect's fitted size in
-    sensible units, and whether it explains the misfit (only when the improvement and the
-    explained fraction pass the decision thresholds)."""
+    sensible units (times in s/ms/µs/ns, differences with their true sign), and whether it
+    explains the misfit: only when the improvement and the explained fraction pass the
+    decision thresholds (:data:`MIN_IMPROVEMENT`, :data:`MIN_EXPLAINED`).
+
+    Parameters
+    ----------
+    fit : the fitted effect (``facts["no_gain"]``: it could not improve on the model).
+    data : the bundle's arrays.
+    base, cand : comparisons before and with the effect.
+    noise : noise estimate (K) per data set.
+
+    Returns
+    -------
+    str
+    """
     e, p = fit.effect, fit.effect.params
     name, before, after = _most_improved(base, cand)
     improvement = base.rms_k / cand.rms_k if cand.rms_k > 0 else math.inf
     frac = explained_fraction(base, cand, noise)
-    explains = (not fit.facts.get("no_gain") and improvement >= MIN_IMPROVEMENT
-                and frac >= MIN_EXPLAINED)
+    no_gain = bool(fit.facts.get("no_gain")) or _neutral(e)
+    explains = not no_gain and improvement >= MIN_IMPROVEMENT and frac >= MIN_EXPLAINED
     verdict = (f"explains {100 * frac:.0f} % of the misfit" if explains else
-               f"does not explain the misfit (RMS only {improvement:.3g}× lower, "
+               f"does not explain the misfit (RMS {_fmt(improvement)}× lower, "
                f"{100 * max(frac, 0):.0f} % of the misfit)")
-    gain = f"{name} RMS {before:.3g} → {after:.3g} K"
-    if fit.facts.get("no_gain"):
+    gain = f"{name} RMS {_fmt(before)} → {_fmt(after)} K"
+    if no_gain:
         return f"no {e.name} ({e.form}) improves on the model without it ({gain})"
     if e.name == "temperature-coefficient":
         pw, rth = fit.facts.get("powers_w", []), fit.facts.get("rth_k_per_w", [])
-        meas = ", ".join(f"{r:.4g} K/W at {q:.3g} W" for q, r in zip(pw, rth, strict=True))
-        return (f"Rth measured {meas}; R(T) = R0·(1 {_signed(p['alpha_per_k'], '/K')}·"
+        meas = ", ".join(f"{_fmt(r, 4)} K/W at {_fmt(q)} W"
+                         for q, r in zip(pw, rth, strict=True))
+        return ((f"Rth measured {meas}; " if meas else "")
+                + f"R(T) = R0·(1 {_signed(100 * p['alpha_per_k'], '%/K')}·"
                 f"({_offset(p['t0_c'])})) {verdict} ({gain})")
     if e.name == "phase-change":
         hot = [c.name for c in data.cooling if float(np.max(c.tj_c)) > p["t_c"] - p["width_k"]]
         node = int(p["node"])
         cross = f"{', '.join(hot)} cross" if len(hot) > 1 else f"{hot[0]} crosses" if hot \
             else "no curve crosses"
-        return (f"{cross} {p['t_c']:.4g} ± {p['width_k']:.2g} °C; "
-                f"a latent heat of {p['latent_j'] * 1e3:.3g} mJ at ladder node {node}"
+        return (f"{cross} {_fmt(p['t_c'], 4)} ± {_fmt(p['width_k'], 2)} °C; "
+                f"a latent heat of {_fmt(p['latent_j'] * 1e3)} mJ at ladder node {node}"
                 f"{' (the junction)' if node == 0 else ''} {verdict} ({gain})")
     if e.name == "sample-window":
         mean = float(np.mean(base.dataset("pwm").residuals_k)) if data.pwm is not None else 0.0
         declared = fit.facts.get("declared_s", 0.0)
         how = "averaged over" if e.form == "average" else "at the end of"
-        return (f"PWM readings are {mean:+.3g} K off on average; a reading {how} a "
+        return (f"PWM readings are {_signed(mean, 'K')} off on average; a reading {how} a "
                 f"{_time(p['window_s'])} power-off window before each sample (declared "
                 f"{_time(declared) if declared > 0 else 'none'}) {verdict} ({gain})")
     if e.name == "electrical-transient":
         if e.form == "power":
-            size = f"{p['k_per_w']:+.3g} K per watt cut off"
+            size = f"{_signed(p['k_per_w'], 'K')} per watt cut off"
         elif e.form == "ringing":
-            size = (f"{p['amplitude_k']:+.3g} K, ringing at "
-                    f"{p['ring_hz'] / 1e3:.3g} kHz,")
+            size = f"{_signed(p['amplitude_k'], 'K')}, ringing at {_fmt(p['ring_hz'])} Hz,"
         else:
-            size = f"{p['amplitude_k']:+.3g} K"
+            size = _signed(p["amplitude_k"], "K")
         return (f"cooling readings after the cut are off by {size} and recover within "
                 f"{_time(p['masked_s'])}; the transient {verdict} ({gain})")
     if e.name == "tsp-nonlinearity":
         cal = base.dataset("calibration").residuals_k if data.calibration is not None else \
             np.zeros(1)
-        cubic = (f" {_signed(p['cub_k_per_k3'], 'K/K³')}·({_offset(p['t_cal_c'])})³"
+        cubic = (f" {_signed(1e6 * p['cub_k_per_k3'], 'µK/K³')}·({_offset(p['t_cal_c'])})³"
                  if e.form == "cubic" else "")
-        return (f"the linear calibration's residuals span {np.ptp(cal):.3g} K "
-                f"(noise {noise.get('calibration', math.nan):.2g} K); a TSP error "
-                f"{p['quad_k_per_k2']:.3g} K/K²·({_offset(p['t_cal_c'])})²{cubic} {verdict} "
-                f"({gain})")
+        scatter = (f" (noise {_fmt(noise['calibration'], 2)} K)" if "calibration" in noise
+                   else "")
+        return (f"the linear calibration's residuals span {_fmt(np.ptp(cal))} K{scatter}; a "
+                f"TSP error {_signed(1e3 * p['quad_k_per_k2'], 'mK/K²')}·"
+                f"({_offset(p['t_cal_c'])})²{cubic} {verdict} ({gain})")
     return f"{e.name} ({e.form}) {verdict} ({gain})"
 
 
@@ -569,7 +604,7 @@ def _candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         fit, cmp, bic = best
         improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
         cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
-                               _evidence(fit, data, before, cmp, noise),
+                               evidence(fit, data, before, cmp, noise),
                                explained_fraction(before, cmp, noise),
                                time.perf_counter() - t0))
     cands.sort(key=lambda c: c.bic)

@@ -19,6 +19,7 @@ from spicethermal.diagnose import (
     diagnose,
     fit_with_effects,
     localise,
+    runs_z,
 )
 from spicethermal.effects import known_names
 from spicethermal.model import ThermalModel
@@ -181,3 +182,32 @@ def test_noise_free_clean_bundle_needs_nothing():
                                                                  "sample-window"])
     assert d.verdict_effect is None and d.baseline.rms_k < 1e-4
     json.dumps(d.to_json(), allow_nan=False)
+
+
+def test_two_effects_are_named_in_turn_and_the_error_falls_each_time():
+    """A bench that reads PWM after an undeclared window *and* whose cooling readings carry an
+    electrical transient: step 1 names one, step 2 the other; the JSON lists both."""
+    from dataclasses import replace
+
+    from spicethermal.effectfit import transient_offset
+    from spicethermal.effects import Effect
+
+    b = scenario_bundle("sample-window", seed=4)
+    tr = Effect.create("electrical-transient", amplitude_k=-4.0, masked_s=2e-4)
+    cooling = tuple(replace(c, tj_c=c.tj_c + transient_offset(c.t_s, tr)) for c in b.cooling)
+    d = diagnose(b.with_(cooling=cooling))
+    assert sorted(d.effects) == ["electrical-transient", "sample-window"], d.verdict_reason
+    assert d.verdict_effect == d.effects[0]
+    rms = [d.baseline.rms_k] + [s.chosen.rms_k for s in d.steps]
+    assert rms[0] > rms[1] > rms[2]
+    assert all(s.chosen.improvement == pytest.approx(a / b) for s, a, b in
+               zip(d.steps, rms, rms[1:], strict=False))
+    doc = d.to_json()
+    assert doc["verdict"]["effects"] == d.effects == [s["effect"] for s in doc["steps"]]
+    assert "RMS staircase: baseline" in str(d) and "at the noise" in d.verdict_reason
+
+
+def test_runs_test_separates_structure_from_noise():
+    rng = np.random.default_rng(0)
+    assert abs(runs_z(rng.normal(size=400))) < 3
+    assert runs_z(np.sin(np.linspace(0, 6, 400)) + 0.1 * rng.normal(size=400)) < -10
