@@ -19,19 +19,19 @@ from spicethermal.effectfit import (
     check_time,
     fit_effect,
     fit_effect_forms,
-    robust_lsq,
-    sse,
-    time_limit,
-    transient_offset,
-    window_average_k,
     pc_cooling_rise,
     pc_frozen_ladder,
     predict,
+    robust_lsq,
+    sse,
     tc_cooling_rise,
     tc_frozen_ladder,
     tc_steady_scale,
+    time_limit,
+    transient_offset,
     tsp_reading,
     tsp_true,
+    window_average_k,
 )
 from spicethermal.effects import (
     CATALOGUE,
@@ -264,7 +264,7 @@ def test_extra_capacitance_is_finite_far_from_the_band():
 
 
 # ----------------------------------------------------------------------------- registry
-def test_a_plugin_effect_registers_and_is_listed(monkeypatch, capsys):
+def test_a_plugin_effect_registers_and_is_listed(monkeypatch, capsys, tmp_path):
     """A toy effect from outside the package, through the entry-point group."""
     import importlib.metadata
 
@@ -284,10 +284,14 @@ def test_a_plugin_effect_registers_and_is_listed(monkeypatch, capsys):
                         lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
     assert "toy-gain" in known_names()
     assert Effect.create("toy-gain", gain=1.5).params["gain"] == 1.5
-    bundle = scenario_bundle("clean", seed=0)
+    bundle = scenario_bundle("sample-window", seed=0)
     data = BundleData.from_bundle(bundle)
     with pytest.raises(FitError, match="has no fit"):
         fit_effect(data, actuator(), "toy-gain")
+    bundle.write(tmp_path / "b")
+    assert main(["diagnose", str(tmp_path / "b"), "--effect", "toy-gain", "-q"]) == 0
+    assert "toy-gain                 not tried: fit failed: effect 'toy-gain' has no fit" in \
+        capsys.readouterr().out
 
 
 # ------------------------------------------------------------------------ robust fitting
