@@ -96,7 +96,7 @@ MAX_STEPS = 3
 #: Time budget (s of CPU time, see :func:`~spicethermal.effectfit.time_limit`) of one
 #: candidate's fit at the first step; a fit past it keeps its
 #: best point so far (a fit that cannot start fails).
-CANDIDATE_BUDGET_S = 6.0
+CANDIDATE_BUDGET_S = 8.0
 #: ... and at later steps (their forward models carry the effects added so far).
 LATER_BUDGET_S = 3.0
 #: Noise estimates are at least this (K): the resolution of any real bench.

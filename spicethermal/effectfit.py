@@ -84,6 +84,8 @@ FORM_BIC_MARGIN = 10.0
 #: Tolerances of the phase-change integration (relative, and absolute in K): 0.1 mK on rises
 #: of tens of kelvins, below any bench's noise.
 PC_RTOL, PC_ATOL_K = 1e-7, 1e-6
+#: Evaluations allowed to the band's own fit (3 parameters, the ladder held).
+PC_NFEV = 40
 #: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
 #: evaluation integrates the curves that cross the band); past it the best point so far is kept.
 PC_JOINT_BUDGET_S = 1.5
@@ -115,6 +117,17 @@ def time_limit(seconds: float) -> Iterator[None]:
     """
     deadline = min(_DEADLINE.get(), time.process_time() + seconds)
     token = _DEADLINE.set(deadline)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+@contextmanager
+def unlimited() -> Iterator[None]:
+    """Lift every :func:`time_limit` inside the block (for the checks that must complete,
+    such as comparing a fit with the model it extends)."""
+    token = _DEADLINE.set(math.inf)
     try:
         yield
     finally:
@@ -194,6 +207,11 @@ class BundleData:
     #: Noise scale (K) of each data set: the fits weigh its residuals by 1/scale (1 K when
     #: absent); the diagnosis sets them to its noise estimates.
     scales: Mapping[str, float] = field(default_factory=dict)
+    #: Temperatures of the bundle's calibration points when the cooling curves are in volts:
+    #: their readings went through the least-squares line fitted to those points (here, in
+    #: :meth:`from_bundle`). None: readings in °C from the bench, modelled as through the
+    #: tangent at ``t_cal_c`` (which also covers a line of another gain and offset).
+    line_temps_c: NDArray | None = None
 
     def scale(self, name: str) -> float:
         """Noise scale (K) of data set ``name`` (1 when not set)."""
@@ -230,7 +248,10 @@ class BundleData:
         if line is not None and np.unique(bundle.calibration.temp_c).size >= 3:
             cal = CalData(np.asarray(bundle.calibration.temp_c, float),
                           np.asarray(line.temperature(bundle.calibration.v_tsp_v), float))
-        return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle")
+        in_volts = bool(bundle.cooling) and all(c.tj_c is None for c in bundle.cooling)
+        return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle",
+                   line_temps_c=np.asarray(bundle.calibration.temp_c, float) if in_volts
+                   else None)
 
     @property
     def datasets(self) -> tuple[str, ...]:
@@ -519,6 +540,24 @@ def transient_offset(t_s: ArrayLike, effect: Effect | None, power_w: float = 0.0
     return out
 
 
+def calibrated_reading(temp_c: ArrayLike, effect: Effect | None,
+                       line_temps_c: NDArray | None) -> NDArray:
+    """What the bench reads at true temperature ``temp_c`` through its linear calibration:
+    fitted by least squares to the calibration points at ``line_temps_c`` (the line absorbs
+    the straight part of the TSP's nonlinearity, so a curvature cannot pose as a gain), or,
+    without calibration points, the tangent at ``t_cal_c`` (:func:`tsp_reading`).
+
+    >>> e = Effect.create("tsp-nonlinearity", quad_k_per_k2=1e-3, t_cal_c=20.0)
+    >>> round(float(calibrated_reading(50.0, e, np.array([20.0, 40.0, 60.0, 80.0]))), 4)
+    49.5283
+    """
+    r = tsp_reading(temp_c, effect)
+    if effect is None or line_temps_c is None:
+        return r
+    slope, offset = np.polyfit(line_temps_c, tsp_reading(line_temps_c, effect), 1)
+    return (r - offset) / slope
+
+
 def calibration_reading(temp_c: NDArray, effect: Effect | None) -> NDArray:
     """What the least-squares linear calibration of the points at ``temp_c`` reads there when
     the TSP reads :func:`tsp_reading` through its true tangent: the calibration regresses the
@@ -532,9 +571,7 @@ def calibration_reading(temp_c: NDArray, effect: Effect | None) -> NDArray:
     """
     if effect is None:
         return temp_c.copy()
-    r = tsp_reading(temp_c, effect)
-    slope, offset = np.polyfit(temp_c, r, 1)
-    return (r - offset) / slope
+    return calibrated_reading(temp_c, effect, temp_c)
 
 
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
@@ -611,11 +648,12 @@ def predict(data: BundleData, ladder: Foster | Cauer,
     fx = _effects_map(effects)
     tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
     out: dict[str, NDArray] = {}
+    line = data.line_temps_c
     for c in data.cooling:
-        out[c.name] = tsp_reading(cooling_true_c(c, ladder, effects), tsp) + \
+        out[c.name] = calibrated_reading(cooling_true_c(c, ladder, effects), tsp, line) + \
             transient_offset(c.t_s, tr, c.power_w)
     if data.pwm is not None:
-        out["pwm"] = tsp_reading(pwm_true_c(data.pwm, ladder, effects), tsp)
+        out["pwm"] = calibrated_reading(pwm_true_c(data.pwm, ladder, effects), tsp, line)
     if data.calibration is not None:
         out["calibration"] = calibration_reading(data.calibration.temp_c, tsp)
     return out
@@ -689,7 +727,7 @@ def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
     return BundleData(tuple(c for c in data.cooling if c.name in names),
                       data.pwm if "pwm" in names else None,
                       data.calibration if "calibration" in names else None,
-                      data.ambient_c, data.source, data.scales)
+                      data.ambient_c, data.source, data.scales, data.line_temps_c)
 
 
 def robust_lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
@@ -785,7 +823,8 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         tsp = _effects_map(effects).get("tsp-nonlinearity")
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
-            parts.append((tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
+            parts.append((calibrated_reading(cooling_true_c(top, lad, effects), tsp,
+                                             data.line_temps_c) - c.tj_steady_c)
                          / data.scale(c.name))
         return np.concatenate(parts)
 
@@ -947,7 +986,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     fits = []
     for _, node, x0 in [junction] + ([outer] if outer[1] != 0 else []):  # noqa: B007 (build)
         fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
-                              tol=PC_FIT_TOL))
+                              tol=PC_FIT_TOL, max_nfev=PC_NFEV))
     lad, effs, res = min(fits, key=lambda r: r[2].cost)
     held = 0.5 * sse(sub, ladder, base)
     if res.cost >= held:  # no band does better than the given ladder without one
@@ -961,8 +1000,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         with time_limit(PC_JOINT_BUDGET_S):
             lad2, effs2, _ = joint_fit(data, names, lad, True, res.x, lo, hi, build,
                                        diff_step=1e-3, tol=PC_FIT_TOL)
-        if sse(data, lad2, effs2) < sse(data, lad, effs):
-            lad, effs = lad2, effs2
+        with unlimited():
+            if sse(data, lad2, effs2) < sse(data, lad, effs):
+                lad, effs = lad2, effs2
     except (FitError, TimeLimitError):
         pass
     return [EffectFit(effs[-1], lad, 4, {"t_range_c": (t_lo, t_hi)})]
@@ -1119,11 +1159,14 @@ def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
     if why:
         raise FitError(f"cannot fit {name}: {why}")
     others = _others(effects, name)
-    off = sse(data, ladder, others)
     out = []
-    for fit in FITTERS[name](data, ladder, effects):
+    fits = FITTERS[name](data, ladder, effects)
+    with unlimited():
+        off = sse(data, ladder, others)
+    for fit in fits:
         try:
-            worse = sse(data, fit.ladder, [*others, fit.effect]) > off
+            with unlimited():
+                worse = sse(data, fit.ladder, [*others, fit.effect]) > off
         except (SimulationError, *NUMERICAL_ERRORS):
             worse = True
         if worse:
