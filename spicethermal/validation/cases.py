@@ -36,7 +36,8 @@ STRENGTHS = ("weak", "medium", "strong")
 #: A fast subset (seconds to simulate): a clean bundle and one strong case per effect that
 #: the diagnosis names today (tests/test_validation.py runs it).
 FAST = ("clean/mosfet-2", "temperature-coefficient/local-linear/strong",
-        "electrical-transient/fixed/strong", "tsp-nonlinearity/quadratic/strong")
+        "phase-change/gaussian-junction/strong", "electrical-transient/fixed/strong",
+        "tsp-nonlinearity/quadratic/strong", "sample-window/average/strong")
 
 
 @dataclass(frozen=True)
