@@ -96,13 +96,20 @@ class Case:
     truth: dict[str, Any] = field(default_factory=dict)
 
     def record(self) -> Record:
-        """Simulate the bench (noise seeded by :attr:`seed`)."""
-        extra = {"validation": {"case": self.name, "family": self.family,
-                                "expected": list(self.expected), "form": self.form,
-                                "strength": self.strength, "truth": self.truth,
-                                "seed": self.seed}}
+        """Simulate the bench (noise seeded by :attr:`seed`). The bundle says nothing of the
+        truth (a held-out bundle would not): it lives in :meth:`describe`."""
         return measure(self.network, self.bench, self.seed,
-                       device=f"validation {self.device}, case {self.name}", extra=extra)
+                       device=f"validation {self.device} #{self.seed}")
+
+    def describe(self) -> dict[str, Any]:
+        """The truth and the bench variant, as JSON-ready data."""
+        b = self.bench
+        return {"case": self.name, "family": self.family, "expected": list(self.expected),
+                "device": self.device, "form": self.form, "strength": self.strength,
+                "truth": self.truth, "seed": self.seed,
+                "bench": {"noise_k": b.noise_k, "cooling_powers_w": list(b.cooling_powers_w),
+                          "per_decade": b.per_decade, "dense_pwm": b.dense_pwm,
+                          "tj_steady_c": b.steady, "volts": b.volts}}
 
 
 # --------------------------------------------------------------------------------------------
