@@ -86,6 +86,9 @@ MIN_BIC_DROP = 10.0
 MIN_EXPLAINED = 0.6
 #: A data set fits "within its noise" when its RMS is within this many noise estimates.
 EXPLAINED_RATIO = 2.0
+#: Effects that leave a structured residual are named only when together they explain at
+#: least this fraction of the baseline's misfit beyond the noise (else: not in the catalogue).
+MIN_TOTAL_EXPLAINED = 0.97
 #: The residual is at the noise when ``χ² / N`` is below this and no data set has a structured
 #: residual (:func:`runs_z` below :data:`RUNS_Z`).
 AT_NOISE_CHI2 = 1.5
@@ -688,8 +691,20 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             chosen.comparison
         cur_bic = _criterion(cur, noise, k_total)
     where = tuple(localise(base, noise))
+    total = explained_fraction(base, cur, noise)
+    if steps and total < MIN_TOTAL_EXPLAINED and structured(cur, noise):
+        # the effects found explain part of the misfit and leave a structured residual: the
+        # physics at work is not in the catalogue (a remounted contact, a heater that sags
+        # or a convection that switches can each pass for a temperature coefficient)
+        tried = ", ".join(s.chosen.effect.name for s in steps)
+        located = localise(cur, noise) or localise(cur)
+        reason = (f"no catalogued effect explains the misfit: {tried} would explain only "
+                  f"{100 * total:.0f} % of it (needs {100 * MIN_TOTAL_EXPLAINED:.0f} % when a "
+                  f"structured residual remains) and leave {located[0]}; not in the catalogue")
+        steps = []
+    else:
+        reason = _reason(base, cur, noise, first, steps, skipped)
     effect = steps[0].chosen.effect.name if steps else None
-    reason = _reason(base, cur, noise, first, steps, skipped)
     return Diagnosis(base, model, noise, bic0, tuple(first), effect, reason, where, skipped,
                      time.perf_counter() - t_start, data.source, {}, tuple(steps))
 
