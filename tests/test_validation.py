@@ -150,6 +150,14 @@ def test_catalogue_covers_every_form_strength_pairs_clean_and_uncatalogued():
     assert all(not c.expected for c in cases if c.family in ("clean", "uncatalogued"))
 
 
+def test_cases_are_repeatable_and_seeds_differ():
+    a, b = case("clean/actuator-1").record(), case("clean/actuator-1").record()
+    assert all(np.array_equal(a.measured[k], b.measured[k]) for k in a.measured)
+    other = case("clean/actuator-4").record()
+    assert not np.array_equal(a.measured["pwm"] - a.truth["pwm"],
+                              other.measured["pwm"] - other.truth["pwm"])
+
+
 def test_detectability_separates_clean_from_a_strong_effect():
     assert not detectability(case("clean/actuator-1").record()).detectable
     strong = detectability(case("electrical-transient/fixed/strong").record())
