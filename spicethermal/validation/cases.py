@@ -285,7 +285,13 @@ def _pair(k: int) -> Case:
 
 
 def catalogue() -> list[Case]:
-    """Every case, in a fixed order: effects (form × strength), pairs, clean, uncatalogued."""
+    """Every case, in a fixed order: effects (form × strength), pairs, clean, uncatalogued.
+
+    Returns
+    -------
+    list of Case
+        Built afresh (cheap: nothing is simulated until :meth:`Case.record`).
+    """
     out: list[Case] = []
     i = 0
     names = list(DEVICES)
@@ -307,7 +313,17 @@ def catalogue() -> list[Case]:
 
 
 def case(name: str) -> Case:
-    """The case called ``name`` (a KeyError lists none; names are ``effect/form/strength``)."""
+    """The case called ``name``.
+
+    Parameters
+    ----------
+    name : ``effect/form/strength``, ``pair/e1+e2``, ``clean/...`` or ``uncatalogued/...``.
+
+    Returns
+    -------
+    Case
+        Raises KeyError for an unknown name.
+    """
     for c in catalogue():
         if c.name == name:
             return c

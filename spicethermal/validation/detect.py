@@ -92,8 +92,14 @@ def _predict(x: np.ndarray, record: Record) -> dict[str, np.ndarray]:
 
 
 def linear_fit(record: Record) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Best linear Foster ladder of every reading: ``(r, τ, predictions)``, the lowest sum of
-    squares over orders :data:`ORDERS` and log-spaced starts."""
+    """Best linear Foster ladder of every reading of ``record`` (calibration aside).
+
+    Returns
+    -------
+    tuple
+        ``(r, τ, predictions)``: the stages with the lowest sum of squares over orders
+        :data:`ORDERS` and log-spaced starts, and the readings they predict per data set.
+    """
     keys = [k for k in record.measured if k != "calibration"]
     y = np.concatenate([record.measured[k] for k in keys])
     inp = record.inputs
@@ -129,7 +135,17 @@ def _rms(x: np.ndarray) -> float:
 
 
 def detectability(record: Record) -> Detectability:
-    """Detectability of the case behind ``record`` (module docstring)."""
+    """Detectability of the case behind ``record`` (module docstring).
+
+    Parameters
+    ----------
+    record : a simulated measurement (:func:`~.measure.measure`).
+
+    Returns
+    -------
+    Detectability
+        RMS of the best linear ladder and of the truth per data set, ``Δχ²``, the mark.
+    """
     r, _, pred = linear_fit(record)
     lin, tru = {}, {}
     rss_lin = rss_tru = 0.0

@@ -143,7 +143,27 @@ def _line(temp_c: np.ndarray, volts: np.ndarray) -> tuple[float, float]:
 
 def measure(net: Network, bench: Bench, seed: int, device: str = "validation device",
             extra: dict | None = None) -> Record:
-    """Simulate the bench on ``net`` and return the :class:`Record` (module docstring)."""
+    """Simulate the bench on ``net`` (module docstring).
+
+    Parameters
+    ----------
+    net : the device.
+    bench : how it is measured, artefacts included.
+    seed : seed of the noise (the same seed gives the same bundle).
+    device, extra : the bundle's ``device`` text and extra ``bundle.json`` keys.
+
+    Returns
+    -------
+    Record
+        The bundle and the noise-free and measured readings in kelvin.
+
+    Examples
+    --------
+    >>> from spicethermal.validation.network import Network
+    >>> rec = measure(Network((10.0, 20.0), (1e-3, 0.1)), Bench((0.5,), 0.5, noise_k=0.0), 1)
+    >>> round(float(rec.bundle.cooling[0].tj_steady_c), 6)
+    40.0
+    """
     rng = np.random.default_rng(seed)
     t = bench.times()
     tref = bench.tref_c

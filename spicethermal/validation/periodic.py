@@ -34,7 +34,8 @@ MAX_SHOTS = 30
 
 def foster_reading(r: np.ndarray, tau: np.ndarray, power_w: float, freq_hz: float,
                    duty: float, window_s: float = 0.0, mode: str = "end") -> float:
-    """Reading (rise over the reference, K) of a linear ladder given by its Foster stages.
+    """Reading (rise over the reference, K) of a linear ladder given by its Foster stages
+    ``r`` (K/W) and ``tau`` (s), as :func:`pwm_reading` defines it.
 
     >>> round(foster_reading(np.array([10.0]), np.array([1e-2]), 1.0, 1e3, 1.0), 9)
     10.0
@@ -50,7 +51,25 @@ def foster_reading(r: np.ndarray, tau: np.ndarray, power_w: float, freq_hz: floa
 
 def periodic_start(net: Network, power_w: float, freq_hz: float, duty: float,
                    tref_c: float) -> np.ndarray:
-    """Node temperatures (°C) at the start of an on-phase in the periodic steady state."""
+    """Node temperatures (°C) at the start of an on-phase in the periodic steady state.
+
+    Parameters
+    ----------
+    net : the network; power_w, freq_hz, duty : the train; tref_c : the reference (°C).
+
+    Returns
+    -------
+    numpy.ndarray
+        The fixed point of the period map (module docstring).
+
+    Examples
+    --------
+    >>> from spicethermal.validation.network import Network
+    >>> x = periodic_start(Network((10.0,), (1e-3,)).with_(power_slope_per_k=1e-9),
+    ...                    1.0, 1e3, 0.5, 25.0)
+    >>> round(float(x[0]), 5)    # closed form: 25 + 10 (1 − e^{−0.05}) e^{−0.05} / (1 − e^{−0.1})
+    29.87503
+    """
     period = 1.0 / freq_hz
     on, off = duty * period, (1.0 - duty) * period
     x = net.steady(power_w * duty, tref_c)
@@ -69,7 +88,18 @@ def periodic_start(net: Network, power_w: float, freq_hz: float, duty: float,
 
 def pwm_reading(net: Network, power_w: float, freq_hz: float, duty: float, tref_c: float,
                 window_s: float = 0.0, mode: str = "end") -> float:
-    """What the bench reads (°C) in the periodic steady state (module docstring)."""
+    """What the bench reads (°C) in the periodic steady state (module docstring).
+
+    Parameters
+    ----------
+    net : the network; power_w, freq_hz, duty : the train; tref_c : the reference (°C).
+    window_s, mode : the sample window and how it is read (``"end"`` or ``"average"``).
+
+    Returns
+    -------
+    float
+        The reading in °C.
+    """
     if mode not in ("end", "average"):
         raise ValueError(f"mode {mode!r}: expected 'end' or 'average'")
     if net.is_linear:
