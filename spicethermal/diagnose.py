@@ -409,8 +409,9 @@ def _offset(t_c: float) -> str:
     return f"T − {_fmt(t_c, 4)} °C" if t_c >= 0 else f"T + {_fmt(-t_c, 4)} °C"
 
 
-def _signed(x: float, unit: str) -> str:
-    return f"{'+' if x >= 0 else '−'} {_fmt(abs(x))} {unit}"
+def _signed(x: float, unit: str, gap: str = " ") -> str:
+    """``+ 0.3 %/K`` inside a formula (``gap=""``: ``−5.99 K`` on its own)."""
+    return f"{'+' if x >= 0 else '−'}{gap}{_fmt(abs(x))} {unit}"
 
 
 def _neutral(effect: Effect) -> bool:
@@ -472,16 +473,17 @@ def evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Compariso
         mean = float(np.mean(base.dataset("pwm").residuals_k)) if data.pwm is not None else 0.0
         declared = fit.facts.get("declared_s", 0.0)
         how = "averaged over" if e.form == "average" else "at the end of"
-        return (f"PWM readings are {_signed(mean, 'K')} off on average; a reading {how} a "
+        return (f"PWM readings are {_signed(mean, 'K', '')} off on average; a reading {how} a "
                 f"{_time(p['window_s'])} power-off window before each sample (declared "
                 f"{_time(declared) if declared > 0 else 'none'}) {verdict} ({gain})")
     if e.name == "electrical-transient":
         if e.form == "power":
-            size = f"{_signed(p['k_per_w'], 'K')} per watt cut off"
+            size = f"{_signed(p['k_per_w'], 'K', '')} per watt cut off"
         elif e.form == "ringing":
-            size = f"{_signed(p['amplitude_k'], 'K')}, ringing at {_fmt(p['ring_hz'])} Hz,"
+            size = (f"{_signed(p['amplitude_k'], 'K', '')}, ringing at "
+                    f"{_fmt(p['ring_hz'] / 1e3)} kHz,")
         else:
-            size = _signed(p["amplitude_k"], "K")
+            size = _signed(p["amplitude_k"], "K", "")
         return (f"cooling readings after the cut are off by {size} and recover within "
                 f"{_time(p['masked_s'])}; the transient {verdict} ({gain})")
     if e.name == "tsp-nonlinearity":

@@ -50,6 +50,7 @@ from __future__ import annotations
 import contextvars
 import math
 import time
+import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -84,11 +85,18 @@ FORM_BIC_MARGIN = 10.0
 #: Tolerances of the phase-change integration (relative, and absolute in K): 0.1 mK on rises
 #: of tens of kelvins, below any bench's noise.
 PC_RTOL, PC_ATOL_K = 1e-7, 1e-6
+#: CPU time (s) allowed to one evaluation of the phase-change grid (a band that makes the
+#: integration crawl is not the start point).
+PC_EVAL_S = 0.3
+#: CPU time (s) allowed to the whole grid (the junction node's points come first).
+PC_GRID_S = 2.0
 #: Evaluations allowed to the band's own fit (3 parameters, the ladder held).
 PC_NFEV = 40
 #: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
 #: evaluation integrates the curves that cross the band); past it the best point so far is kept.
 PC_JOINT_BUDGET_S = 1.5
+#: The baseline ladder's order is searched up to this many stages.
+MAX_BASELINE_ORDER = 6
 #: Numerical failures that make a trial point of a fit (or a whole candidate) fail.
 NUMERICAL_ERRORS = (ArithmeticError, ValueError, np.linalg.LinAlgError)
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
@@ -132,6 +140,23 @@ def unlimited() -> Iterator[None]:
         yield
     finally:
         _DEADLINE.reset(token)
+
+
+def bounded(fn: Callable[[], Any], seconds: float, default: Any) -> Any:
+    """``fn()`` within ``seconds`` of CPU time, else ``default`` (the enclosing
+    :func:`time_limit` still raises when it runs out).
+
+    >>> bounded(lambda: 1 + 1, 1.0, None), bounded(check_time, 0.0, "late")
+    (2, 'late')
+    """
+    outer = _DEADLINE.get()
+    try:
+        with time_limit(seconds):
+            return fn()
+    except TimeLimitError:
+        if time.process_time() > outer:
+            raise
+        return default
 
 
 def check_time() -> None:
@@ -434,9 +459,11 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
 
     left_band.terminal = True  # type: ignore[attr-defined]
     left_band.direction = -1  # type: ignore[attr-defined]
-    sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
-                    rtol=PC_RTOL, atol=PC_ATOL_K, first_step=min(f.tau) / 1000,
-                    events=left_band if tc is None else None)
+    with warnings.catch_warnings():  # a failed integration is reported by sol.success
+        warnings.simplefilter("ignore")
+        sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
+                        rtol=PC_RTOL, atol=PC_ATOL_K, first_step=min(f.tau) / 1000,
+                        events=left_band if tc is None else None)
     if not sol.success:
         raise SimulationError(f"phase-change cooling integration failed: {sol.message}")
     out = np.empty(t.shape)
@@ -693,8 +720,10 @@ def transient_spans(data: BundleData) -> dict[str, float]:
 def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
     """The linear ladder the diagnosis starts from: :func:`reference_ladder` (order chosen by
     BIC on the lowest-power curve), then refitted jointly to every cooling curve's readings
-    outside their detected transients (same order), so that the effects are compared with
-    the best linear model of all the curves rather than of one.
+    outside their detected transients, so that the effects are compared with the best linear
+    model of all the curves rather than of one. With ``order="auto"`` one and two more stages
+    are tried too, and the joint fit with the lowest BIC is kept (one sparse, noisy curve
+    can hide a stage that all of them show).
 
     >>> from spicethermal.scenarios import scenario_bundle
     >>> lad = baseline_ladder(BundleData.from_bundle(scenario_bundle("clean", seed=0)))
@@ -704,9 +733,26 @@ def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
     ladder = reference_ladder(data, order)
     if len(data.cooling) < 2:
         return ladder
-    lad, _, _ = joint_fit(data, [c.name for c in data.cooling], ladder, True, [], [], [],
-                          lambda x: [], exclude=transient_spans(data))
-    return lad
+    names = [c.name for c in data.cooling]
+    spans = transient_spans(data)
+    orders = [ladder.order]
+    if order == "auto":
+        orders += [m for m in (ladder.order + 1, ladder.order + 2) if m <= MAX_BASELINE_ORDER]
+    best = None
+    for m in orders:
+        try:
+            start = ladder if m == ladder.order else reference_ladder(data, m)
+            lad, _, res = joint_fit(data, names, start, True, [], [], [], lambda x: [],
+                                    exclude=spans)
+        except (FitError, DataFormatError, SimulationError, *NUMERICAL_ERRORS):
+            continue
+        n = max(res.fun.size, 2)
+        bic = n * math.log(max(2 * res.cost, 1e-300) / n) + 2 * m * math.log(n)
+        if best is None or bic < best[0]:
+            best = (bic, lad)
+    if best is None:
+        raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
+    return best[1]
 
 
 # --------------------------------------------------------------------------------------------
@@ -965,7 +1011,8 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
 
     def cost(x: Sequence[float]) -> float:
         try:
-            return sse(sub, ref, build(np.asarray(x, dtype=float)))
+            return bounded(lambda: sse(sub, ref, build(np.asarray(x, dtype=float))),
+                           PC_EVAL_S, math.inf)
         except TimeLimitError:
             raise
         except (SimulationError, *NUMERICAL_ERRORS):
@@ -973,10 +1020,14 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
 
     # coarse grid over (node, centre, latent heat), then least squares from the best point
     grid = []
-    for node in range(ref.order):
-        fracs = (1e-3, 1e-2, 1e-1, 1.0) if node == 0 else (0.1, 1.0, 10.0)
-        grid += [(cost([math.log(fr), tc, width0]), node, [math.log(fr), tc, width0])
-                 for tc in (centres if node == 0 else centres[:1]) for fr in fracs]
+    stop = time.process_time() + PC_GRID_S
+    points = [(node, fr, tc) for node in range(ref.order)
+              for tc in (centres if node == 0 else centres[:1])
+              for fr in ((1e-3, 1e-2, 1e-1, 1.0) if node == 0 else (0.1, 1.0, 10.0))]
+    for node, fr, tc in points:  # noqa: B007 (build reads node)
+        if grid and time.process_time() > stop:
+            break
+        grid.append((cost([math.log(fr), tc, width0]), node, [math.log(fr), tc, width0]))
     no_band = sse(sub, ref, base)
     if min(g[0] for g in grid) >= no_band:  # no band anywhere helps: nothing to refine
         return [EffectFit(switched_off("phase-change", "logistic", data), _foster(ladder), 4,
@@ -1031,7 +1082,8 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
                   lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1]}),
         "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
                   lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
-        "ringing": ([[amp0, lspan, lf - lspan] for lf in (0.0, 0.5)],
+        "ringing": ([[amp0, ls, lf] for ls in (lspan, lspan + 0.5)
+                     for lf in (-0.3, 0.0, 0.3, 0.6, 0.9)],
                     [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
                     lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
                                "ring_hz": 10 ** (x[2] - x[1])}),
