@@ -702,7 +702,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         located = localise(cur, noise) or localise(cur)
         reason = (f"no catalogued effect explains the misfit: {tried} would explain only "
                   f"{100 * total:.0f} % of it (needs {100 * MIN_TOTAL_EXPLAINED:.0f} % when a "
-                  f"structured residual remains) and leave {located[0]}; not in the catalogue")
+                  f"structured residual remains) and leave {'; and '.join(located[:2])}; not in "
+                  f"the catalogue")
         steps = []
     else:
         reason = _reason(base, cur, noise, first, steps, skipped)
@@ -743,10 +744,11 @@ def _reason(base: Comparison, final: Comparison, noise: Mapping[str, float],
             why = "no candidate effect could be fitted"
         located = localise(final, noise) or localise(final)
         return (f"no catalogued effect explains the misfit: {why}; not in the catalogue: the "
-                f"error sits in {located[0]}")
+                f"error sits in {'; and in '.join(located[:2])}")
     located = localise(final, noise) or localise(final)
     return ("; then ".join(parts) + "; a structured residual remains that no catalogued effect "
-            f"explains (not in the catalogue): {located[0] if located else ', '.join(left)}")
+            f"explains (not in the catalogue): "
+            f"{'; and '.join(located[:2]) if located else ', '.join(left)}")
 
 
 def bic_drop(cand: Candidate, base: Comparison, noise: Mapping[str, float]) -> float:

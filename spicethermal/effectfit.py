@@ -95,8 +95,11 @@ PC_NFEV = 40
 #: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
 #: evaluation integrates the curves that cross the band); past it the best point so far is kept.
 PC_JOINT_BUDGET_S = 1.5
-#: The baseline ladder's order is searched up to this many stages.
+#: The baseline ladder's order is searched up to this many stages ...
 MAX_BASELINE_ORDER = 6
+#: ... and a stage is added only when it lowers the RMS of the joint fit this many times
+#: (and that of every curve).
+ORDER_GAIN = 1.2
 #: Numerical failures that make a trial point of a fit (or a whole candidate) fail.
 NUMERICAL_ERRORS = (ArithmeticError, ValueError, np.linalg.LinAlgError)
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
@@ -748,8 +751,15 @@ def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
             continue
         n = max(res.fun.size, 2)
         bic = n * math.log(max(2 * res.cost, 1e-300) / n) + 2 * m * math.log(n)
-        if best is None or bic < best[0]:
-            best = (bic, lad)
+        pred = predict(_subset(data, names), lad)
+        per_curve = [float(np.sum(((pred[c.name] - c.tj_c)[c.t_s >= spans.get(c.name, 0.0)])
+                                  ** 2)) for c in data.cooling]
+        # more stages only for a ladder that is plainly too short: every curve fits better
+        # and the RMS falls ORDER_GAIN× (a slow extra stage that one curve's drift asks for
+        # would otherwise hide what the diagnosis must see)
+        if best is None or (bic < best[0] and res.cost < best[2] / ORDER_GAIN ** 2
+                            and all(a <= b for a, b in zip(per_curve, best[3], strict=True))):
+            best = (bic, lad, res.cost, per_curve)
     if best is None:
         raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
     return best[1]
