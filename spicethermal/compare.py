@@ -208,18 +208,36 @@ def _pct(d: float) -> str:
 # measurement effects
 # --------------------------------------------------------------------------------------------
 def _reading(model: ThermalModel, dataset: str, at: Mapping[str, float], model_c: float,
-             measurement: Measurement | None) -> float:
-    """Model temperature → what the bench reads (the model's measurement effects, the hook)."""
-    value = model_c
-    tsp = model.effect("tsp-nonlinearity")
-    if tsp is not None:
-        value += tsp.params["quad_k_per_k2"] * (model_c - tsp.params["t_cal_c"]) ** 2
-    trans = model.effect("electrical-transient")
-    if trans is not None and "t_s" in at and trans.params["masked_s"] > 0:
-        value += trans.params["amplitude_k"] * math.exp(-5 * at["t_s"] / trans.params["masked_s"])
+             measurement: Measurement | None, power_w: float = 0.0) -> float:
+    """Model temperature → what the bench reads: the model's measurement effects (the one
+    measurement model of :mod:`spicethermal.effectfit`, shared with fit and diagnose), then
+    the hook. ``power_w`` is the power cut before a cooling reading."""
+    from .effectfit import transient_offset, tsp_reading
+
+    value = float(tsp_reading(model_c, model.effect("tsp-nonlinearity")))
+    if "t_s" in at:
+        value += float(transient_offset(at["t_s"], model.effect("electrical-transient"),
+                                        power_w))
     if measurement is not None:
         value = float(measurement(dataset, at, value))
     return value
+
+
+def _window_reading(model: ThermalModel, engine: str, reading: Callable[[float], float],
+                    power_w: float, freq_hz: float, duty: float, window_s: float) -> float:
+    """The PWM reading after a window of ``window_s``: at its end (``reading(window_s)``), or
+    averaged over it for the ``average`` form of ``sample-window`` (exact for a linear model
+    solved analytically, else 4-point Gauss–Legendre over the window)."""
+    sw = model.effect("sample-window")
+    if sw is None or sw.form != "average" or window_s <= 0:
+        return reading(window_s)
+    if engine == "analytic" and model.is_linear:
+        from .effectfit import window_average_k
+
+        return window_average_k(model.ladder, power_w, freq_hz, duty, window_s)
+    x, w = np.polynomial.legendre.leggauss(4)
+    return float(sum(wi * reading(0.5 * window_s * (1 + xi))
+                     for xi, wi in zip(x, w, strict=True)) / 2)
 
 
 def sample_window_s(model: ThermalModel, table: PwmTable | None = None,
@@ -269,12 +287,16 @@ def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
                                  strict=True):
         f, d, p, tref = float(f), float(d), float(p), float(tref)
         if engine == "analytic":
-            state = model.pwm(p, f, d, window, tref)
+            def reading(w: float, p=p, f=f, d=d, tref=tref) -> float:
+                return model.pwm(p, f, d, w, tref).reading_k
         else:
             sim = sims.setdefault(tref, SpicePwm(model, engine, dialect, tref_c=tref))
-            state = sim.state(p, f, d, window)
+
+            def reading(w: float, p=p, f=f, d=d, sim=sim) -> float:
+                return sim.state(p, f, d, w).reading_k
         at = {"freq_hz": f, "duty": d}
-        model_c = _reading(model, dataset, at, tref + state.reading_k, measurement)
+        rise = _window_reading(model, engine, reading, p, f, d, window)
+        model_c = _reading(model, dataset, at, tref + rise, measurement)
         points.append(ComparisonPoint(dataset, at, float(tj), model_c,
                                       {"power_w": p, "tref_c": tref, "window_s": window}))
     return tuple(points)
@@ -317,7 +339,7 @@ def compare_cooling(model: ThermalModel, bundle: Bundle, index: int = 0, *,
     points = []
     for t, tj, tref, r in zip(table.t_s, measured, trefs, rise, strict=True):
         at = {"t_s": float(t)}
-        model_c = _reading(model, name, at, float(tref) + float(r), measurement)
+        model_c = _reading(model, name, at, float(tref) + float(r), measurement, table.power_w)
         points.append(ComparisonPoint(name, at, float(tj), model_c,
                                       {"power_w": table.power_w, "tref_c": float(tref)}))
     return tuple(points)

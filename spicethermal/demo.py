@@ -79,7 +79,6 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
     from .curves import ZthCurve
     from .datasheet import mur880e, table1
     from .diagnose import diagnose
-    from .effectfit import fit_with_effects
     from .fit import fit_model
     from .spice import export
 
@@ -136,23 +135,22 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
     table2_cmp = steps.run("the paper's Table 2: 18 PWM points in ngspice", table2)
 
     # 6. diagnosis ---------------------------------------------------------------------------
-    diag = steps.run("diagnosis: which physical effect is missing",
-                     lambda: diagnose(bundle, model=model))
+    # the same default path as `spicethermal diagnose BUNDLE`: one baseline, one set of numbers
+    diag = steps.run("diagnosis: which physical effect is missing", lambda: diagnose(bundle))
 
     # 7. add the effect ----------------------------------------------------------------------
     def improve():
-        before = compare(model, bundle)
+        before, after = diag.baseline, diag.final
         effect = diag.verdict_effect
         if effect is None:
             return None, before, before
-        better = fit_with_effects(bundle, [effect], base=model)
+        better = diag.model()
         better.save(out / f"actuator_model_{effect}.json")
         for dialect in DIALECTS:
             export(better, out / "lib" / f"actuator_{effect}_{dialect}_cauer.lib", dialect,
                    "cauer", SUBCKT["actuator"] + "_TC")
-        after = compare(better, bundle)
         plots.fig_before_after(before, after, figs / "effect_before_after.png",
-                               titles=("linear ladder", f"with {effect}"))
+                               titles=("linear ladder", f"with {', '.join(diag.effects)}"))
         return better, before, after
 
     better, before, after = steps.run("add the effect and compare again", improve)
@@ -178,8 +176,8 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         f"Table 2 in ngspice: RMS {table2_cmp.rms_k:.2f} K, worst {table2_cmp.max_abs_k:.2f} K "
         f"over {len(table2_cmp.points)} PWM points",
         f"diagnosis: {diag.verdict_effect or 'no catalogued effect'} — {diag.verdict_reason}",
-        (f"with {diag.verdict_effect}: RMS {before.rms_k:.2f} K -> {after.rms_k:.2f} K "
-         f"({before.rms_k / max(after.rms_k, 1e-12):.1f}x lower)") if better is not None else
+        (f"with {', '.join(diag.effects)}: RMS {before.rms_k:.3g} K -> {after.rms_k:.3g} K "
+         f"({before.rms_k / max(after.rms_k, 1e-12):.3g}x lower)") if better is not None else
         f"model RMS over all data sets {before.rms_k:.2f} K (nothing to add)",
         f"MUR880E vs datasheet r(t): worst error {max(abs(t1.error_percent)):.1f} % "
         f"(the paper's bench: 13.3 %); {len(libs)} .lib files in {out / 'lib'}",

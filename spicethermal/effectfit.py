@@ -47,9 +47,14 @@ band) and ``sample-window`` (cooling curves are not affected).
 
 from __future__ import annotations
 
+import contextvars
 import math
-from collections.abc import Callable, Mapping, Sequence
+import time
+import warnings
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -68,11 +73,100 @@ if TYPE_CHECKING:  # pragma: no cover
 #: band's capacity, :meth:`~spicethermal.effects.Effect.extra_capacitance`, is below 1e-6 of
 #: its peak there).
 BAND_REACH = 8.0
-#: Iterations allowed to a least-squares fit that includes the ladder (each iteration costs
-#: 2·order + k evaluations); enough for the catalogued effects, a bound on hopeless fits.
-MAX_NFEV_WITH_LADDER = 40
+#: Evaluations allowed to one least-squares fit: a bound on hopeless fits only; fits stop on
+#: their tolerance or on the time budget of :func:`time_limit`.
+MAX_NFEV = 400
+#: Relative tolerance on the cost, the step and the gradient at which a fit stops.
+FIT_TOL = 1e-6
+#: The phase-change fit (an integration per evaluation) stops at this looser tolerance.
+PC_FIT_TOL = 1e-5
+#: A form other than an effect's default is kept only when it lowers the BIC by more than this.
+FORM_BIC_MARGIN = 10.0
+#: Tolerances of the phase-change integration (relative, and absolute in K): 0.1 mK on rises
+#: of tens of kelvins, below any bench's noise.
+PC_RTOL, PC_ATOL_K = 1e-7, 1e-6
+#: CPU time (s) allowed to one evaluation of the phase-change grid (a band that makes the
+#: integration crawl is not the start point).
+PC_EVAL_S = 0.3
+#: CPU time (s) allowed to the whole grid (the junction node's points come first).
+PC_GRID_S = 2.0
+#: Evaluations allowed to the band's own fit (3 parameters, the ladder held).
+PC_NFEV = 40
+#: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
+#: evaluation integrates the curves that cross the band); past it the best point so far is kept.
+PC_JOINT_BUDGET_S = 1.5
+#: The baseline ladder's order is searched up to this many stages ...
+MAX_BASELINE_ORDER = 6
+#: ... and a stage is added only when it lowers the RMS of the joint fit this many times
+#: (and that of every curve).
+ORDER_GAIN = 1.2
+#: Numerical failures that make a trial point of a fit (or a whole candidate) fail.
+NUMERICAL_ERRORS = (ArithmeticError, ValueError, np.linalg.LinAlgError)
 #: Transient decay: the reading error is ``A·exp(−TRANSIENT_RATE·t/masked_s)`` (as in compare).
 TRANSIENT_RATE = 5.0
+
+_DEADLINE: contextvars.ContextVar[float] = contextvars.ContextVar("deadline", default=math.inf)
+
+
+class TimeLimitError(SimulationError):
+    """The time budget of :func:`time_limit` ran out."""
+
+
+@contextmanager
+def time_limit(seconds: float) -> Iterator[None]:
+    """A time budget for the fits and integrations run inside the block: past it,
+    :func:`check_time` raises :class:`TimeLimitError` (fits then return their best point so far,
+    integrations fail). Nested budgets keep the earlier deadline. The clock is the process's
+    CPU time (:func:`time.process_time`): a numerical hang is caught the same way on a busy
+    machine as on an idle one, and the verdict does not depend on the machine's load.
+
+    >>> with time_limit(0.0):
+    ...     check_time()
+    Traceback (most recent call last):
+    ...
+    spicethermal.effectfit.TimeLimitError: time budget exhausted
+    """
+    deadline = min(_DEADLINE.get(), time.process_time() + seconds)
+    token = _DEADLINE.set(deadline)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+@contextmanager
+def unlimited() -> Iterator[None]:
+    """Lift every :func:`time_limit` inside the block (for the checks that must complete,
+    such as comparing a fit with the model it extends)."""
+    token = _DEADLINE.set(math.inf)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def bounded(fn: Callable[[], Any], seconds: float, default: Any) -> Any:
+    """``fn()`` within ``seconds`` of CPU time, else ``default`` (the enclosing
+    :func:`time_limit` still raises when it runs out).
+
+    >>> bounded(lambda: 1 + 1, 1.0, None), bounded(check_time, 0.0, "late")
+    (2, 'late')
+    """
+    outer = _DEADLINE.get()
+    try:
+        with time_limit(seconds):
+            return fn()
+    except TimeLimitError:
+        if time.process_time() > outer:
+            raise
+        return default
+
+
+def check_time() -> None:
+    """Raise :class:`TimeLimitError` when the current :func:`time_limit` has run out."""
+    deadline = _DEADLINE.get()
+    if time.process_time() > deadline:
+        raise TimeLimitError("time budget exhausted")
 
 
 # --------------------------------------------------------------------------------------------
@@ -138,13 +232,31 @@ class BundleData:
     calibration: CalData | None = None
     ambient_c: float = 25.0
     source: str = "bundle"
+    #: Noise scale (K) of each data set: the fits weigh its residuals by 1/scale (1 K when
+    #: absent); the diagnosis sets them to its noise estimates.
+    scales: Mapping[str, float] = field(default_factory=dict)
+    #: Temperatures of the bundle's calibration points when the cooling curves are in volts:
+    #: their readings went through the least-squares line fitted to those points (here, in
+    #: :meth:`from_bundle`). None: readings in °C from the bench, modelled as through the
+    #: tangent at ``t_cal_c`` (which also covers a line of another gain and offset).
+    line_temps_c: NDArray | None = None
+
+    def scale(self, name: str) -> float:
+        """Noise scale (K) of data set ``name`` (1 when not set)."""
+        return float(self.scales.get(name, 1.0))
 
     @classmethod
     def from_bundle(cls, bundle: Bundle) -> BundleData:
         ambient = bundle.ambient_c if bundle.ambient_c is not None else 25.0
+        # curves in volts go through the *linear* calibration, as the calibration data set
+        # does: a curvature of the TSP then shows once, as tsp-nonlinearity, never twice
+        line = bundle.calibration
+        if line is not None and hasattr(line, "fit"):  # a K-factor is linear already
+            line = line.fit(1)
         curves = []
         for i, c in enumerate(bundle.cooling):
-            tj = np.asarray(bundle.cooling_tj_c(i), dtype=float)
+            tj = np.asarray(c.tj_c if c.tj_c is not None else line.temperature(c.v_tsp_v),
+                            dtype=float)
             rows, steady = bundle.cooling_reference_c(i)
             if steady is None:
                 steady = float(rows[0]) if rows is not None else ambient
@@ -164,11 +276,13 @@ class BundleData:
                           float(p.sample_window_s))
         cal = None
         points = getattr(bundle.calibration, "temp_c", None)  # a K-factor has no points
-        if points is not None and np.unique(points).size >= 3:
-            line = bundle.calibration.fit(1)
+        if line is not None and points is not None and np.unique(points).size >= 3:
             cal = CalData(np.asarray(bundle.calibration.temp_c, float),
                           np.asarray(line.temperature(bundle.calibration.v_tsp_v), float))
-        return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle")
+        in_volts = bool(bundle.cooling) and all(c.tj_c is None for c in bundle.cooling)
+        return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle",
+                   line_temps_c=np.asarray(points, float) if in_volts and points is not None
+                   else None)
 
     @property
     def datasets(self) -> tuple[str, ...]:
@@ -283,7 +397,7 @@ def tc_frozen_ladder(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: 
 
 def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     p = effect.params
-    return (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
+    return p["latent_j"] > 0 and (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
             and t_lo_c < p["t_c"] + BAND_REACH * p["width_k"])
 
 
@@ -326,12 +440,15 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     def scale(theta: NDArray) -> float:
         return max(0.05, 1.0 + alpha * (tref_c + float(theta[0]) - t0))
 
+    capacity = CATALOGUE[effect.name].extra_capacitance
+
     def minv(theta: NDArray, y: NDArray) -> NDArray:
-        cx = effect.extra_capacitance(node, tref_c + float(theta[node]))
+        cx = capacity(effect, node, tref_c + float(theta[node]))
         cy = cinv @ y
         return cy - cx * ce * cy[node] / (1 + cx * ce[node])
 
     def rhs(_t: float, theta: NDArray) -> NDArray:
+        check_time()
         return minv(theta, -g @ theta / scale(theta))
 
     def jac(_t: float, theta: NDArray) -> NDArray:  # the resistance's own slope left out
@@ -348,9 +465,11 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
 
     left_band.terminal = True  # type: ignore[attr-defined]
     left_band.direction = -1  # type: ignore[attr-defined]
-    sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
-                    rtol=1e-7, atol=1e-6, first_step=min(f.tau) / 1000,
-                    events=left_band if tc is None else None)
+    with warnings.catch_warnings():  # a failed integration is reported by sol.success
+        warnings.simplefilter("ignore")
+        sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
+                        rtol=PC_RTOL, atol=PC_ATOL_K, first_step=min(f.tau) / 1000,
+                        events=left_band if tc is None else None)
     if not sol.success:
         raise SimulationError(f"phase-change cooling integration failed: {sol.message}")
     out = np.empty(t.shape)
@@ -395,30 +514,97 @@ def _effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
 
 
 def tsp_reading(temp_c: ArrayLike, effect: Effect | None) -> NDArray:
-    """What a linear-calibrated TSP reads at true temperature ``temp_c``."""
+    """What a linear-calibrated TSP reads at true temperature ``temp_c``:
+    ``T + q (T − T_cal)² + c (T − T_cal)³`` (``c`` in the cubic form only).
+
+    >>> e = Effect.create("tsp-nonlinearity", "cubic", quad_k_per_k2=1e-3, cub_k_per_k3=1e-5)
+    >>> round(float(tsp_reading(35.0, e)), 9)
+    35.11
+    """
     t = np.asarray(temp_c, dtype=float)
     if effect is None:
         return t
-    return t + effect.params["quad_k_per_k2"] * (t - effect.params["t_cal_c"]) ** 2
+    p = effect.params
+    d = t - p["t_cal_c"]
+    out = t + p["quad_k_per_k2"] * d ** 2
+    if effect.form == "cubic":
+        out = out + p["cub_k_per_k3"] * d ** 3
+    return out
 
 
 def tsp_true(read_c: ArrayLike, effect: Effect | None) -> NDArray:
-    """Inverse of :func:`tsp_reading` (the root on the calibrated branch)."""
+    """Inverse of :func:`tsp_reading` (the root on the calibrated branch; Newton steps from the
+    quadratic root for the cubic form)."""
     r = np.asarray(read_c, dtype=float)
-    if effect is None or effect.params["quad_k_per_k2"] == 0:
+    if effect is None:
         return r
     q, tc = effect.params["quad_k_per_k2"], effect.params["t_cal_c"]
-    disc = np.clip(1 + 4 * q * (r - tc), 0.0, None)
-    return tc + 2 * (r - tc) / (1 + np.sqrt(disc))
+    t = r
+    if q != 0:
+        disc = np.clip(1 + 4 * q * (r - tc), 0.0, None)
+        t = tc + 2 * (r - tc) / (1 + np.sqrt(disc))
+    c = effect.params["cub_k_per_k3"] if effect.form == "cubic" else 0.0
+    if c != 0:
+        for _ in range(30):
+            d = t - tc
+            slope = np.maximum(1 + 2 * q * d + 3 * c * d * d, 0.05)
+            step = (t + q * d * d + c * d ** 3 - r) / slope
+            t = t - step
+            if np.all(np.abs(step) < 1e-12 * (1 + np.abs(t))):
+                break
+    return t
 
 
-def transient_offset(t_s: ArrayLike, effect: Effect | None) -> NDArray:
-    """Reading error (K) of the electrical transient at ``t_s`` after the cut."""
+def transient_offset(t_s: ArrayLike, effect: Effect | None, power_w: float = 0.0) -> NDArray:
+    """Reading error (K) of the electrical transient at ``t_s`` after cutting ``power_w``.
+
+    >>> e = Effect.create("electrical-transient", "power", k_per_w=-10.0, masked_s=1e-4)
+    >>> round(float(transient_offset(0.0, e, 0.3)), 9)
+    -3.0
+    """
     t = np.asarray(t_s, dtype=float)
     if effect is None or effect.params["masked_s"] <= 0:
         return np.zeros(t.shape)
     p = effect.params
-    return p["amplitude_k"] * np.exp(-TRANSIENT_RATE * t / p["masked_s"])
+    amp = p["k_per_w"] * power_w if effect.form == "power" else p["amplitude_k"]
+    out = amp * np.exp(-TRANSIENT_RATE * t / p["masked_s"])
+    if effect.form == "ringing":
+        out = out * np.cos(2 * math.pi * p["ring_hz"] * t)
+    return out
+
+
+def calibrated_reading(temp_c: ArrayLike, effect: Effect | None,
+                       line_temps_c: NDArray | None) -> NDArray:
+    """What the bench reads at true temperature ``temp_c`` through its linear calibration:
+    fitted by least squares to the calibration points at ``line_temps_c`` (the line absorbs
+    the straight part of the TSP's nonlinearity, so a curvature cannot pose as a gain), or,
+    without calibration points, the tangent at ``t_cal_c`` (:func:`tsp_reading`).
+
+    >>> e = Effect.create("tsp-nonlinearity", quad_k_per_k2=1e-3, t_cal_c=20.0)
+    >>> round(float(calibrated_reading(50.0, e, np.array([20.0, 40.0, 60.0, 80.0]))), 4)
+    49.5283
+    """
+    r = tsp_reading(temp_c, effect)
+    if effect is None or line_temps_c is None:
+        return r
+    slope, offset = np.polyfit(line_temps_c, tsp_reading(line_temps_c, effect), 1)
+    return (r - offset) / slope
+
+
+def calibration_reading(temp_c: NDArray, effect: Effect | None) -> NDArray:
+    """What the least-squares linear calibration of the points at ``temp_c`` reads there when
+    the TSP reads :func:`tsp_reading` through its true tangent: the calibration regresses the
+    TSP (here that reading) on ``T`` and inverts the line, which absorbs the straight part of
+    the nonlinearity and leaves the bow (``q (u − P u)/(1 + q b_u)`` for the quadratic form).
+
+    >>> t = np.array([20.0, 40.0, 60.0, 80.0])
+    >>> e = Effect.create("tsp-nonlinearity", quad_k_per_k2=1e-3, t_cal_c=20.0)
+    >>> [round(float(x - y), 4) for x, y in zip(calibration_reading(t, e), t)]
+    [0.3774, -0.3774, -0.3774, 0.3774]
+    """
+    if effect is None:
+        return temp_c.copy()
+    return calibrated_reading(temp_c, effect, temp_c)
 
 
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
@@ -445,6 +631,7 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
     tc, pc, sw = (fx.get(n) for n in ("temperature-coefficient", "phase-change",
                                       "sample-window"))
     window = float(sw.params["window_s"]) if sw is not None else data.window_s
+    average = sw is not None and sw.form == "average" and window > 0
     out = np.empty(data.freq_hz.size)
     for i, (f, d, p, tref) in enumerate(zip(data.freq_hz, data.duty, data.power_w, data.tref_c,
                                             strict=True)):
@@ -454,8 +641,31 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
                                    p * d)
         if pc is not None and _band_reached(pc, tref, tref + p * _foster(lad).rth):
             lad = pc_frozen_ladder(lad, pc, tref, p * d)
-        out[i] = tref + steady_state(lad, p, f, d, window).reading_k
+        if average:
+            out[i] = tref + window_average_k(lad, p, f, d, window)
+        else:
+            out[i] = tref + steady_state(lad, p, f, d, window).reading_k
     return out
+
+
+def window_average_k(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: float,
+                     window_s: float) -> float:
+    """Mean junction rise (K) over a power-off window of ``window_s`` that starts when an
+    on-phase of the periodic steady state ends: each Foster stage starts at its peak ``pᵢ``
+    and decays, so the mean is ``Σ pᵢ τᵢ/w (1 − e^{−w/τᵢ})``.
+
+    >>> lad = Foster.from_tau([10.0], [1e-3])
+    >>> round(window_average_k(lad, 1.0, 1e6, 0.5, 1e-3), 3) == round(5 * (1 - math.exp(-1)), 3)
+    True
+    """
+    from .pwm import steady_state
+
+    f = _foster(ladder)
+    total = 0.0
+    for r, tau in zip(f.r, f.tau, strict=True):
+        peak = steady_state(Foster.from_tau([r], [tau]), power_w, freq_hz, duty).peak_k
+        total += peak * tau / window_s * -math.expm1(-window_s / tau)
+    return total
 
 
 def predict(data: BundleData, ladder: Foster | Cauer,
@@ -471,19 +681,14 @@ def predict(data: BundleData, ladder: Foster | Cauer,
     fx = _effects_map(effects)
     tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
     out: dict[str, NDArray] = {}
+    line = data.line_temps_c
     for c in data.cooling:
-        out[c.name] = tsp_reading(cooling_true_c(c, ladder, effects), tsp) + \
-            transient_offset(c.t_s, tr)
+        out[c.name] = calibrated_reading(cooling_true_c(c, ladder, effects), tsp, line) + \
+            transient_offset(c.t_s, tr, c.power_w)
     if data.pwm is not None:
-        out["pwm"] = tsp_reading(pwm_true_c(data.pwm, ladder, effects), tsp)
+        out["pwm"] = calibrated_reading(pwm_true_c(data.pwm, ladder, effects), tsp, line)
     if data.calibration is not None:
-        cal = data.calibration
-        model = cal.temp_c.copy()
-        if tsp is not None:
-            q = tsp.params["quad_k_per_k2"]
-            basis, b_u = cal.curvature_basis(tsp.params["t_cal_c"])
-            model = model + q * basis / (1 + q * b_u)
-        out["calibration"] = model
+        out["calibration"] = calibration_reading(data.calibration.temp_c, tsp)
     return out
 
 
@@ -521,8 +726,10 @@ def transient_spans(data: BundleData) -> dict[str, float]:
 def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
     """The linear ladder the diagnosis starts from: :func:`reference_ladder` (order chosen by
     BIC on the lowest-power curve), then refitted jointly to every cooling curve's readings
-    outside their detected transients (same order), so that the effects are compared with
-    the best linear model of all the curves rather than of one.
+    outside their detected transients, so that the effects are compared with the best linear
+    model of all the curves rather than of one. With ``order="auto"`` one and two more stages
+    are tried too, and the joint fit with the lowest BIC is kept (one sparse, noisy curve
+    can hide a stage that all of them show).
 
     >>> from spicethermal.scenarios import scenario_bundle
     >>> lad = baseline_ladder(BundleData.from_bundle(scenario_bundle("clean", seed=0)))
@@ -532,9 +739,33 @@ def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
     ladder = reference_ladder(data, order)
     if len(data.cooling) < 2:
         return ladder
-    lad, _, _ = joint_fit(data, [c.name for c in data.cooling], ladder, True, [], [], [],
-                          lambda x: [], exclude=transient_spans(data))
-    return lad
+    names = [c.name for c in data.cooling]
+    spans = transient_spans(data)
+    orders = [ladder.order]
+    if order == "auto":
+        orders += [m for m in (ladder.order + 1, ladder.order + 2) if m <= MAX_BASELINE_ORDER]
+    best = None
+    for m in orders:
+        try:
+            start = ladder if m == ladder.order else reference_ladder(data, m)
+            lad, _, res = joint_fit(data, names, start, True, [], [], [], lambda x: [],
+                                    exclude=spans)
+        except (FitError, DataFormatError, SimulationError, *NUMERICAL_ERRORS):
+            continue
+        n = max(res.fun.size, 2)
+        bic = n * math.log(max(2 * res.cost, 1e-300) / n) + 2 * m * math.log(n)
+        pred = predict(_subset(data, names), lad)
+        per_curve = [float(np.sum(((pred[c.name] - c.tj_c)[c.t_s >= spans.get(c.name, 0.0)])
+                                  ** 2)) for c in data.cooling]
+        # more stages only for a ladder that is plainly too short: every curve fits better
+        # and the RMS falls ORDER_GAIN× (a slow extra stage that one curve's drift asks for
+        # would otherwise hide what the diagnosis must see)
+        if best is None or (bic < best[0] and res.cost < best[2] / ORDER_GAIN ** 2
+                            and all(a <= b for a, b in zip(per_curve, best[3], strict=True))):
+            best = (bic, lad, res.cost, per_curve)
+    if best is None:
+        raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
+    return best[1]
 
 
 # --------------------------------------------------------------------------------------------
@@ -555,49 +786,85 @@ def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
     return BundleData(tuple(c for c in data.cooling if c.name in names),
                       data.pwm if "pwm" in names else None,
                       data.calibration if "calibration" in names else None,
-                      data.ambient_c, data.source)
+                      data.ambient_c, data.source, data.scales, data.line_temps_c)
 
 
-def _lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
-         hi: Sequence[float], **kw: Any):
+def robust_lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
+               hi: Sequence[float], **kw: Any) -> Any:
+    """:func:`scipy.optimize.least_squares` made robust: a trial point whose forward model
+    fails numerically (overflow, no convergence, a :class:`~spicethermal.errors.SimulationError`)
+    gets a large residual; past the :func:`time_limit` the best point so far is returned (its
+    ``status`` is ``-9``). Raises :class:`~spicethermal.errors.FitError` when the start fails."""
     from scipy.optimize import least_squares
 
     lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     x0 = np.asarray(x0, dtype=float)
     pad = 1e-9 * np.maximum(1.0, np.abs(x0))
     x0 = np.clip(x0, lo_a + pad, hi_a - pad)
-    size = fun(x0).size
+    best = SimpleNamespace(x=x0, cost=math.inf, fun=None, status=-9, nfev=0)
+
+    def evaluate(x: NDArray) -> NDArray:
+        check_time()
+        with np.errstate(over="raise", invalid="raise", divide="raise"):
+            return np.asarray(fun(x), dtype=float)
+
+    try:
+        r0 = evaluate(x0)
+    except (SimulationError, DataFormatError, *NUMERICAL_ERRORS) as exc:
+        raise FitError(f"the forward model fails at the start point: {exc}") from None
+    if not np.all(np.isfinite(r0)):
+        raise FitError("the forward model is not finite at the start point")
+    size = r0.size
 
     def safe(x: NDArray) -> NDArray:
         try:
-            with np.errstate(over="raise", invalid="raise"):
-                r = fun(x)
-        except (SimulationError, FloatingPointError, DataFormatError, ValueError,
-                np.linalg.LinAlgError):
+            r = evaluate(x)
+        except TimeLimitError:
+            raise
+        except (SimulationError, DataFormatError, *NUMERICAL_ERRORS):
             return np.full(size, 1e6)
-        return r if np.all(np.abs(r) < 1e6) else np.full(size, 1e6)
+        if not np.all(np.abs(r) < 1e6):
+            return np.full(size, 1e6)
+        cost = 0.5 * float(r @ r)
+        best.nfev += 1
+        if cost < best.cost:
+            best.x, best.cost, best.fun = np.array(x), cost, r
+        return r
 
-    return least_squares(safe, x0, bounds=(lo_a, hi_a), x_scale="jac", **kw)
+    kw.setdefault("max_nfev", MAX_NFEV)
+    kw.setdefault("x_scale", "jac")
+    for key in ("ftol", "xtol", "gtol"):
+        kw.setdefault(key, FIT_TOL)
+    try:
+        return least_squares(safe, x0, bounds=(lo_a, hi_a), **kw)
+    except TimeLimitError:
+        if best.fun is None:
+            raise
+        return best
 
 
 def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
               fit_ladder: bool, x0: Sequence[float], lo: Sequence[float], hi: Sequence[float],
               build: Callable[[NDArray], list[Effect]], *,
               exclude: Mapping[str, float] | None = None,
+              keep_before: Mapping[str, float] | None = None,
               max_nfev: int | None = None,
-              diff_step: float | None = None) -> tuple[Foster, list[Effect], Any]:
+              diff_step: float | None = None,
+              tol: float = FIT_TOL) -> tuple[Foster, list[Effect], Any]:
     """Least squares of the readings of data sets ``names`` over the effect parameters
     ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
     ``log R`` and ``log τ`` (same order). Cooling points before ``exclude[name]`` s are left
-    out. When the ladder is fitted, each curve's steady reading just before the cut is a data
+    out, and so are those at or after ``keep_before[name]`` s. When the ladder is fitted,
+    each curve's steady reading just before the cut is a data
     point too (it pins Rth). ``diff_step`` is the relative finite-difference step (larger than
     the default for forward models solved by an adaptive integrator). Returns the ladder, the
     effects and scipy's result."""
     f = _foster(ladder)
     m = f.order if fit_ladder else 0
     sub = _subset(data, names)
-    keep = {n: (sub.curve(n).t_s >= (exclude or {}).get(n, 0.0)) if n.startswith("cooling")
-            else slice(None) for n in names}
+    keep = {n: ((sub.curve(n).t_s >= (exclude or {}).get(n, 0.0))
+                & (sub.curve(n).t_s < (keep_before or {}).get(n, math.inf)))
+            if n.startswith("cooling") else slice(None) for n in names}
     meas = {n: data.measured(n)[keep[n]] for n in names}
 
     def split(x: NDArray) -> tuple[Foster, NDArray]:
@@ -611,21 +878,22 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         lad, xe = split(x)
         effects = build(xe)
         pred = predict(sub, lad, effects)
-        parts = [pred[n][keep[n]] - meas[n] for n in names]
+        parts = [(pred[n][keep[n]] - meas[n]) / data.scale(n) for n in names]
         tsp = _effects_map(effects).get("tsp-nonlinearity")
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
-            parts.append(tsp_reading(cooling_true_c(top, lad, effects), tsp) - c.tj_steady_c)
+            parts.append((calibrated_reading(cooling_true_c(top, lad, effects), tsp,
+                                             data.line_temps_c) - c.tj_steady_c)
+                         / data.scale(c.name))
         return np.concatenate(parts)
 
-    if max_nfev is None and m:
-        max_nfev = MAX_NFEV_WITH_LADDER
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
     big = np.full(2 * m, np.inf)
-    res = _lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
+    res = robust_lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
                np.concatenate([-big, np.asarray(lo, float)]),
-               np.concatenate([big, np.asarray(hi, float)]), max_nfev=max_nfev,
-               diff_step=diff_step)
+               np.concatenate([big, np.asarray(hi, float)]),
+               **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step,
+               ftol=tol, xtol=tol, gtol=tol)
     lad, xe = split(res.x)
     return lad, build(xe), res
 
@@ -635,30 +903,34 @@ def _others(effects: Sequence[Effect], name: str) -> list[Effect]:
 
 
 def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
-                      effects: Sequence[Effect] = ()) -> EffectFit:
-    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected)."""
+                      effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected), for
+    each form (reading at the end of the window, averaged over it); three starts each."""
     if data.pwm is None:
         raise FitError("sample-window needs a PWM data set")
     base = _others(effects, "sample-window")
-
-    def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("sample-window", window_s=float(x[0]) * 1e-6)]
-
     hi_us = 1e6 * min(1.0, 20.0 / float(np.min(data.pwm.freq_hz)))
-    best = None
-    for s in (10.0, 100.0, 1000.0):
-        if s < hi_us:
-            r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
-            if best is None or r[2].cost < best[2].cost:
-                best = r
-    lad, effs, _ = best
-    return EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s})
+    out = []
+    for form in CATALOGUE["sample-window"].forms:
+        def build(x: NDArray, form: str = form) -> list[Effect]:
+            return [*base, Effect.create("sample-window", form, window_s=float(x[0]) * 1e-6)]
+
+        best = None
+        for s in (10.0, 100.0, 1000.0):
+            if s < hi_us:
+                r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
+                if best is None or r[2].cost < best[2].cost:
+                    best = r
+        lad, effs, _ = best
+        out.append(EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s}))
+    return out
 
 
 def fit_temperature_coefficient(data: BundleData, ladder: Foster | Cauer,
-                                effects: Sequence[Effect] = ()) -> EffectFit:
+                                effects: Sequence[Effect] = ()) -> list[EffectFit]:
     """α (``t0_c`` = the reference temperature) jointly with the ladder at ``T0`` from every
-    cooling curve; the initial α from ``1/Rth(P) = 1/Rth0 − α P`` across the curves."""
+    cooling curve; two starts: α from ``1/Rth(P) = 1/Rth0 − α P`` across the curves, and the
+    given (linear) ladder with α = 0, so the result never fits worse than that ladder."""
     if not data.cooling:
         raise FitError("temperature-coefficient needs cooling curves")
     f = _foster(ladder)
@@ -685,10 +957,13 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster | Cauer,
         return [*base, Effect.create("temperature-coefficient", alpha_per_k=float(x[0]) * 1e-3,
                                      t0_c=t0)]
 
-    lad, effs, _ = joint_fit(data, names, start, True, [alpha0 * 1e3], [-15.0], [15.0], build,
-                             exclude=transient_spans(data) if "electrical-transient" not in
-                             _effects_map(base) else None)
-    return EffectFit(effs[-1], lad, 1, {"powers_w": powers, "rth_k_per_w": rths})
+    exclude = transient_spans(data) if "electrical-transient" not in _effects_map(base) \
+        else None
+    fits = [joint_fit(data, names, lad0, True, [a0 * 1e3], [-15.0], [15.0], build,
+                      exclude=exclude)
+            for lad0, a0 in ([(start, alpha0)] if alpha0 else []) + [(f, 0.0)]]
+    lad, effs, _ = min(fits, key=lambda r: r[2].cost)
+    return [EffectFit(effs[-1], lad, 1, {"powers_w": powers, "rth_k_per_w": rths})]
 
 
 def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]) -> float:
@@ -703,8 +978,9 @@ def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]
 
 
 def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
-                     effects: Sequence[Effect] = ()) -> EffectFit:
-    """Latent heat, band centre and width (at the junction node) from the cooling curves,
+                     effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Latent heat, band centre, width and node (the best node of the grid) from the cooling
+    curves,
     with the ladder of the lowest-power curve held: the band is sought above that curve's
     temperatures (a band it crossed would be in its ladder), up to the hottest reading.
     Start: the best point of a grid of latent heats × centres (where the hottest curve's
@@ -729,9 +1005,11 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     span = t_hi - t_lo
     c_scale = float(max(ref.c))
 
+    node = 0
+
     def build(x: NDArray) -> list[Effect]:
         return [*base, Effect.create("phase-change", latent_j=math.exp(x[0]) * c_scale,
-                                     t_c=float(x[1]), width_k=float(x[2]), node=0)]
+                                     t_c=float(x[1]), width_k=float(x[2]), node=node)]
 
     centres = [float(np.clip(_band_start(data, ref, base), t_lo + 0.02 * span,
                              t_hi - 0.02 * span))]
@@ -740,38 +1018,65 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         centres.append(default)
     centres += list(np.linspace(t_lo + 0.15 * span, t_hi - 0.15 * span, 3))
     lo = [math.log(1e-6), t_lo, 0.2]
-    hi = [math.log(10.0), t_hi, max(0.3, span / 4)]
+    hi = [math.log(100.0), t_hi, max(0.3, span / 4)]
     width0 = float(np.clip(1.5, lo[2] * 1.01, hi[2] * 0.99))
     sub = _subset(data, names)
-    meas = np.concatenate([data.measured(n) for n in names])
 
     def cost(x: Sequence[float]) -> float:
         try:
-            pred = predict(sub, ref, build(np.asarray(x, dtype=float)))
-        except SimulationError:
+            return bounded(lambda: sse(sub, ref, build(np.asarray(x, dtype=float))),
+                           PC_EVAL_S, math.inf)
+        except TimeLimitError:
+            raise
+        except (SimulationError, *NUMERICAL_ERRORS):
             return math.inf
-        return float(np.sum((np.concatenate([pred[n] for n in names]) - meas) ** 2))
 
-    # coarse grid over (centre, latent heat), then least squares from the best point
-    grid = [(cost([math.log(fr), tc, width0]), [math.log(fr), tc, width0])
-            for tc in centres for fr in (1e-3, 1e-2, 3e-2, 1e-1, 3e-1)]
-    x0 = min(grid, key=lambda g: g[0])[1]
-    lad, effs, res = joint_fit(data, names, ref, False, x0, lo, hi, build, max_nfev=40,
-                               diff_step=1e-3)
-    pred = predict(sub, ladder, base)
-    held = 0.5 * float(np.sum((np.concatenate([pred[n] for n in names]) - meas) ** 2))
+    # coarse grid over (node, centre, latent heat), then least squares from the best point
+    grid = []
+    stop = time.process_time() + PC_GRID_S
+    points = [(node, fr, tc) for node in range(ref.order)
+              for tc in (centres if node == 0 else centres[:1])
+              for fr in ((1e-3, 1e-2, 1e-1, 1.0) if node == 0 else (0.1, 1.0, 10.0))]
+    for node, fr, tc in points:  # noqa: B007 (build reads node)
+        if grid and time.process_time() > stop:
+            break
+        grid.append((cost([math.log(fr), tc, width0]), node, [math.log(fr), tc, width0]))
+    no_band = sse(sub, ref, base)
+    if min(g[0] for g in grid) >= no_band:  # no band anywhere helps: nothing to refine
+        return [EffectFit(switched_off("phase-change", "logistic", data), _foster(ladder), 4,
+                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
+    junction = min((g for g in grid if g[1] == 0), key=lambda g: g[0])
+    outer = min(grid, key=lambda g: g[0])
+    fits = []
+    for _, node, x0 in [junction] + ([outer] if outer[1] != 0 else []):  # noqa: B007 (build)
+        fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
+                              tol=PC_FIT_TOL, max_nfev=PC_NFEV))
+    lad, effs, res = min(fits, key=lambda r: r[2].cost)
+    held = 0.5 * sse(sub, ladder, base)
     if res.cost >= held:  # no band does better than the given ladder without one
         p = effs[-1].params
-        return EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
-                                       width_k=p["width_k"], node=0), _foster(ladder), 3,
-                         {"t_range_c": (t_lo, t_hi), "no_gain": True})
-    return EffectFit(effs[-1], lad, 3, {"t_range_c": (t_lo, t_hi)})
+        return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
+                                        width_k=p["width_k"], node=0), _foster(ladder), 4,
+                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
+    # then the ladder with the band, jointly (the reference curve alone fixes it poorly)
+    node = int(effs[-1].params["node"])
+    try:
+        with time_limit(PC_JOINT_BUDGET_S):
+            lad2, effs2, _ = joint_fit(data, names, lad, True, res.x, lo, hi, build,
+                                       diff_step=1e-3, tol=PC_FIT_TOL)
+        with unlimited():
+            if sse(data, lad2, effs2) < sse(data, lad, effs):
+                lad, effs = lad2, effs2
+    except (FitError, TimeLimitError):
+        pass
+    return [EffectFit(effs[-1], lad, 4, {"t_range_c": (t_lo, t_hi)})]
 
 
 def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
-                             effects: Sequence[Effect] = ()) -> EffectFit:
-    """Amplitude and span of the transient jointly with the ladder, from every point of every
-    cooling curve (the early ones included)."""
+                             effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Each form of the transient: its parameters first on the early points of every cooling
+    curve with the ladder held (a multi-start), then jointly with the ladder from every point
+    of every cooling curve (the early ones included)."""
     if not data.cooling:
         raise FitError("electrical-transient needs cooling curves")
     names = [c.name for c in data.cooling]
@@ -779,22 +1084,53 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
     first = min(float(c.t_s[0]) for c in data.cooling)
     pred = predict(_subset(data, names), ladder, base)
     amp0 = float(np.mean([data.measured(n)[0] - pred[n][0] for n in names]))
+    per_w0 = float(np.mean([(data.measured(c.name)[0] - pred[c.name][0]) / c.power_w
+                            for c in data.cooling]))
     spans = [s for s in transient_spans(data).values() if s > 0]
     span0 = max(float(np.median(spans)) if spans else 1e-4, 10 * first)
+    lspan = math.log10(span0)
+    lo_s, hi_s = math.log10(first) - 1, 0.0
+    forms = {  # form: (starts, lower, upper, parameters from x)
+        "fixed": ([[amp0, lspan]], [-1e3, lo_s], [1e3, hi_s],
+                  lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1]}),
+        "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
+                  lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
+        "ringing": ([[amp0, ls, lf] for ls in (lspan, lspan + 0.5)
+                     for lf in (-0.3, 0.0, 0.3, 0.6, 0.9)],
+                    [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
+                    lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
+                               "ring_hz": 10 ** (x[2] - x[1])}),
+    }
+    early = {n: 10 * span0 for n in names}
+    n_early = sum(int(np.sum(c.t_s < early[c.name])) for c in data.cooling)
+    held = {}
+    for form, (starts, lo, hi, params) in forms.items():
+        def build(x: NDArray, form: str = form, params=params) -> list[Effect]:
+            return [*base, Effect.create("electrical-transient", form,
+                                         **{k: float(v) for k, v in params(x).items()})]
 
-    def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("electrical-transient", amplitude_k=float(x[0]),
-                                     masked_s=10 ** float(x[1]))]
-
-    lad, effs, _ = joint_fit(data, names, ladder, True, [amp0, math.log10(span0)],
-                             [-1e3, math.log10(first) - 1], [1e3, 0.0], build)
-    return EffectFit(effs[-1], lad, 2, {})
+        res = min((joint_fit(data, names, ladder, False, x0, lo, hi, build,
+                             keep_before=early)[2] for x0 in starts), key=lambda r: r.cost)
+        held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
+    # the ladder is refitted with the default form and with the best other form when the
+    # early points prefer it decisively
+    best = min(held, key=lambda k: held[k][0])
+    refine = ["fixed"] + ([best] if best != "fixed" and held[best][0] < held["fixed"][0] - 10
+                          else [])
+    out = []
+    for form in refine:
+        _, x0, build = held[form]
+        lo, hi = forms[form][1], forms[form][2]
+        lad, effs, _ = joint_fit(data, names, ladder, True, list(x0), lo, hi, build)
+        out.append(EffectFit(effs[-1], lad, len(lo), {}))
+    return out
 
 
 def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
-                         effects: Sequence[Effect] = ()) -> EffectFit:
-    """``q`` and ``t_cal_c`` jointly with the ladder from every data set: the calibration
-    residuals fix ``q``, the readings of the curves and the PWM grid ``t_cal_c``."""
+                         effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """``q`` and ``t_cal_c`` (and, in the cubic form, ``c``) jointly with the ladder from every
+    data set: the calibration residuals fix the curvature, the readings of the curves and the
+    PWM grid ``t_cal_c``. The cubic form starts from the quadratic fit."""
     names = list(data.datasets)
     if not names:
         raise FitError("tsp-nonlinearity needs data")
@@ -808,20 +1144,30 @@ def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
     temps = np.concatenate([data.measured(n) for n in names])
     lo_t, hi_t = float(np.min(temps)) - 50, float(np.max(temps)) + 50
     qmax = 1e4 * 0.2 / max(hi_t - lo_t, 1.0)
+    cmax = 1e6 * 0.2 / max(hi_t - lo_t, 1.0) ** 2
+    exclude = transient_spans(data) if "electrical-transient" not in _effects_map(base) \
+        else None
 
     def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("tsp-nonlinearity", quad_k_per_k2=float(x[0]) * 1e-4,
-                                     t_cal_c=float(x[1]))]
+        cubic = {"cub_k_per_k3": float(x[2]) * 1e-6} if len(x) > 2 else {}
+        return [*base, Effect.create("tsp-nonlinearity", "cubic" if cubic else "quadratic",
+                                     quad_k_per_k2=float(x[0]) * 1e-4, t_cal_c=float(x[1]),
+                                     **cubic)]
 
     x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]
-    lad, effs, _ = joint_fit(data, names, ladder, bool(data.cooling), x0, [-qmax, lo_t],
-                             [qmax, hi_t], build,
-                             exclude=transient_spans(data) if "electrical-transient" not in
-                             _effects_map(base) else None)
-    return EffectFit(effs[-1], lad, 2, {})
+    fit_ladder = bool(data.cooling)
+    lad, effs, res = joint_fit(data, names, ladder, fit_ladder, x0, [-qmax, lo_t], [qmax, hi_t],
+                               build, exclude=exclude)
+    out = [EffectFit(effs[-1], lad, 2, {})]
+    q = effs[-1].params
+    x1 = [q["quad_k_per_k2"] * 1e4, q["t_cal_c"], 0.0]
+    lad3, effs3, _ = joint_fit(data, names, lad, fit_ladder, x1, [-qmax, lo_t, -cmax],
+                               [qmax, hi_t, cmax], build, exclude=exclude)
+    out.append(EffectFit(effs3[-1], lad3, 3, {}))
+    return out
 
 
-FITTERS: Mapping[str, Callable[..., EffectFit]] = {
+FITTERS: Mapping[str, Callable[..., list[EffectFit]]] = {
     "temperature-coefficient": fit_temperature_coefficient,
     "phase-change": fit_phase_change,
     "sample-window": fit_sample_window,
@@ -840,9 +1186,65 @@ def needs(name: str, data: BundleData) -> str:
     return ""
 
 
+def switched_off(name: str, form: str, data: BundleData) -> Effect:
+    """Effect ``name`` at its neutral parameters (no latent heat, no α, no error; the declared
+    sample window): what a nested model reduces to.
+
+    >>> switched_off("temperature-coefficient", "junction", BundleData()).params["alpha_per_k"]
+    0.0
+    """
+    if name == "sample-window":
+        return Effect.create(name, form, window_s=data.pwm.window_s if data.pwm else 0.0)
+    return Effect.create(name, form)
+
+
+def sse(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Effect]) -> float:
+    """Sum of squared residuals over every point of every data set, each data set's divided
+    by its noise scale squared (K² when no scale is set)."""
+    pred = predict(data, ladder, effects)
+    return float(sum(np.sum((pred[n] - data.measured(n)) ** 2) / data.scale(n) ** 2
+                     for n in data.datasets))
+
+
+def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
+                     effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Every form of effect ``name`` fitted on top of ``ladder`` and ``effects``.
+
+    A nested model never fits worse than the model it extends: a form whose fit leaves a
+    larger squared error than ``ladder`` and ``effects`` alone is replaced by the effect
+    switched off (:func:`switched_off`) on ``ladder`` (``facts["no_gain"]``). Raises
+    :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
+    """
+    if name not in FITTERS:
+        from .effects import spec
+
+        spec(name)  # the catalogue's error for an unknown name
+        raise FitError(f"effect {name!r} has no fit")
+    why = needs(name, data)
+    if why:
+        raise FitError(f"cannot fit {name}: {why}")
+    others = _others(effects, name)
+    out = []
+    fits = FITTERS[name](data, ladder, effects)
+    with unlimited():
+        off = sse(data, ladder, others)
+    for fit in fits:
+        try:
+            with unlimited():
+                worse = sse(data, fit.ladder, [*others, fit.effect]) > off
+        except (SimulationError, *NUMERICAL_ERRORS):
+            worse = True
+        if worse:
+            fit = EffectFit(switched_off(name, fit.effect.form, data), _foster(ladder),
+                            fit.n_params, {**fit.facts, "no_gain": True})
+        out.append(fit)
+    return out
+
+
 def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
                effects: Sequence[Effect] = ()) -> EffectFit:
-    """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``.
+    """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``: the form
+    with the lowest ``N ln(SSE/N) + k ln N`` over every point (see :func:`fit_effect_forms`).
 
     Raises :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
 
@@ -851,18 +1253,30 @@ def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
     >>> from spicethermal.scenarios import scenario_bundle
     >>> data = BundleData.from_bundle(scenario_bundle("temperature-coefficient", seed=0))
     >>> fit = fit_effect(data, baseline_ladder(data), "temperature-coefficient")
-    >>> round(fit.effect.params["alpha_per_k"], 4), fit.n_params
-    (-0.003, 1)
+    >>> round(fit.effect.params["alpha_per_k"], 4), fit.n_params, fit.effect.form
+    (-0.003, 1, 'junction')
     """
-    if name not in FITTERS:
-        from .effects import spec
+    fits = fit_effect_forms(data, ladder, name, effects)
+    n = max(sum(data.measured(d).size for d in data.datasets), 2)
+    others = _others(effects, name)
 
-        spec(name)  # the catalogue's error for an unknown name
-        raise FitError(f"effect {name!r} has no fit")  # pragma: no cover
-    why = needs(name, data)
-    if why:
-        raise FitError(f"cannot fit {name}: {why}")
-    return FITTERS[name](data, ladder, effects)
+    def bic(fit: EffectFit) -> float:
+        err = max(sse(data, fit.ladder, [*others, fit.effect]), 1e-300)
+        return n * math.log(err / n) + fit.n_params * math.log(n)
+
+    return fits[choose_form([bic(f) for f in fits])]
+
+
+def choose_form(bics: Sequence[float]) -> int:
+    """Index of the form to keep among forms with criteria ``bics`` (first = the default
+    form): the default unless another lowers the criterion by more than
+    :data:`FORM_BIC_MARGIN`.
+
+    >>> choose_form([100.0, 95.0]), choose_form([100.0, 80.0, 85.0])
+    (0, 1)
+    """
+    low = min(range(len(bics)), key=lambda i: bics[i])
+    return low if bics[low] < bics[0] - FORM_BIC_MARGIN else 0
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str], order: int | str = "auto",

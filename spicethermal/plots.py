@@ -14,6 +14,7 @@ Contents
   :func:`plot_differential_structure`, :func:`fig_structure` (separation marked).
 * Diagnosis — residuals per data set :func:`plot_dataset_residuals`, before/after an effect
   :func:`fig_before_after`, candidates :func:`plot_candidates`, :func:`fig_candidates`,
+  the RMS staircase of the iterative diagnosis :func:`plot_staircase`, :func:`fig_staircase`,
   the paper's Table 2 :func:`fig_table2_diagnosis`; all in :func:`diagnosis_figures`.
 * Fig. 8 and Table 2 — duty-cycle impedance curves :func:`plot_r_duty`, :func:`fig8`; PWM
   residuals as grouped bars :func:`plot_table2` and heat map :func:`plot_table2_heatmap`, both in
@@ -730,20 +731,62 @@ def fig_candidates(result: Diagnosis, path: str | os.PathLike) -> Path:
     return save_figure(fig, path)
 
 
+def plot_staircase(result: Diagnosis, ax: Axes | None = None) -> Axes:
+    """The RMS error falling with each effect added by the iterative diagnosis (log scale),
+    each step labelled with its effect, form and improvement; the noise level dashed."""
+    ax = _axes(ax, 6.4, 3.2)
+    labels = ["baseline"] + [f"+ {s.chosen.effect.name}\n({s.chosen.effect.form})"
+                             for s in result.steps]
+    values = [result.baseline.rms_k] + [s.chosen.rms_k for s in result.steps]
+    x = np.arange(len(values))
+    ax.step(x, values, where="mid", color="C0")
+    ax.plot(x, values, "o", color="C0")
+    for xi, s in zip(x[1:], result.steps, strict=True):
+        ax.annotate(f"{s.chosen.improvement:.3g}×", (xi, s.chosen.rms_k), fontsize=8,
+                    textcoords="offset points", xytext=(4, 4))
+    noise = float(np.sqrt(np.mean([v ** 2 for v in result.noise_k.values()])))
+    ax.axhline(noise, color="0.5", ls="--", lw=1, label=f"noise ≈ {noise:.2g} K")
+    ax.set_xticks(x, labels, fontsize=8)
+    ax.set_yscale("log")
+    ax.set_ylabel("RMS over every data set (K)")
+    ax.legend(fontsize="small")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.set_title("error after each added effect", fontsize=10, loc="left")
+    return ax
+
+
+def fig_staircase(result: Diagnosis, path: str | os.PathLike) -> Path:
+    """:func:`plot_staircase` as a PNG file."""
+    fig = new_figure(6.4, 3.4)
+    plot_staircase(result, fig.add_subplot())
+    return save_figure(fig, path)
+
+
 def diagnosis_figures(result: Diagnosis, out_dir: str | os.PathLike) -> list[Path]:
-    """The diagnosis figures, written into ``out_dir``: the residuals before and after the
-    verdict's effect (``diagnosis_before_after.png``; after = the best candidate when no
-    effect was found), the candidates (``diagnosis_candidates.png``) and, for a Table-2
-    diagnosis, Δ(f, D) with the explanations tried (``diagnosis_table2.png``).
+    """The diagnosis figures, written into ``out_dir``: the RMS staircase of the steps
+    (``diagnosis_steps.png``), the residuals before and after the effects found
+    (``diagnosis_before_after.png``; after = the best candidate when no effect was found),
+    before and after each step when there are several (``diagnosis_step_K.png``), the
+    candidates (``diagnosis_candidates.png``) and, for a Table-2 diagnosis, Δ(f, D) with the
+    explanations tried (``diagnosis_table2.png``).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    paths = []
+    paths = [fig_staircase(result, out / "diagnosis_steps.png")]
     best = result.best or (result.candidates[0] if result.candidates else None)
-    after = best.comparison if best is not None else result.baseline
-    label = f"with {best.effect.name}" if best is not None else "(no candidate)"
+    after = result.final if result.steps else (best.comparison if best is not None
+                                                 else result.baseline)
+    label = ("with " + ", ".join(result.effects) if result.steps else
+             f"with {best.effect.name}" if best is not None else "(no candidate)")
     paths.append(fig_before_after(result.baseline, after, out / "diagnosis_before_after.png",
                                   ("baseline", label)))
+    if len(result.steps) > 1:
+        prev, prev_label = result.baseline, "baseline"
+        for k, s in enumerate(result.steps, 1):
+            name = f"+ {s.chosen.effect.name}"
+            paths.append(fig_before_after(prev, s.chosen.comparison,
+                                          out / f"diagnosis_step_{k}.png", (prev_label, name)))
+            prev, prev_label = s.chosen.comparison, name
     if result.candidates:
         paths.append(fig_candidates(result, out / "diagnosis_candidates.png"))
     table2 = result.extra.get("table2")

@@ -174,25 +174,28 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
     secs.append(s)
 
     s = Section("diagnosis", "6. Diagnosis: what the linear ladder misses")
-    s.verdict = f"Verdict: {diagnosis.verdict_effect or 'no catalogued effect'} — " \
+    s.verdict = f"Verdict: {', '.join(diagnosis.effects) or 'no catalogued effect'} — " \
                 f"{diagnosis.verdict_reason}"
     s.table(["where", "at", "residual (K)"],
             [[w["dataset"], _at(w["at"]), _signed(w["residual_k"])]
              for w in diagnosis.to_json()["baseline"]["worst"]],
             "Worst misfits of the linear ladder "
-            f"(RMS {diagnosis.to_json()['baseline']['rms_k']:.2f} K)")
-    s.table(["candidate effect", "fitted parameters", "RMS (K)", "improvement", "evidence"],
-            [[c["effect"], ", ".join(f"{k} = {_g(v, 3)}" for k, v in c["params"].items()),
-              f"{c['rms_k']:.3f}", f"{c['improvement']:.1f}×", c["evidence"]]
+            f"(RMS {diagnosis.to_json()['baseline']['rms_k']:.3g} K)")
+    s.table(["candidate effect", "form", "fitted parameters", "RMS (K)", "improvement",
+             "evidence"],
+            [[c["effect"], c["form"],
+              ", ".join(f"{k} = {_g(v, 3)}" for k, v in c["params"].items()),
+              f"{c['rms_k']:.3g}", f"{c['improvement']:.3g}×", c["evidence"]]
              for c in diagnosis.to_json()["candidates"]], "Candidates, best first")
     if better is not None:
         s.paragraphs.append(
-            f"With {diagnosis.verdict_effect} added (fitted parameters above), the RMS error "
-            f"over every data set falls from {before.rms_k:.2f} K to {after.rms_k:.2f} K "
-            f"({before.rms_k / max(after.rms_k, 1e-12):.1f}× lower); worst from "
-            f"{before.max_abs_k:.2f} K to {after.max_abs_k:.2f} K.")
+            f"With {', '.join(diagnosis.effects)} added (fitted parameters above), the RMS "
+            f"error over every data set falls from {before.rms_k:.3g} K to {after.rms_k:.3g} K "
+            f"({before.rms_k / max(after.rms_k, 1e-12):.3g}× lower; RMS staircase: "
+            f"{diagnosis.staircase()}); worst from {before.max_abs_k:.3g} K to "
+            f"{after.max_abs_k:.3g} K.")
         s.table(["data set", "RMS before (K)", "RMS after (K)"],
-                [[name, f"{cb.rms_k:.3f}", f"{after.by_dataset()[name].rms_k:.3f}"]
+                [[name, f"{cb.rms_k:.3g}", f"{after.by_dataset()[name].rms_k:.3g}"]
                  for name, cb in before.by_dataset().items()])
     s.figure(figs / "effect_before_after.png", out,
              "Residuals of every data set: the linear ladder (left) and the model with the "

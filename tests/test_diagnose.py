@@ -19,6 +19,7 @@ from spicethermal.diagnose import (
     diagnose,
     fit_with_effects,
     localise,
+    runs_z,
 )
 from spicethermal.effects import known_names
 from spicethermal.model import ThermalModel
@@ -52,7 +53,7 @@ def test_clean_data_have_no_verdict(seed):
     d = _diagnosis("clean", seed)
     assert d.verdict_effect is None
     assert "no effect is missing" in d.verdict_reason
-    assert all(c.improvement < MIN_IMPROVEMENT for c in d.candidates)
+    assert not d.steps and all(c.improvement < MIN_IMPROVEMENT for c in d.candidates)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -74,7 +75,7 @@ def test_localise_names_frequency_and_duty():
 def test_document_follows_the_contract():
     d = _diagnosis("temperature-coefficient", 0)
     doc = json.loads(json.dumps(d.to_json()))
-    assert set(doc) == {"format", "baseline", "candidates", "verdict"}
+    assert set(doc) == {"format", "baseline", "candidates", "steps", "verdict"}
     assert doc["format"] == DIAGNOSIS_FORMAT
     assert set(doc["baseline"]) == {"rms_k", "max_abs_k", "worst"}
     assert doc["baseline"]["worst"] and all(set(w) == {"dataset", "at", "residual_k"}
@@ -83,10 +84,16 @@ def test_document_follows_the_contract():
     assert worst == sorted(worst, reverse=True) and worst[0] == doc["baseline"]["max_abs_k"]
     assert {c["effect"] for c in doc["candidates"]} == set(known_names())
     for c in doc["candidates"]:
-        assert set(c) == {"effect", "params", "rms_k", "improvement", "evidence"}
+        assert set(c) == {"effect", "form", "params", "rms_k", "improvement", "explained",
+                          "evidence"}
         assert c["improvement"] == pytest.approx(doc["baseline"]["rms_k"] / c["rms_k"])
         assert isinstance(c["evidence"], str) and c["evidence"].count(". ") == 0
     assert doc["verdict"]["effect"] == "temperature-coefficient"
+    assert doc["verdict"]["effects"] == ["temperature-coefficient"]
+    assert set(doc["verdict"]) == {"effect", "effects", "reason"}
+    assert [set(s) for s in doc["steps"]] == [{"effect", "form", "params", "rms_k",
+                                               "improvement"}]
+    assert doc["steps"][0]["rms_k"] == doc["candidates"][0]["rms_k"]
     assert doc["candidates"][0]["effect"] == "temperature-coefficient"
     alpha = doc["candidates"][0]["params"]["alpha_per_k"]
     assert alpha == pytest.approx(-3e-3, rel=0.03)
@@ -175,3 +182,32 @@ def test_noise_free_clean_bundle_needs_nothing():
                                                                  "sample-window"])
     assert d.verdict_effect is None and d.baseline.rms_k < 1e-4
     json.dumps(d.to_json(), allow_nan=False)
+
+
+def test_two_effects_are_named_in_turn_and_the_error_falls_each_time():
+    """A bench that reads PWM after an undeclared window *and* whose cooling readings carry an
+    electrical transient: step 1 names one, step 2 the other; the JSON lists both."""
+    from dataclasses import replace
+
+    from spicethermal.effectfit import transient_offset
+    from spicethermal.effects import Effect
+
+    b = scenario_bundle("sample-window", seed=4)
+    tr = Effect.create("electrical-transient", amplitude_k=-4.0, masked_s=2e-4)
+    cooling = tuple(replace(c, tj_c=c.tj_c + transient_offset(c.t_s, tr)) for c in b.cooling)
+    d = diagnose(b.with_(cooling=cooling))
+    assert sorted(d.effects) == ["electrical-transient", "sample-window"], d.verdict_reason
+    assert d.verdict_effect == d.effects[0]
+    rms = [d.baseline.rms_k] + [s.chosen.rms_k for s in d.steps]
+    assert rms[0] > rms[1] > rms[2]
+    assert all(s.chosen.improvement == pytest.approx(a / b) for s, a, b in
+               zip(d.steps, rms, rms[1:], strict=False))
+    doc = d.to_json()
+    assert doc["verdict"]["effects"] == d.effects == [s["effect"] for s in doc["steps"]]
+    assert "RMS staircase: baseline" in str(d) and "at the noise" in d.verdict_reason
+
+
+def test_runs_test_separates_structure_from_noise():
+    rng = np.random.default_rng(0)
+    assert abs(runs_z(rng.normal(size=400))) < 3
+    assert runs_z(np.sin(np.linspace(0, 6, 400)) + 0.1 * rng.normal(size=400)) < -10

@@ -4,6 +4,7 @@ integration and closed forms, and each effect's fit recovering its hidden parame
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -11,18 +12,37 @@ import pytest
 from spicethermal.bundle import Bundle, CalibrationTable, PwmTable
 from spicethermal.effectfit import (
     BundleData,
+    CalData,
+    TimeLimitError,
     baseline_ladder,
+    calibration_reading,
+    check_time,
     fit_effect,
+    fit_effect_forms,
     pc_cooling_rise,
     pc_frozen_ladder,
     predict,
+    robust_lsq,
+    sse,
     tc_cooling_rise,
     tc_frozen_ladder,
     tc_steady_scale,
+    time_limit,
+    transient_offset,
     tsp_reading,
     tsp_true,
+    window_average_k,
 )
-from spicethermal.effects import CATALOGUE, DEVICE, MEASUREMENT, Effect, known_names
+from spicethermal.effects import (
+    CATALOGUE,
+    DEVICE,
+    ENTRY_POINT_GROUP,
+    MEASUREMENT,
+    Effect,
+    EffectSpec,
+    Param,
+    known_names,
+)
 from spicethermal.errors import DataFormatError, FitError
 from spicethermal.ladder import Foster
 from spicethermal.model import Schedule, ThermalModel
@@ -177,3 +197,131 @@ def test_fit_needs_the_right_data():
     with pytest.raises(DataFormatError, match="known effects"):
         fit_effect(data, actuator(), "no-such-effect")
     assert math.isfinite(predict(data, actuator())["pwm"][0])
+
+
+# ------------------------------------------------------------------------------- forms
+def test_every_form_is_valid_and_round_trips():
+    for name in known_names():
+        s = CATALOGUE[name]
+        assert s.forms and len(set(s.forms)) == len(s.forms)
+        for form in s.forms:
+            e = Effect.create(name, form)
+            assert Effect.from_dict(e.to_dict()) == e
+    assert "form" not in Effect.create("sample-window").to_dict()  # default: as before
+    with pytest.raises(DataFormatError, match="form 'sine'"):
+        Effect.create("electrical-transient", "sine")
+
+
+def test_transient_forms_follow_their_closed_forms():
+    t = np.array([0.0, 1e-5, 4e-5])
+    fixed = Effect.create("electrical-transient", amplitude_k=-2.0, masked_s=1e-4)
+    power = Effect.create("electrical-transient", "power", k_per_w=-4.0, masked_s=1e-4)
+    ring = Effect.create("electrical-transient", "ringing", amplitude_k=-2.0, masked_s=1e-4,
+                         ring_hz=2.5e4)
+    decay = np.exp(-5 * t / 1e-4)
+    assert np.allclose(transient_offset(t, fixed, 9.0), -2.0 * decay, rtol=1e-14)
+    assert np.allclose(transient_offset(t, power, 0.5), -2.0 * decay, rtol=1e-14)
+    assert transient_offset(t, ring)[2] == pytest.approx(-2.0 * decay[2] * math.cos(2.0 * math.pi),
+                                                         rel=1e-12)
+    assert transient_offset(1e-5, ring) == pytest.approx(-2.0 * decay[1] * math.cos(0.5 * math.pi),
+                                                         abs=1e-15)
+
+
+def test_cubic_tsp_reading_and_its_inverse():
+    eff = Effect.create("tsp-nonlinearity", "cubic", quad_k_per_k2=3e-4, cub_k_per_k3=-2e-6,
+                        t_cal_c=30.0)
+    t = np.linspace(0.0, 150.0, 31)
+    r = tsp_reading(t, eff)
+    assert r[t == 80.0][0] == pytest.approx(80 + 3e-4 * 2500 - 2e-6 * 125000, abs=1e-12)
+    assert np.allclose(tsp_true(r, eff), t, atol=1e-9)
+
+
+def test_calibration_reading_equals_the_quadratic_closed_form():
+    """(u − P u) q / (1 + q b_u): the line regressed on T absorbs the straight part."""
+    temps = np.arange(20.0, 101.0, 5.0)
+    cal = CalData(temps, temps)
+    eff = Effect.create("tsp-nonlinearity", quad_k_per_k2=-6e-4, t_cal_c=40.0)
+    basis, b_u = cal.curvature_basis(40.0)
+    closed = temps + -6e-4 * basis / (1 - 6e-4 * b_u)
+    assert np.allclose(calibration_reading(temps, eff), closed, atol=1e-12)
+
+
+def test_window_average_is_the_mean_of_the_end_readings(actuator):
+    """The mean over the window of the readings taken at each instant of it."""
+    from spicethermal.pwm import steady_state
+
+    w = 3e-4
+    s = np.linspace(0.0, w, 4001)
+    ends = [steady_state(actuator, 0.1, 2e3, 0.4, x).reading_k for x in s]
+    assert window_average_k(actuator, 0.1, 2e3, 0.4, w) == pytest.approx(
+        np.trapezoid(ends, s) / w, rel=1e-6)
+
+
+def test_extra_capacitance_is_finite_far_from_the_band():
+    e = Effect.create("phase-change", latent_j=5.0, t_c=50.0, width_k=0.05, node=1)
+    assert e.extra_capacitance(1, 1e5) == 0.0 and e.extra_capacitance(1, -1e5) == 0.0
+    assert e.latent_heat(1, 1e5) == 5.0 and e.extra_capacitance(0, 50.0) == 0.0
+
+
+# ----------------------------------------------------------------------------- registry
+def test_a_plugin_effect_registers_and_is_listed(monkeypatch, capsys, tmp_path):
+    """A toy effect from outside the package, through the entry-point group."""
+    import importlib.metadata
+
+    from spicethermal.cli import main
+    from spicethermal.effects import catalogue
+
+    toy = EffectSpec.create("toy-gain", MEASUREMENT, "a toy reading gain",
+                            gain=Param("", 1.0, 0.0, 2.0))
+
+    class EntryPoint:
+        def load(self):
+            return toy
+
+    monkeypatch.setattr(catalogue, "_PLUGINS_LOADED", False)
+    monkeypatch.setattr(catalogue, "_REGISTRY", dict(catalogue._REGISTRY))
+    monkeypatch.setattr(importlib.metadata, "entry_points",
+                        lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
+    assert "toy-gain" in known_names()
+    assert Effect.create("toy-gain", gain=1.5).params["gain"] == 1.5
+    bundle = scenario_bundle("sample-window", seed=0)
+    data = BundleData.from_bundle(bundle)
+    with pytest.raises(FitError, match="has no fit"):
+        fit_effect(data, actuator(), "toy-gain")
+    bundle.write(tmp_path / "b")
+    assert main(["diagnose", str(tmp_path / "b"), "--effect", "toy-gain", "-q"]) == 0
+    assert "toy-gain                 not tried: fit failed: effect 'toy-gain' has no fit" in \
+        capsys.readouterr().out
+
+
+# ------------------------------------------------------------------------ robust fitting
+def test_a_nested_fit_never_fits_worse_than_the_linear_ladder():
+    data = BundleData.from_bundle(scenario_bundle("clean", seed=2))
+    lad = baseline_ladder(data)
+    for name in known_names():
+        for fit in fit_effect_forms(data, lad, name):
+            assert sse(data, fit.ladder, [fit.effect]) <= sse(data, lad, []) * (1 + 1e-12)
+
+
+def test_numerical_failures_and_the_time_limit_end_a_fit_cleanly():
+    def overflow(x):
+        if x[0] > 1.5:
+            raise OverflowError("math range error")
+        return np.array([x[0] - 2.0, 0.1])
+
+    res = robust_lsq(overflow, [1.0], [0.0], [3.0])
+    assert res.x[0] <= 1.5 + 1e-9  # the failing region is never the answer
+    with pytest.raises(FitError, match="start point"):
+        robust_lsq(overflow, [2.0], [0.0], [3.0])
+
+    def busy(x):  # about 5 ms of CPU per evaluation, minimum at x = 2
+        t0 = time.process_time()
+        while time.process_time() - t0 < 5e-3:
+            pass
+        return np.array([math.cosh(x[0]) - math.cosh(2.0), 1e-3 * x[0]])
+
+    with time_limit(0.03):
+        res = robust_lsq(busy, [10.0], [-800.0], [800.0], x_scale=1.0)
+    assert res.status == -9 and res.cost < 0.5 * (math.cosh(10.0) - math.cosh(2.0)) ** 2
+    with time_limit(0.0), pytest.raises(TimeLimitError):
+        check_time()
