@@ -180,7 +180,8 @@ def test_command_end_to_end_on_a_simulated_population(tmp_path, capsys):
     assert f"outlier {planted[0]}: larger outer resistance" in text
     rows = _csv_rows(out / "results.csv")
     assert len(rows) == 12 and {r["verdict"] for r in rows} == {"none"}
-    assert all(float(r["improvement"]) > 0 for r in rows)
+    # empty when the diagnosis fitted no candidate (the linear model is at the noise already)
+    assert all(r["improvement"] == "" or float(r["improvement"]) > 0 for r in rows)
     for name in ("typical", "worst"):
         lib = (out / "spread" / f"{name}.lib").read_text()
         assert f".SUBCKT {name.upper()} TJ TREF" in lib
