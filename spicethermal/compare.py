@@ -257,22 +257,22 @@ def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
     >>> [abs(round(p.residual_k, 3)) for p in pts]
     [0.0, 0.0]
     """
-    from .pwmsim import SpicePwm
+    from .pwmsim import SpicePwm, run_parallel
 
     engine = resolve_engine(engine, model)
     window = sample_window_s(model, table, window_s)
     ref_default = DEFAULT_REFERENCE_C if reference_c is None else float(reference_c)
     trefs = table.tref_c if table.tref_c is not None else np.full(table.freq_hz.size, ref_default)
-    sims: dict[float, SpicePwm] = {}
+    trefs = np.asarray(trefs, dtype=float)
+    rows = list(zip(table.powers_w.tolist(), table.freq_hz.tolist(), table.duty.tolist(),
+                    trefs.tolist(), strict=True))
+    if engine == "analytic":
+        states = [model.pwm(p, f, d, window, tref) for p, f, d, tref in rows]
+    else:  # the ngspice points in parallel
+        sims = {tref: SpicePwm(model, engine, dialect, tref_c=tref) for tref in set(trefs.tolist())}
+        states = run_parallel([(sims[tref], p, f, d, window) for p, f, d, tref in rows])
     points = []
-    for f, d, p, tj, tref in zip(table.freq_hz, table.duty, table.powers_w, table.tj_c, trefs,
-                                 strict=True):
-        f, d, p, tref = float(f), float(d), float(p), float(tref)
-        if engine == "analytic":
-            state = model.pwm(p, f, d, window, tref)
-        else:
-            sim = sims.setdefault(tref, SpicePwm(model, engine, dialect, tref_c=tref))
-            state = sim.state(p, f, d, window)
+    for (p, f, d, tref), tj, state in zip(rows, table.tj_c, states, strict=True):
         at = {"freq_hz": f, "duty": d}
         model_c = _reading(model, dataset, at, tref + state.reading_k, measurement)
         points.append(ComparisonPoint(dataset, at, float(tj), model_c,
