@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._types import listed, number
+from ._types import frequency, listed, number
 from ._types import positive as _positive
 
 NAME = "bench"
@@ -56,7 +56,7 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
     if action in ("run", "pwm"):
         p.add_argument("--pwm-power", type=_positive, dest="pwm_power_w", metavar="W",
                        help="pulse power of the PWM runs, W")
-        p.add_argument("--freqs", type=listed(_positive), dest="pwm_freqs_hz", metavar="HZ,..",
+        p.add_argument("--freqs", type=listed(frequency), dest="pwm_freqs_hz", metavar="HZ,..",
                        help="PWM frequencies, Hz")
         p.add_argument("--duties", type=listed(_positive), dest="pwm_duties", metavar="D,..",
                        help="PWM duty cycles, 0..1")

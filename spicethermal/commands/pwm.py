@@ -13,7 +13,7 @@ import argparse
 import json
 
 from ..pwmsim import ENGINES
-from ._types import duty, nonnegative, number, positive
+from ._types import duty, frequency, nonnegative, number
 
 NAME = "pwm"
 HELP = "periodic steady state under PWM: peak, mean, valley and the bench reading"
@@ -22,7 +22,7 @@ HELP = "periodic steady state under PWM: peak, mean, valley and the bench readin
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
     parser.add_argument("--freq", required=True, metavar="HZ",
-                        type=positive, help="PWM frequency, Hz")
+                        type=frequency, help="PWM frequency, Hz")
     parser.add_argument("--duty", required=True, metavar="D",
                         type=duty, help="duty cycle, 0..1")
     parser.add_argument("--power", required=True, metavar="W", type=nonnegative,
