@@ -25,7 +25,7 @@ firmware:
 	$(MAKE) -C firmware host
 
 demo: setup firmware
-	$(BIN)/spicethermal demo --out out/demo
+	$(BIN)/spicethermal demo -o out/demo
 
 test: setup firmware
 	$(MAKE) -C firmware test

@@ -8,10 +8,12 @@ read as expected (case matters as in SI: ``m`` is milli, ``M`` mega, ``K`` kelvi
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from decimal import Decimal
+from typing import Any
 
 #: SI prefixes (powers of ten) accepted before a unit or alone (``u`` and ``µ``: micro).
 PREFIXES = {"f": -15, "p": -12, "n": -9, "u": -6, "µ": -6, "μ": -6, "m": -3, "k": 3, "M": 6,
@@ -145,3 +147,47 @@ def listed(kind: Callable[[str], float]) -> Callable[[str], tuple[float, ...]]:
         return tuple(kind(x) for x in parts)
 
     return parse
+
+
+# ------------------------------------------------------------------------------ spellings
+class AliasFormatter(argparse.HelpFormatter):
+    """``--help`` without the old spellings an option still accepts (:func:`add_option`)."""
+
+    def _format_action_invocation(self, action: argparse.Action) -> str:
+        hidden = getattr(action, "hidden_aliases", ())
+        if not hidden:
+            return super()._format_action_invocation(action)
+        shown = copy.copy(action)
+        shown.option_strings = [s for s in action.option_strings if s not in hidden]
+        return super()._format_action_invocation(shown)
+
+
+def add_option(parser: argparse.ArgumentParser, *names: str, old: Sequence[str] = (),
+               **kwargs: Any) -> argparse.Action:
+    """``parser.add_argument(*names, **kwargs)`` that also accepts the ``old`` spellings.
+
+    The old spellings parse exactly as the new ones but are left out of ``--help``, docs/cli.md
+    and the spelling rules of ``tests/test_cli_spelling.py``.
+
+    Parameters
+    ----------
+    parser : the command's parser.
+    names : the option's spellings (``"-o", "--output"``).
+    old : earlier spellings kept working (``"--out"``).
+    kwargs : as for :meth:`argparse.ArgumentParser.add_argument`.
+
+    Returns
+    -------
+    argparse.Action : the option, with ``hidden_aliases`` set to ``old``.
+
+    Examples
+    --------
+    >>> p = argparse.ArgumentParser(prog="x")
+    >>> _ = add_option(p, "--freq", old=("--f-pwm",), type=float)
+    >>> p.parse_args(["--f-pwm", "5"]).freq, "--f-pwm" in p.format_help()
+    (5.0, False)
+    """
+    action = parser.add_argument(*names, *old, **kwargs)
+    action.hidden_aliases = tuple(old)  # type: ignore[attr-defined]
+    parser.formatter_class = AliasFormatter
+    return action

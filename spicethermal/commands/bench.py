@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._types import frequency, listed, number
+from ._types import add_option, frequency, listed, number
 from ._types import positive as _positive
 
 NAME = "bench"
@@ -35,12 +35,12 @@ ACTION_HELP = {
 def _common(p: argparse.ArgumentParser, action: str) -> None:
     p.add_argument("--port", required=True, metavar="URL",
                    help="pyserial URL of the bench, or sim://actuator, sim://mur880e")
-    p.add_argument("-o", "--out", required=True, metavar="BUNDLE",
+    add_option(p, "-o", "--output", old=("--out",), dest="out", required=True, metavar="BUNDLE",
                    help="bundle directory to write (an existing bundle is updated)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--settle-s", type=_positive, dest="settle_s", metavar="S",
+    add_option(p, "--settle", old=("--settle-s",), type=_positive, dest="settle_s", metavar="S",
                    help="heating time to the steady state (default from the board's plan)")
-    p.add_argument("--window-s", type=_positive, dest="window_s", metavar="S",
+    add_option(p, "--window", old=("--window-s",), type=_positive, dest="window_s", metavar="S",
                    help="sample window, s (default 1e-4, the paper's 100 us)")
     if action in ("run", "calibrate"):
         p.add_argument("--setpoints", type=listed(number), dest="calibration_c", metavar="C,..",

@@ -13,7 +13,7 @@ import argparse
 import json
 
 from ..pwmsim import ENGINES
-from ._types import duty, frequency, nonnegative, number
+from ._types import add_option, duty, frequency, nonnegative, number
 
 NAME = "pwm"
 HELP = "periodic steady state under PWM: peak, mean, valley and the bench reading"
@@ -32,7 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "reading is the peak)")
     parser.add_argument("--engine", choices=ENGINES, default="analytic",
                         help="closed form/shooting (default) or ngspice (binary or PySpice)")
-    parser.add_argument("--tref", default=25.0, metavar="DEGC", type=number,
+    add_option(parser, "--ambient", old=("--tref",), dest="tref", default=25.0, metavar="DEGC",
+               type=number,
                         help="reference temperature, degC (matters for device effects; "
                              "default 25)")
     parser.add_argument("--json", action="store_true",
