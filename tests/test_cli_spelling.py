@@ -24,6 +24,7 @@ import re
 import pytest
 
 from spicethermal.cli import build_parser
+from spicethermal.clidoc import commands
 
 RENAMED = {"--out": "-o/--output", "--window-s": "--window", "--f-pwm": "--freq",
            "--tref": "--ambient", "--settle-s": "--settle", "--fig": "--plot",
@@ -33,14 +34,12 @@ UNIT_SUFFIX = re.compile(r"^--.+-(s|hz|w|k|c|v|degc|k-per-w)$")
 HOW = "(keep the old spelling with add_option(parser, ..., old=('{old}',)))"
 
 
-def _options(parser: argparse.ArgumentParser, name: str = "spicethermal"):
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for sub, subparser in action.choices.items():
-                yield from _options(subparser, f"{name} {sub}")
-        elif action.option_strings and action.help != argparse.SUPPRESS:
-            hidden = getattr(action, "hidden_aliases", ())
-            yield name, action, [s for s in action.option_strings if s not in hidden]
+def _options(parser: argparse.ArgumentParser):
+    for name, command in commands(parser):
+        for action in command._actions:
+            if action.option_strings and action.help != argparse.SUPPRESS:
+                hidden = getattr(action, "hidden_aliases", ())
+                yield name, action, [s for s in action.option_strings if s not in hidden]
 
 
 OPTIONS = list(_options(build_parser()))
