@@ -58,6 +58,10 @@ if TYPE_CHECKING:  # pragma: no cover
 COMPARISON_FORMAT = "spicethermal-comparison/1"
 #: Reference temperature assumed when a bundle gives none (the paper's Table 2 adds 25 °C).
 DEFAULT_REFERENCE_C = 25.0
+#: Cooling curves with more samples are compared as means over log-time bins.
+MAX_COOLING_POINTS = 2000
+#: Log-time bins per decade of a long cooling curve (:func:`log_bin_means`).
+COOLING_BINS_PER_DECADE = 100
 
 #: ``measurement(dataset, at, model_c) -> reading_c``: what the bench would read.
 Measurement = Callable[[str, Mapping[str, float], float], float]
@@ -314,13 +318,51 @@ def compare_cooling(model: ThermalModel, bundle: Bundle, index: int = 0, *,
     trefs = np.asarray(tref_rows, dtype=float) if tref_rows is not None else \
         np.full(measured.size, float(tref_steady))
     rise = cooling_rise_k(model, table.power_w, table.t_s, float(tref_steady))
+    columns = (np.asarray(table.t_s, dtype=float), measured, trefs, rise)
+    if measured.size > MAX_COOLING_POINTS:  # a long record: means over log-time bins
+        columns = log_bin_means(*columns)
     points = []
-    for t, tj, tref, r in zip(table.t_s, measured, trefs, rise, strict=True):
+    for t, tj, tref, r in zip(*columns, strict=True):
         at = {"t_s": float(t)}
         model_c = _reading(model, name, at, float(tref) + float(r), measurement)
         points.append(ComparisonPoint(name, at, float(tj), model_c,
                                       {"power_w": table.power_w, "tref_c": float(tref)}))
     return tuple(points)
+
+
+def log_bin_means(t_s: ArrayLike, *columns: ArrayLike, per_decade: int = COOLING_BINS_PER_DECADE
+                  ) -> tuple[NDArray, ...]:
+    """Means of ``t_s`` and each column over bins of equal width in log t (``per_decade``).
+
+    A record of 10^6 samples becomes a few hundred points, each the mean of its samples (noise
+    averages down; a smooth response is changed only to second order in the bin width).
+    Samples at t <= 0 form one bin.
+
+    Parameters
+    ----------
+    t_s : sample times, ascending.
+    columns : arrays of the same length.
+    per_decade : bins per decade of t.
+
+    Returns
+    -------
+    tuple of arrays : the bin means of ``t_s`` and of each column, bins with samples only.
+
+    Examples
+    --------
+    >>> t, y = log_bin_means([1.0, 1.5, 10.0, 10.5], [1.0, 3.0, 5.0, 7.0], per_decade=2)
+    >>> t.tolist(), y.tolist()
+    ([1.25, 10.25], [2.0, 6.0])
+    """
+    t = np.asarray(t_s, dtype=float)
+    positive = t[t > 0]
+    if positive.size == 0:
+        return (t, *(np.asarray(c, dtype=float) for c in columns))
+    scaled = np.log10(np.maximum(t, positive[0]) / positive[0]) * per_decade
+    key = np.where(t > 0, np.floor(scaled + 1e-9).astype(np.int64) + 1, 0)
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    return tuple(np.bincount(inverse, weights=np.asarray(c, dtype=float)) / counts
+                 for c in (t, *columns))
 
 
 def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
