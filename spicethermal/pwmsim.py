@@ -40,7 +40,7 @@ import multiprocessing
 import os
 import tempfile
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -202,7 +202,8 @@ class SpicePwm:
         """``.ic`` node temperatures (°C) at the start of an on-phase, periodic steady state."""
         from .spice import initial_conditions, reference_drive
 
-        theta = self._model.pwm_initial_state(power_w, freq_hz, duty, self.tref_c)
+        theta = self._model.pwm_initial_state(power_w, freq_hz, duty, self.tref_c,
+                                              tol_k=self.tol_k / 10)  # ample for the check
         return initial_conditions(self._model, theta, reference_drive(self._model,
                                                                       self.tref_c)[0])
 
@@ -281,19 +282,23 @@ class SpicePwm:
 def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]]) -> list[PwmState]:
     """:meth:`SpicePwm.state` of every ``(sim, power_w, freq_hz, duty, window_s)``, in order.
 
-    The jobs run in a pool of forked processes sized to the cores (:func:`workers`): each
-    computes its periodic start (shooting, for a model with device effects) and runs
-    ``ngspice -b``. The workers inherit the jobs (models need no pickling) and send back only
-    the states. In turn where ``fork`` is unavailable, and for ``pyspice`` (its shared library
-    runs one simulation at a time).
+    With device effects the jobs run in a pool of forked processes sized to the cores
+    (:func:`workers`): each shoots its periodic start (CPU in Python) and runs ``ngspice -b``;
+    the workers inherit the jobs (models need no pickling) and send back only the states. For
+    linear models (closed-form start, the work is in ngspice) and where ``fork`` is unavailable
+    the pool is of threads. ``pyspice`` jobs run in turn (its shared library runs one
+    simulation at a time).
 
     >>> run_parallel([])
     []
     """
     n = min(workers(), len(jobs))
-    if (n < 2 or "fork" not in multiprocessing.get_all_start_methods()
-            or any(job[0].engine == "pyspice" for job in jobs)):
+    if n < 2 or any(job[0].engine == "pyspice" for job in jobs):
         return [_run_job(job) for job in jobs]
+    if all(job[0].model.is_linear for job in jobs) or \
+            "fork" not in multiprocessing.get_all_start_methods():
+        with ThreadPoolExecutor(n) as threads:  # the work is in ngspice: no process to fork
+            return list(threads.map(_run_job, jobs))
     _FORKED_JOBS[:] = jobs
     try:
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
