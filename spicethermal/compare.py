@@ -246,12 +246,12 @@ def sample_window_s(model: ThermalModel, table: PwmTable | None = None,
 def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
                 reference_c: float | None = None, window_s: float | None = None,
                 measurement: Measurement | None = None, dialect: str = "ngspice",
-                dataset: str = "pwm") -> tuple[ComparisonPoint, ...]:
+                dataset: str = "pwm", quiet: bool = True) -> tuple[ComparisonPoint, ...]:
     """Every row of a PWM table against the model's reading.
 
     ``reference_c`` is the reference temperature for rows without ``tref_c`` (default
     :data:`DEFAULT_REFERENCE_C`); ``window_s`` overrides the sample window (see
-    :func:`sample_window_s`).
+    :func:`sample_window_s`); unless ``quiet``, ngspice runs show progress on stderr.
 
     >>> from spicethermal.ladder import Foster
     >>> from spicethermal.model import ThermalModel
@@ -274,7 +274,8 @@ def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
         states = [model.pwm(p, f, d, window, tref) for p, f, d, tref in rows]
     else:  # the ngspice points in parallel
         sims = {tref: SpicePwm(model, engine, dialect, tref_c=tref) for tref in set(trefs.tolist())}
-        states = run_parallel([(sims[tref], p, f, d, window) for p, f, d, tref in rows])
+        states = run_parallel([(sims[tref], p, f, d, window) for p, f, d, tref in rows],
+                              quiet=quiet)
     points = []
     for (p, f, d, tref), tj, state in zip(rows, table.tj_c, states, strict=True):
         at = {"freq_hz": f, "duty": d}
@@ -367,7 +368,8 @@ def log_bin_means(t_s: ArrayLike, *columns: ArrayLike, per_decade: int = COOLING
 
 def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
             window_s: float | None = None, measurement: Measurement | None = None,
-            datasets: Sequence[str] | None = None, dialect: str = "ngspice") -> Comparison:
+            datasets: Sequence[str] | None = None, dialect: str = "ngspice",
+            quiet: bool = True) -> Comparison:
     """Measured vs model over every data set of ``bundle`` (or only the named ``datasets``).
 
     Parameters
@@ -380,6 +382,7 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
     measurement : ``(dataset, at, model_c) -> reading_c`` applied to every prediction.
     datasets : e.g. ``["pwm"]`` or ``["cooling_1"]``; default all.
     dialect : ``.lib`` dialect for the ngspice engines.
+    quiet : no progress bar for the ngspice runs (shown on a terminal otherwise).
 
     Returns
     -------
@@ -415,7 +418,8 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
     for name in wanted:
         if name == "pwm":
             points += compare_pwm(model, bundle.pwm, engine=engine, reference_c=bundle.ambient_c,
-                                  window_s=window_s, measurement=measurement, dialect=dialect)
+                                  window_s=window_s, measurement=measurement, dialect=dialect,
+                                  quiet=quiet)
         else:
             points += compare_cooling(model, bundle, int(name.split("_")[1]) - 1,
                                       measurement=measurement)

@@ -279,7 +279,8 @@ class SpicePwm:
         return run_parallel([(self, *map(float, x)) for x in zip(p, f, d, w, strict=True)])
 
 
-def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]]) -> list[PwmState]:
+def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]], *,
+                 quiet: bool = True) -> list[PwmState]:
     """:meth:`SpicePwm.state` of every ``(sim, power_w, freq_hz, duty, window_s)``, in order.
 
     With device effects the jobs run in a pool of forked processes sized to the cores
@@ -287,22 +288,28 @@ def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]]) ->
     the workers inherit the jobs (models need no pickling) and send back only the states. For
     linear models (closed-form start, the work is in ngspice) and where ``fork`` is unavailable
     the pool is of threads. ``pyspice`` jobs run in turn (its shared library runs one
-    simulation at a time).
+    simulation at a time). Unless ``quiet``, a progress bar on stderr
+    (:func:`spicethermal.progress.bar`).
 
     >>> run_parallel([])
     []
     """
+    from .progress import bar
+
     n = min(workers(), len(jobs))
+    desc = "ngspice PWM points"
     if n < 2 or any(job[0].engine == "pyspice" for job in jobs):
-        return [_run_job(job) for job in jobs]
+        return [_run_job(job) for job in bar(jobs, desc=desc, quiet=quiet)]
     if all(job[0].model.is_linear for job in jobs) or \
             "fork" not in multiprocessing.get_all_start_methods():
         with ThreadPoolExecutor(n) as threads:  # the work is in ngspice: no process to fork
-            return list(threads.map(_run_job, jobs))
+            return list(bar(threads.map(_run_job, jobs), total=len(jobs), desc=desc,
+                            quiet=quiet))
     _FORKED_JOBS[:] = jobs
     try:
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
-            return list(pool.map(_run_forked_job, range(len(jobs))))
+            return list(bar(pool.map(_run_forked_job, range(len(jobs))), total=len(jobs),
+                            desc=desc, quiet=quiet))
     finally:
         _FORKED_JOBS.clear()
 

@@ -30,6 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--window", type=_window, metavar="S",
                         help="sample window for PWM readings, s (default: the model's "
                              "sample-window effect, else the bundle's sample_window_s)")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bar on stderr (none either when it is not a terminal)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -39,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
 
     model = ThermalModel.load(args.model)
     bundle = Bundle.read(args.bundle)
-    result = compare(model, bundle, args.engine, window_s=args.window)
+    result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
     else:
