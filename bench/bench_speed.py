@@ -14,11 +14,11 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 from unittest import mock
 
 import numpy as np
+from bench_conversions import best_of  # same folder: run as a script or by bench/table.py
 
 from spicethermal import pwmsim
 from spicethermal.data import path as data_path
@@ -32,13 +32,8 @@ GRID = [(f, d) for f in (500.0, 1e3, 3e3, 5e3, 10e3, 25e3) for d in (0.2, 0.5, 0
 CLI = [sys.executable, "-m", "spicethermal.cli"]
 
 
-def best(fn, repeat: int = REPEAT) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+def best(fn) -> float:
+    return best_of(fn, REPEAT)
 
 
 def table2_grid(workers: int | None = None) -> float:
