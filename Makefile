@@ -25,7 +25,7 @@ firmware:
 	$(MAKE) -C firmware host
 
 demo: setup firmware
-	$(BIN)/spicethermal demo --out out/demo
+	$(BIN)/spicethermal demo -o out/demo
 
 test: setup firmware
 	$(MAKE) -C firmware test
@@ -35,7 +35,7 @@ lint: setup
 	$(BIN)/ruff check spicethermal tests bench
 
 bench: setup firmware   # accuracy and speed studies: minutes, not part of `make test`
-	@for f in bench/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
+	$(BIN)/python bench/table.py --all
 
 clean:
 	rm -rf out build dist

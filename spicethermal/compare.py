@@ -58,6 +58,10 @@ if TYPE_CHECKING:  # pragma: no cover
 COMPARISON_FORMAT = "spicethermal-comparison/1"
 #: Reference temperature assumed when a bundle gives none (the paper's Table 2 adds 25 °C).
 DEFAULT_REFERENCE_C = 25.0
+#: Cooling curves with more samples are compared as means over log-time bins.
+MAX_COOLING_POINTS = 2000
+#: Log-time bins per decade of a long cooling curve (:func:`log_bin_means`).
+COOLING_BINS_PER_DECADE = 100
 
 #: ``measurement(dataset, at, model_c) -> reading_c``: what the bench would read.
 Measurement = Callable[[str, Mapping[str, float], float], float]
@@ -223,21 +227,14 @@ def _reading(model: ThermalModel, dataset: str, at: Mapping[str, float], model_c
     return value
 
 
-def _window_reading(model: ThermalModel, engine: str, reading: Callable[[float], float],
-                    power_w: float, freq_hz: float, duty: float, window_s: float) -> float:
-    """The PWM reading after a window of ``window_s``: at its end (``reading(window_s)``), or
-    averaged over it for the ``average`` form of ``sample-window`` (exact for a linear model
-    solved analytically, else 4-point Gauss–Legendre over the window)."""
+def _window_nodes(model: ThermalModel, window_s: float) -> tuple[list[float], list[float]]:
+    """Offsets into the sample window at which a PWM reading is taken, and their weights: its
+    end, or 4-point Gauss–Legendre over it for the ``average`` form of ``sample-window``."""
     sw = model.effect("sample-window")
     if sw is None or sw.form != "average" or window_s <= 0:
-        return reading(window_s)
-    if engine == "analytic" and model.is_linear:
-        from .effectfit import window_average_k
-
-        return window_average_k(model.ladder, power_w, freq_hz, duty, window_s)
+        return [window_s], [1.0]
     x, w = np.polynomial.legendre.leggauss(4)
-    return float(sum(wi * reading(0.5 * window_s * (1 + xi))
-                     for xi, wi in zip(x, w, strict=True)) / 2)
+    return (0.5 * window_s * (1 + x)).tolist(), (w / 2).tolist()
 
 
 def sample_window_s(model: ThermalModel, table: PwmTable | None = None,
@@ -260,12 +257,12 @@ def sample_window_s(model: ThermalModel, table: PwmTable | None = None,
 def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
                 reference_c: float | None = None, window_s: float | None = None,
                 measurement: Measurement | None = None, dialect: str = "ngspice",
-                dataset: str = "pwm") -> tuple[ComparisonPoint, ...]:
+                dataset: str = "pwm", quiet: bool = True) -> tuple[ComparisonPoint, ...]:
     """Every row of a PWM table against the model's reading.
 
     ``reference_c`` is the reference temperature for rows without ``tref_c`` (default
     :data:`DEFAULT_REFERENCE_C`); ``window_s`` overrides the sample window (see
-    :func:`sample_window_s`).
+    :func:`sample_window_s`); unless ``quiet``, ngspice runs show progress on stderr.
 
     >>> from spicethermal.ladder import Foster
     >>> from spicethermal.model import ThermalModel
@@ -275,27 +272,35 @@ def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
     >>> [abs(round(p.residual_k, 3)) for p in pts]
     [0.0, 0.0]
     """
-    from .pwmsim import SpicePwm
+    from .pwmsim import SpicePwm, run_parallel
 
     engine = resolve_engine(engine, model)
     window = sample_window_s(model, table, window_s)
     ref_default = DEFAULT_REFERENCE_C if reference_c is None else float(reference_c)
     trefs = table.tref_c if table.tref_c is not None else np.full(table.freq_hz.size, ref_default)
-    sims: dict[float, SpicePwm] = {}
-    points = []
-    for f, d, p, tj, tref in zip(table.freq_hz, table.duty, table.powers_w, table.tj_c, trefs,
-                                 strict=True):
-        f, d, p, tref = float(f), float(d), float(p), float(tref)
-        if engine == "analytic":
-            def reading(w: float, p=p, f=f, d=d, tref=tref) -> float:
-                return model.pwm(p, f, d, w, tref).reading_k
-        else:
-            sim = sims.setdefault(tref, SpicePwm(model, engine, dialect, tref_c=tref))
+    trefs = np.asarray(trefs, dtype=float)
+    rows = list(zip(table.powers_w.tolist(), table.freq_hz.tolist(), table.duty.tolist(),
+                    trefs.tolist(), strict=True))
+    nodes, weights = _window_nodes(model, window)
+    if engine == "analytic" and model.is_linear and len(nodes) > 1:
+        from .effectfit import window_average_k  # the window average in closed form
 
-            def reading(w: float, p=p, f=f, d=d, sim=sim) -> float:
-                return sim.state(p, f, d, w).reading_k
+        rises = [window_average_k(model.ladder, p, f, d, window) for p, f, d, _ in rows]
+    else:
+        if engine == "analytic":
+            states = [model.pwm(p, f, d, w, tref) for p, f, d, tref in rows for w in nodes]
+        else:  # the ngspice points in parallel
+            sims = {tref: SpicePwm(model, engine, dialect, tref_c=tref)
+                    for tref in set(trefs.tolist())}
+            states = run_parallel([(sims[tref], p, f, d, w) for p, f, d, tref in rows
+                                   for w in nodes], quiet=quiet)
+        k = len(nodes)
+        rises = [sum(wt * s.reading_k for wt, s in zip(weights, states[i * k:(i + 1) * k],
+                                                         strict=True))
+                 for i in range(len(rows))]
+    points = []
+    for (p, f, d, tref), tj, rise in zip(rows, table.tj_c, rises, strict=True):
         at = {"freq_hz": f, "duty": d}
-        rise = _window_reading(model, engine, reading, p, f, d, window)
         model_c = _reading(model, dataset, at, tref + rise, measurement)
         points.append(ComparisonPoint(dataset, at, float(tj), model_c,
                                       {"power_w": p, "tref_c": tref, "window_s": window}))
@@ -336,8 +341,11 @@ def compare_cooling(model: ThermalModel, bundle: Bundle, index: int = 0, *,
     trefs = np.asarray(tref_rows, dtype=float) if tref_rows is not None else \
         np.full(measured.size, float(tref_steady))
     rise = cooling_rise_k(model, table.power_w, table.t_s, float(tref_steady))
+    columns = (np.asarray(table.t_s, dtype=float), measured, trefs, rise)
+    if measured.size > MAX_COOLING_POINTS:  # a long record: means over log-time bins
+        columns = log_bin_means(*columns)
     points = []
-    for t, tj, tref, r in zip(table.t_s, measured, trefs, rise, strict=True):
+    for t, tj, tref, r in zip(*columns, strict=True):
         at = {"t_s": float(t)}
         model_c = _reading(model, name, at, float(tref) + float(r), measurement, table.power_w)
         points.append(ComparisonPoint(name, at, float(tj), model_c,
@@ -345,9 +353,45 @@ def compare_cooling(model: ThermalModel, bundle: Bundle, index: int = 0, *,
     return tuple(points)
 
 
+def log_bin_means(t_s: ArrayLike, *columns: ArrayLike, per_decade: int = COOLING_BINS_PER_DECADE
+                  ) -> tuple[NDArray, ...]:
+    """Means of ``t_s`` and each column over bins of equal width in log t (``per_decade``).
+
+    A record of 10^6 samples becomes a few hundred points, each the mean of its samples (noise
+    averages down; a smooth response is changed only to second order in the bin width).
+    Samples at t <= 0 form one bin.
+
+    Parameters
+    ----------
+    t_s : sample times, ascending.
+    columns : arrays of the same length.
+    per_decade : bins per decade of t.
+
+    Returns
+    -------
+    tuple of arrays : the bin means of ``t_s`` and of each column, bins with samples only.
+
+    Examples
+    --------
+    >>> t, y = log_bin_means([1.0, 1.5, 10.0, 10.5], [1.0, 3.0, 5.0, 7.0], per_decade=2)
+    >>> t.tolist(), y.tolist()
+    ([1.25, 10.25], [2.0, 6.0])
+    """
+    t = np.asarray(t_s, dtype=float)
+    positive = t[t > 0]
+    if positive.size == 0:
+        return (t, *(np.asarray(c, dtype=float) for c in columns))
+    scaled = np.log10(np.maximum(t, positive[0]) / positive[0]) * per_decade
+    key = np.where(t > 0, np.floor(scaled + 1e-9).astype(np.int64) + 1, 0)
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    return tuple(np.bincount(inverse, weights=np.asarray(c, dtype=float)) / counts
+                 for c in (t, *columns))
+
+
 def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
             window_s: float | None = None, measurement: Measurement | None = None,
-            datasets: Sequence[str] | None = None, dialect: str = "ngspice") -> Comparison:
+            datasets: Sequence[str] | None = None, dialect: str = "ngspice",
+            quiet: bool = True) -> Comparison:
     """Measured vs model over every data set of ``bundle`` (or only the named ``datasets``).
 
     Parameters
@@ -360,6 +404,7 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
     measurement : ``(dataset, at, model_c) -> reading_c`` applied to every prediction.
     datasets : e.g. ``["pwm"]`` or ``["cooling_1"]``; default all.
     dialect : ``.lib`` dialect for the ngspice engines.
+    quiet : no progress bar for the ngspice runs (shown on a terminal otherwise).
 
     Returns
     -------
@@ -395,7 +440,8 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
     for name in wanted:
         if name == "pwm":
             points += compare_pwm(model, bundle.pwm, engine=engine, reference_c=bundle.ambient_c,
-                                  window_s=window_s, measurement=measurement, dialect=dialect)
+                                  window_s=window_s, measurement=measurement, dialect=dialect,
+                                  quiet=quiet)
         else:
             points += compare_cooling(model, bundle, int(name.split("_")[1]) - 1,
                                       measurement=measurement)

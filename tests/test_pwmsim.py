@@ -112,6 +112,32 @@ def test_grid_batch_matches_closed_form(actuator):
 
 
 @pytest.mark.ngspice
+@needs_ngspice
+def test_grid_runs_in_parallel_in_order(actuator):
+    """The pool keeps the order of the points, with power and window per point."""
+    m = ThermalModel(actuator)
+    freqs, duties = (25e3, 500.0, 3e3), (0.2, 0.8, 0.5)
+    states = SpicePwm(m).grid([0.05, 0.094, 0.2], freqs, duties, window_s=[1e-4, 0.0, 1e-4])
+    for s, f, d, p, w in zip(states, freqs, duties, [0.05, 0.094, 0.2], [1e-4, 0.0, 1e-4],
+                             strict=True):
+        assert (s.freq_hz, s.duty, s.power_w, s.window_s) == (f, d, p, w)
+        _close(s, m.pwm(p, f, d, w), 2e-3)
+
+
+@pytest.mark.ngspice
+@needs_ngspice
+@pytest.mark.parametrize("freq", [1.0, 10.0, 100.0])
+def test_low_frequencies_are_periodic_and_exact(actuator, freq):
+    """Down to 1 Hz (edges shortened below the fastest τ; ripple of kelvins): periodic, and
+    within 2 mK of the closed form."""
+    m = ThermalModel(actuator)
+    for d in (0.2, 0.8):
+        run = SpicePwm(m).run(POWER_W, freq, d, WINDOW_S)
+        assert run.drift_k < 1e-3
+        _close(run.state, m.pwm(POWER_W, freq, d, WINDOW_S), 2e-3)
+
+
+@pytest.mark.ngspice
 def test_grid_pyspice_matches_closed_form(actuator):
     m = ThermalModel(actuator)
     states = SpicePwm(m, engine="pyspice").grid(POWER_W, *zip(*_grid(), strict=True),

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._types import listed, number
+from ._types import add_option, frequency, listed, number
 from ._types import positive as _positive
 
 NAME = "bench"
@@ -31,7 +31,7 @@ ACTION_HELP = {
 def _common(p: argparse.ArgumentParser, action: str) -> None:
     p.add_argument("--port", required=True, metavar="URL",
                    help="pyserial URL of the bench, or sim://actuator, sim://mur880e")
-    p.add_argument("-o", "--out", required=True, metavar="BUNDLE",
+    add_option(p, "-o", "--output", old=("--out",), dest="out", required=True, metavar="BUNDLE",
                    help="bundle directory to write (an existing bundle is updated)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--wait", action="store_true",
@@ -39,9 +39,9 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
     p.add_argument("--replace", action="append", default=[], metavar="NAME",
                    help="replace this data file of the bundle (e.g. cooling_1.csv) with the "
                         "new data set of its kind; without it nothing is ever dropped")
-    p.add_argument("--settle-s", type=_positive, dest="settle_s", metavar="S",
+    add_option(p, "--settle", old=("--settle-s",), type=_positive, dest="settle_s", metavar="S",
                    help="heating time to the steady state (default from the board's plan)")
-    p.add_argument("--window-s", type=_positive, dest="window_s", metavar="S",
+    add_option(p, "--window", old=("--window-s",), type=_positive, dest="window_s", metavar="S",
                    help="sample window, s (default 1e-4, the paper's 100 us)")
     if action in ("run", "calibrate"):
         p.add_argument("--setpoints", type=listed(number), dest="calibration_c", metavar="C,..",
@@ -57,7 +57,7 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
     if action in ("run", "pwm"):
         p.add_argument("--pwm-power", type=_positive, dest="pwm_power_w", metavar="W",
                        help="pulse power of the PWM runs, W")
-        p.add_argument("--freqs", type=listed(_positive), dest="pwm_freqs_hz", metavar="HZ,..",
+        p.add_argument("--freqs", type=listed(frequency), dest="pwm_freqs_hz", metavar="HZ,..",
                        help="PWM frequencies, Hz")
         p.add_argument("--duties", type=listed(_positive), dest="pwm_duties", metavar="D,..",
                        help="PWM duty cycles, 0..1")

@@ -32,6 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="sample window for PWM readings, s (default: the model's "
                              "sample-window effect, else the bundle's sample_window_s)")
     add_source_arguments(parser, curve=False, early=False)
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bar on stderr (none either when it is not a terminal)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -40,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     model = ThermalModel.load(args.model)
     bundle = comparable_source(args, args.bundle)
-    result = compare(model, bundle, args.engine, window_s=args.window)
+    result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
     if args.json:
         print(dumps_json(result.to_json(), indent=2))
     else:

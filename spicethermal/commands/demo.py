@@ -4,17 +4,20 @@ from __future__ import annotations
 
 import argparse
 
+from ._types import add_option
+
 NAME = "demo"
 HELP = ("run the whole job on the simulated bench: measure, fit, export, simulate the PWM "
         "table, diagnose, validate on the MUR880E, write the report")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--out", default="out/demo", metavar="DIR",
+    add_option(parser, "-o", "--output", old=("--out",), dest="out", default="out/demo",
+               metavar="DIR",
                         help="directory for the bundles, models, .lib files and report "
                              "(default out/demo)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the simulated bench")
-    parser.add_argument("--quiet", action="store_true", help="no progress output")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress output")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -15,6 +15,7 @@ import argparse
 
 from ..errors import DataFormatError
 from ..files import dumps_json
+from ._types import add_option, frequency
 from ._types import index as _node
 from ._types import number as _number
 from ._types import positive as _positive
@@ -49,7 +50,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--p-max", type=_positive, metavar="W",
                         help="heater power when on (default: the DC power whose steady state "
                              "puts the junction at t-max)")
-    parser.add_argument("--f-pwm", type=_positive, default=DEFAULT_F_PWM_HZ, metavar="HZ",
+    add_option(parser, "--freq", old=("--f-pwm",), dest="f_pwm", type=frequency,
+               default=DEFAULT_F_PWM_HZ, metavar="HZ",
                         help=f"PWM frequency (default {DEFAULT_F_PWM_HZ:g})")
     parser.add_argument("--node", type=_node, default=0, metavar="N",
                         help="actuation node: 0 junction (default), N = Cauer node N")

@@ -13,7 +13,7 @@ import argparse
 
 from ..files import dumps_json
 from ..pwmsim import ENGINES
-from ._types import duty, nonnegative, number, positive
+from ._types import add_option, duty, frequency, nonnegative, number
 
 NAME = "pwm"
 HELP = "periodic steady state under PWM: peak, mean, valley and the bench reading"
@@ -22,7 +22,7 @@ HELP = "periodic steady state under PWM: peak, mean, valley and the bench readin
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
     parser.add_argument("--freq", required=True, metavar="HZ",
-                        type=positive, help="PWM frequency, Hz")
+                        type=frequency, help="PWM frequency, Hz")
     parser.add_argument("--duty", required=True, metavar="D",
                         type=duty, help="duty cycle, 0..1")
     parser.add_argument("--power", required=True, metavar="W", type=nonnegative,
@@ -32,7 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "reading is the peak)")
     parser.add_argument("--engine", choices=ENGINES, default="analytic",
                         help="closed form/shooting (default) or ngspice (binary or PySpice)")
-    parser.add_argument("--tref", default=25.0, metavar="DEGC", type=number,
+    add_option(parser, "--ambient", old=("--tref",), dest="tref", default=25.0, metavar="DEGC",
+               type=number,
                         help="reference temperature, degC (matters for device effects; "
                              "default 25)")
     parser.add_argument("--json", action="store_true",

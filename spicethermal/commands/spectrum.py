@@ -1,4 +1,4 @@
-"""``spicethermal spectrum SOURCE [-o FIG.png] [--json]``: the time-constant spectrum (NID).
+"""``spicethermal spectrum SOURCE [--plot FIG.png] [-o MODEL.json] [--json]``: the spectrum (NID).
 
 SOURCE is any curve source (:mod:`spicethermal.sources`): a measurement bundle directory (its
 first cooling curve with the early-time correction, or first ``zth`` table; ``--curve`` picks
@@ -10,7 +10,9 @@ default 1 W nominal) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco``
 Prints the spectrum's summary, its peaks and the lumped Foster ladder; ``--json`` prints the
 spectrum (``spicethermal-spectrum/1``: ``tau_s``, ``r_density_k_per_w`` in K/W per unit ln τ,
 ``method``, ``resolution_decades``, ``t_resolved_s``, ``rth_k_per_w``) plus the lumped Foster
-stages; ``--model MODEL.json`` writes that ladder as a model file for ``export``.
+stages; ``-o MODEL.json`` writes that ladder as a model file for ``export`` (an ``-o`` path
+ending in .png, .svg or .pdf is the figure, as before ``--plot``; ``--model`` is ``-o``'s old
+spelling).
 ``--bootstrap N`` (residual bootstrap, :mod:`spicethermal.bootstrap`) adds the 95 % band of
 R(τ) to the figure and ``"bootstrap"`` to the JSON (``spectrum``: ``tau_s``,
 ``r_density_k_per_w_lo``, ``r_density_k_per_w_hi``, ``level``). The early-time correction (the
@@ -21,10 +23,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..files import dumps_json
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
+from ._types import add_option
 from ._types import count as _count
 from ._types import positive as _positive
 
@@ -74,15 +78,15 @@ def load_curve(args: argparse.Namespace, source: str) -> ZthCurve:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
-    parser.add_argument("-o", "--output", metavar="FIG.png",
+    parser.add_argument("--plot", metavar="FIG.png",
                         help="write the figure (Zth and model, derivative, spectrum)")
     parser.add_argument("--json", action="store_true", help="print the spectrum as JSON")
     parser.add_argument("--stages-per-decade", type=_positive, default=10.0, metavar="N",
                         help="Foster stages per decade of τ when lumping (default 10)")
     parser.add_argument("--order", type=_count, metavar="N",
                         help="lump into exactly N Foster stages instead (Ward merging)")
-    parser.add_argument("--model", metavar="MODEL.json",
-                        help="write the lumped Foster ladder as a model file")
+    add_option(parser, "-o", "--output", old=("--model",), metavar="MODEL.json",
+               action="append", help="write the lumped Foster ladder as a model file")
     add_spectrum_arguments(parser)
 
 
@@ -92,28 +96,34 @@ def run(args: argparse.Namespace) -> int:
     curve = load_curve(args, args.source)
     spec = time_constant_spectrum(curve, **spectrum_options(args))
     foster = spec.to_foster(args.stages_per_decade, order=args.order)
+    model_path = None
+    for path in args.output or ():  # -o FIG.png: the figure, as before --plot
+        if Path(path).suffix.lower() in (".png", ".svg", ".pdf"):
+            args.plot = args.plot or path
+        else:
+            model_path = path
     sb = None
     if args.bootstrap:
         from ..bootstrap import spectrum_bootstrap
 
         sb = spectrum_bootstrap(curve, spec, args.bootstrap, args.seed,
                                 **spectrum_options(args))
-    if args.output and sb is not None:
+    if args.plot and sb is not None:
         from ..bootstrap import fig_spectrum_band
 
-        fig_spectrum_band(spec, sb, args.output)
-    elif args.output:
+        fig_spectrum_band(spec, sb, args.plot)
+    elif args.plot:
         from ..plots import fig_spectrum
 
-        fig_spectrum(spec, args.output)
-    if args.model:
+        fig_spectrum(spec, args.plot)
+    if model_path:
         from .. import __version__
         from ..model import ThermalModel
 
         ThermalModel(foster, reference="ambient", provenance={
             "tool": f"spicethermal {__version__} spectrum", "source": str(args.source),
             "method": spec.method, "resolution_decades": spec.resolution_decades}
-        ).save(args.model)
+        ).save(model_path)
     if args.json:
         from ..sources import early_time_json
 
@@ -128,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     peaks = ", ".join(f"{x:.3g}" for x in spec.peaks_s())
     print(f"peaks at τ = {peaks or '-'} s")
     print(f"Foster ladder: {foster.order} stages, ΣR = {foster.rth:.4g} K/W")
-    for what, path in (("figure", args.output), ("model", args.model)):
+    for what, path in (("figure", args.plot), ("model", model_path)):
         if path:
             print(f"wrote {what} {path}")
     return 0

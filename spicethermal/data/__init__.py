@@ -5,6 +5,8 @@
   :func:`spicethermal.datasheet.mur880e`.
 * ``actuator_table2.csv`` — the paper's Table 2: measured vs PSPICE-simulated junction
   temperature of the thermopneumatic actuator under PWM (18 points).
+* ``sample_bundle/`` — a measurement bundle of the simulated actuator (calibration, two
+  cooling curves, the 18-point PWM grid), the README tutorial's sample data.
 * ``pyrth_mosfet/`` — real cooling transients of a power MOSFET mounted dry and with a thermal
   interface material, and one T3Ster export, from the PyRth project (MIT licence, see
   ``pyrth_mosfet/README.md`` and ``pyrth_mosfet/LICENSE.txt``).

@@ -1,0 +1,53 @@
+"""Progress on stderr for long commands: one library (tqdm), off with ``-q`` and off when stderr
+is not a terminal (pipes, logs, the tests), so no command's output ever depends on it.
+
+>>> list(bar(range(3), quiet=True))
+[0, 1, 2]
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable, Iterator
+from typing import TypeVar
+
+__all__ = ["bar", "enabled"]
+
+T = TypeVar("T")
+
+
+def enabled(quiet: bool = False) -> bool:
+    """Whether progress is shown: not ``quiet`` and stderr is a terminal.
+
+    >>> enabled(quiet=True)
+    False
+    """
+    return not quiet and sys.stderr.isatty()
+
+
+def bar(items: Iterable[T], *, total: int | None = None, desc: str = "",
+        quiet: bool = False) -> Iterator[T]:
+    """``items`` as they come, with a progress bar on stderr when :func:`enabled`.
+
+    Parameters
+    ----------
+    items : what to iterate over.
+    total : how many there are (default ``len(items)`` when it has one).
+    desc : what is being done (a few words).
+    quiet : no bar (the commands' ``-q``).
+
+    Returns
+    -------
+    Iterator over ``items``.
+
+    Examples
+    --------
+    >>> sum(bar([1, 2, 3], desc="adding", quiet=True))
+    6
+    """
+    if not enabled(quiet):
+        yield from items
+        return
+    from tqdm import tqdm
+
+    yield from tqdm(items, total=total, desc=desc, file=sys.stderr, leave=False)

@@ -1,0 +1,88 @@
+"""Docs that run: every shell command in README.md and docs/*.md, in order, in a scratch directory.
+
+A fenced ``sh`` block is run by bash (``-e``: the first failing command fails the test, with its
+output); a ``spice`` block is run by ngspice, with the ``.lib`` files the commands before it
+wrote. A block right after ``<!-- docs-test: skip (reason) -->`` is not run (hardware, the whole
+test suite). The scratch directory sees the repository's ``spicethermal/`` (its sample data),
+``bench/`` and ``.venv/``, and has an empty ``docs/figures/``: commands write there, never into
+the checkout.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from spicethermal.spice import NgspiceBatch
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+SKIP = re.compile(r"<!--\s*docs-test:\s*skip\b")
+LINKED = ("spicethermal", "bench", ".venv", "netlists", "templates")
+
+
+def blocks(text: str) -> list[tuple[int, str, str]]:
+    """``(line, language, body)`` of every ``sh`` and ``spice`` block not marked skip."""
+    out, lines, i = [], text.splitlines(), 0
+    while i < len(lines):
+        fence = re.match(r"^```(sh|spice)\s*$", lines[i])
+        if fence:
+            j = next(k for k in range(i + 1, len(lines)) if lines[k].startswith("```"))
+            marked = i > 0 and SKIP.search(lines[i - 1])
+            if not marked:
+                out.append((i + 1, fence[1], "\n".join(lines[i + 1:j]) + "\n"))
+            i = j
+        i += 1
+    return out
+
+
+def test_blocks_are_found_and_skips_are_explicit():
+    text = ("```sh\necho a\n```\n<!-- docs-test: skip (x) -->\n```sh\nexit 1\n```\n"
+            "```json\n{}\n```\n")
+    assert blocks(text) == [(1, "sh", "echo a\n")]
+
+
+def _scratch(tmp: Path) -> dict[str, str]:
+    for name in LINKED:
+        if (ROOT / name).exists():
+            (tmp / name).symlink_to(ROOT / name)
+    (tmp / "docs" / "figures").mkdir(parents=True)
+    bin_dir = str(Path(sys.executable).parent)
+    return dict(os.environ, PATH=bin_dir + os.pathsep + os.environ.get("PATH", ""),
+                MPLBACKEND="Agg")
+
+
+def _run_spice(body: str, tmp: Path) -> None:
+    deck, dialect = [], "ngspice"
+    for line in body.splitlines():
+        inc = re.match(r"^\.include\s+(\S+)", line, re.I)
+        if inc:
+            lib = tmp / inc[1]
+            assert lib.is_file(), f"{inc[1]}: no command before this deck wrote it"
+            dialect = re.search(r"(ngspice|pspice|ltspice) dialect", lib.read_text())[1]
+            line = f".include {lib}"
+        deck.append(line.split(";")[0].rstrip())
+    wave = NgspiceBatch(timeout_s=60).run("\n".join(deck), ["V(TJ)"], dialect)
+    assert wave.t_s.size > 2
+
+
+@pytest.mark.slow
+@pytest.mark.ngspice
+@pytest.mark.parametrize("doc", DOCS, ids=[str(d.relative_to(ROOT)) for d in DOCS])
+def test_every_command_in_the_docs_runs(doc, tmp_path):
+    env = _scratch(tmp_path)
+    for line, language, body in blocks(doc.read_text(encoding="utf-8")):
+        where = f"{doc.relative_to(ROOT)}:{line}"
+        if language == "spice":
+            _run_spice(body, tmp_path)
+            continue
+        proc = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", body], cwd=tmp_path,
+                              env=env, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, (
+            f"{where}: a command failed (exit {proc.returncode})\n{body}\n"
+            f"--- stdout (tail)\n{proc.stdout[-2000:]}\n--- stderr (tail)\n{proc.stderr[-2000:]}")
