@@ -40,6 +40,11 @@ _API: dict[str, str] = {
     "read_t3ster": "importers",
     "read_zth_points": "datasheet",
     "read_foster_table": "datasheet",
+    "read_source": "sources",
+    "import_model": "vendor",
+    "read_library": "vendor",
+    "PowerProfile": "predict",
+    "predict": "predict",
     # fitting, comparison, diagnosis
     "fit_foster": "fit",
     "fit_model": "fit",
@@ -57,7 +62,11 @@ _API: dict[str, str] = {
     "export": "spice",
     # effects
     "Effect": "effects",
+    "EffectSpec": "effects",
+    "register_effect": "effects",
     "known_effects": "effects",
+    # many devices
+    "run_batch": "batch.runner",
     # drive
     "optimize_drive": "drive",
     # errors
@@ -69,7 +78,7 @@ _API: dict[str, str] = {
 }
 
 #: names whose attribute in the defining module differs from the public name
-_ALIASES: dict[str, str] = {"known_effects": "known_names"}
+_ALIASES: dict[str, str] = {"known_effects": "known_names", "register_effect": "register"}
 
 __all__ = sorted(_API) + ["__version__"]
 

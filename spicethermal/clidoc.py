@@ -35,8 +35,9 @@ def commands(parser: argparse.ArgumentParser, name: str = "spicethermal"
     Examples
     --------
     >>> from spicethermal.cli import build_parser
-    >>> [n for n, _ in commands(build_parser())][:3]
-    ['spicethermal', 'spicethermal bench', 'spicethermal bench run']
+    >>> names = [n for n, _ in commands(build_parser())]
+    >>> names[0], "spicethermal bench run" in names
+    ('spicethermal', True)
     """
     yield name, parser
     for action in parser._actions:

@@ -1,7 +1,8 @@
 """Docs that run: every shell command in README.md and docs/*.md, in order, in a scratch directory.
 
 A fenced ``sh`` block is run by bash (``-e``: the first failing command fails the test, with its
-output); a ``spice`` block is run by ngspice, with the ``.lib`` files the commands before it
+output); a ``python`` block by the project's Python (a tutorial's own set-up steps); a ``spice``
+block is run by ngspice, with the ``.lib`` files the commands before it
 wrote. A block right after ``<!-- docs-test: skip (reason) -->`` is not run (hardware, the whole
 test suite). The scratch directory sees the repository's ``spicethermal/`` (its sample data),
 ``bench/`` and ``.venv/``, and has an empty ``docs/figures/``: commands write there, never into
@@ -27,10 +28,11 @@ LINKED = ("spicethermal", "bench", ".venv", "netlists", "templates")
 
 
 def blocks(text: str) -> list[tuple[int, str, str]]:
-    """``(line, language, body)`` of every ``sh`` and ``spice`` block not marked skip."""
+    """``(line, language, body)`` of every ``sh``, ``python`` and ``spice`` block not marked
+    skip."""
     out, lines, i = [], text.splitlines(), 0
     while i < len(lines):
-        fence = re.match(r"^```(sh|spice)\s*$", lines[i])
+        fence = re.match(r"^```(sh|python|spice)\s*$", lines[i])
         if fence:
             j = next(k for k in range(i + 1, len(lines)) if lines[k].startswith("```"))
             marked = i > 0 and SKIP.search(lines[i - 1])
@@ -81,7 +83,9 @@ def test_every_command_in_the_docs_runs(doc, tmp_path):
         if language == "spice":
             _run_spice(body, tmp_path)
             continue
-        proc = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", body], cwd=tmp_path,
+        command = ([sys.executable, "-c", body] if language == "python"
+                   else ["bash", "-e", "-o", "pipefail", "-c", body])
+        proc = subprocess.run(command, cwd=tmp_path,
                               env=env, capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, (
             f"{where}: a command failed (exit {proc.returncode})\n{body}\n"

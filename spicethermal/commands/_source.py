@@ -7,7 +7,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from ._types import count, listed, number, positive
+from ._types import AliasFormatter, add_option, count, listed, number, positive
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..bundle import Bundle
@@ -32,9 +32,10 @@ def window(text: str) -> tuple[float, float]:
 def add_source_arguments(parser: argparse.ArgumentParser, *, curve: bool = True,
                          power: bool = True, rth: bool = True, tref: bool = True,
                          early: bool = True) -> None:
-    """Add ``--curve``, ``--calibration``, ``--k-factor``, ``--tref``, ``--power``, ``--rth`` and
+    """Add ``--curve``, ``--calibration``, ``--k-factor``, ``--ambient``, ``--power``, ``--rth`` and
     ``--early-window`` (the flags leave out options a command already defines)."""
     group = parser.add_argument_group("reading SOURCE")
+    parser.formatter_class = AliasFormatter  # old spellings added to the group stay hidden
     if curve:
         group.add_argument("--curve", type=int, default=0, metavar="INDEX",
                            help="which curve of a bundle: cooling curves first, then zth tables "
@@ -43,10 +44,11 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, curve: bool = True,
                        help="TSP calibration (temp_c, v_tsp_v) for a source with raw sensor "
                             "voltage (PyRth .txt, v_tsp_v column); replaces a bundle's or .tco")
     group.add_argument("--k-factor", type=number, dest="k_factor", metavar="MV_PER_K",
-                       help="K-factor calibration instead, anchored with --tref at the end of "
+                       help="K-factor calibration instead, anchored with --ambient at the end of "
                             "the record")
     if tref:
-        group.add_argument("--tref", type=number, metavar="DEGC",
+        add_option(group, "--ambient", old=("--tref",), dest="tref", type=number,
+                   metavar="DEGC",
                            help="temperature at the end of the record (anchors the "
                                 "calibration), or the reference of a cooling CSV")
     if power:

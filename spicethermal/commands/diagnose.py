@@ -56,10 +56,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "frequency)")
     table.add_argument("--window", type=_positive, metavar="S", default=1e-4,
                        help="sample window the bench used (default 1e-4 s, the paper's)")
-    table.add_argument("--ambient", type=_number, metavar="DEGC", default=25.0,
-                       help="reference added to the rises (default 25, as in the paper)")
+    table.add_argument("--ambient", type=_number, metavar="DEGC", dest="tref",
+                       help="reference added to a table's rises (default 25, as in the "
+                            "paper); for a raw record, the temperature at its end (anchors the "
+                            "calibration) or the reference of a cooling CSV")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-    add_source_arguments(parser, curve=False, power=False, rth=False, early=False)
+    add_source_arguments(parser, curve=False, power=False, rth=False, tref=False, early=False)
 
 
 def _progress(quiet: bool):
@@ -82,7 +84,8 @@ def run(args: argparse.Namespace) -> int:
         if args.model:
             raise DataFormatError("--model applies to a bundle, not to a table of readings")
         result = diagnose_table(source, rth_k_per_w=args.rth, power_w=args.power,
-                                window_s=args.window, ambient_c=args.ambient)
+                                window_s=args.window,
+                                ambient_c=25.0 if args.tref is None else args.tref)
     else:
         from ..effects import spec
 

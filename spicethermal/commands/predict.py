@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 
 from ..predict import DEFAULT_POINTS, ENGINES
-from ._types import count, number, positive
+from ._types import add_option, count, number, positive
 
 NAME = "predict"
 HELP = "junction temperature under a measured power profile (analytic, or ngspice with effects)"
@@ -24,7 +24,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="TJ.csv",
                         help="where to write t_s, power_w, tj_c")
     parser.add_argument("--plot", metavar="TJ.png", help="also draw Tj and power against time")
-    parser.add_argument("--tref", type=number, default=25.0, metavar="DEGC",
+    add_option(parser, "--ambient", old=("--tref",), dest="tref", type=number, default=25.0,
+               metavar="DEGC",
                         help="reference (ambient or case) temperature, degC (default 25)")
     parser.add_argument("--until", type=positive, metavar="S",
                         help="predict until this time, s (default: the profile's last sample; "

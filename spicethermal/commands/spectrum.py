@@ -4,7 +4,7 @@ SOURCE is any curve source (:mod:`spicethermal.sources`): a measurement bundle d
 first cooling curve with the early-time correction, or first ``zth`` table; ``--curve`` picks
 another), a Zth CSV file (``t_s`` and ``zth_k_per_w``), a cooling CSV, a PyRth transient
 ``.txt`` file (time and sensor voltage, converted through ``--calibration CSV`` or
-``--k-factor MV_PER_K`` anchored with ``--tref DEGC`` — there is no default — at ``--power W``,
+``--k-factor MV_PER_K`` anchored with ``--ambient DEGC`` — there is no default — at ``--power W``,
 default 1 W nominal) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco`` beside it).
 
 Prints the spectrum's summary, its peaks and the lumped Foster ladder; ``--json`` prints the

@@ -3,7 +3,7 @@
 SOURCE is any curve source (:mod:`spicethermal.sources`): a bundle directory (its first
 cooling curve, converted to Zth(t) with the early-time correction, or its first zth table;
 ``--curve`` picks another), a Zth CSV (``t_s`` and ``zth_k_per_w``, or ``r``), a cooling CSV
-(``t_s``, ``tj_c``, optional ``tref_c``; ``--tref`` when it has no ``tref_c``), or a PyRth
+(``t_s``, ``tj_c``, optional ``tref_c``; ``--ambient`` when it has no ``tref_c``), or a PyRth
 ``.txt`` / T3Ster ``.raw`` transient. The measured r(t) is compared with the datasheet named
 by ``--datasheet``: a CSV of ``t_s`` and ``r`` (with ``--rth``), or ``mur880e`` for the
 MUR880E points of the paper shipped with the package. There is no default device.
@@ -17,6 +17,7 @@ from pathlib import Path
 from ..errors import DataFormatError
 from ..files import dumps_json
 from ._source import SOURCE_HELP, add_source_arguments, read_source_args
+from ._types import add_option
 from ._types import number as _number
 from ._types import positive as _positive
 
@@ -43,7 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tj-steady", type=_number, metavar="DEGC",
                         help="junction temperature at the cut for a cooling CSV (default: "
                              "sqrt(t) extrapolation)")
-    parser.add_argument("--tref", "--tref-steady", type=_number, dest="tref", metavar="DEGC",
+    add_option(parser, "--ambient", old=("--tref", "--tref-steady"), type=_number, dest="tref",
+               metavar="DEGC",
                         help="reference temperature of a cooling CSV without tref_c, or the "
                              "temperature at the end of a raw record (anchors the calibration)")
     parser.add_argument("--mask", type=_mask, default="auto", metavar="S|auto|none",
