@@ -525,8 +525,9 @@ def _criterion(comparison: Comparison, noise: Mapping[str, float], k: int) -> fl
 
 
 def _chi2(comparison: Comparison, noise: Mapping[str, float]) -> float:
-    return sum(float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2
-               for name, sub in comparison.by_dataset().items())
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged candidate: inf
+        return sum(float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2
+                   for name, sub in comparison.by_dataset().items())
 
 
 def explained_fraction(before: Comparison, after: Comparison,
