@@ -74,6 +74,20 @@ def read_zth_points(path: str | os.PathLike, rth_k_per_w: float | None = None,
     """Datasheet Zth points from a CSV: ``t_s`` and ``zth_k_per_w`` (absolute) or ``r``
     (normalized, needs ``rth_k_per_w``). Absolute points without Rth take their last value.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+    rth_k_per_w : float, optional
+        Rth, K/W (needed for normalized ``r``).
+    device : str
+        Label of the curve.
+
+    Returns
+    -------
+    ZthCurve
+        The datasheet curve.
+
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "zth.csv"
     >>> _ = p.write_text("t_s,r\\n1e-3,0.18\\n1e-2,0.39\\n")
@@ -103,6 +117,16 @@ def read_zth_points(path: str | os.PathLike, rth_k_per_w: float | None = None,
 def read_foster_table(path: str | os.PathLike) -> Foster:
     """A published Foster model from a CSV: one row per stage, ``r_k_per_w`` and ``tau_s``
     (or ``c_j_per_k``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    Foster
+        The published ladder.
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "foster.csv"
@@ -215,6 +239,11 @@ def table1(source: ZthCurve | Bundle, datasheet: Datasheet | None = None, *,
     normalize : ``"measured"`` — r(t) = Zth/Rth with the measured Rth (eq. 2, the paper, which
         biased the diode so that Rth matched the datasheet's); ``"datasheet"`` — divide by the
         datasheet's Rth.
+
+    Returns
+    -------
+    Table1
+        One row per datasheet time: measured and datasheet r(t), error in percent.
 
     Examples
     --------

@@ -1116,6 +1116,24 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
     The verdict follows the rule of :func:`diagnose`; the reason states what the numbers
     support, and :attr:`Diagnosis.extra` holds the :class:`TableAnalysis`.
 
+    Parameters
+    ----------
+    path : str or Path
+        The CSV table (``freq_hz, duty, tj_exp_c, tj_model_c``).
+    rth_k_per_w : float
+        Thermal resistance of the simulated ladder, K/W (the paper's 146).
+    power_w : float, optional
+        Pulse power, W; default from the simulated column at the lowest frequency.
+    window_s : float
+        Sample window the bench used, s (the paper's 100 µs).
+    ambient_c : float
+        Reference temperature added to the rises, degC.
+
+    Returns
+    -------
+    Diagnosis
+        The verdict and its reason; ``extra`` holds the :class:`TableAnalysis`.
+
     Examples
     --------
     >>> from spicethermal.data import path

@@ -95,6 +95,11 @@ def steady_state(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: f
         Sample window (power off) that starts when an on-phase ends; the reading is the
         junction rise at its end. 0 reads the peak.
 
+    Returns
+    -------
+    PwmState
+        Peak, mean, valley and reading, K above the reference.
+
     Examples
     --------
     >>> from spicethermal.ladder import Foster

@@ -358,6 +358,26 @@ def pwm_state(model: ThermalModel, power_w: float, freq_hz: float, duty: float,
     ``analytic`` is :meth:`ThermalModel.pwm` (closed form, or shooting with device effects);
     ``auto`` picks it for a linear model and ngspice otherwise (see :func:`resolve_engine`).
 
+    Parameters
+    ----------
+    model : ThermalModel
+        The model to drive.
+    power_w, freq_hz, duty : float
+        Pulse power (W), PWM frequency (Hz) and duty cycle (0..1).
+    window_s : float
+        Sample window after an on-phase, s (0 reads the peak).
+    engine : str
+        ``analytic``, ``ngspice``, ``pyspice`` or ``auto``.
+    tref_c : float
+        Reference temperature, degC.
+    dialect, topology : str
+        The ``.lib`` written for a SPICE engine.
+
+    Returns
+    -------
+    PwmState
+        Peak, mean, valley and bench reading (K above the reference).
+
     >>> from spicethermal.ladder import Foster
     >>> from spicethermal.model import ThermalModel
     >>> m = ThermalModel(Foster.from_tau([10.0], [1e-3]))

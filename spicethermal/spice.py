@@ -399,7 +399,22 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
 def export(model: ThermalModel, path: str | os.PathLike, dialect: str = "ngspice",
            topology: str | None = None, name: str | None = None, *, pins: Pins | None = None,
            temperature: str = "rise") -> Path:
-    """Write the subcircuit file atomically and return its path (see :func:`render_lib`)."""
+    """Write the subcircuit file atomically and return its path (see :func:`render_lib`).
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model to write.
+    path : str or os.PathLike
+        The ``.lib`` file to write.
+    dialect, topology, name, pins, temperature
+        As for :func:`render_lib`.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     path = Path(path)
     text = render_lib(model, dialect, topology, name, path.name, pins=pins,
                       temperature=temperature)
@@ -576,7 +591,18 @@ def _shared_ngspice():
 
 
 def simulator(engine: str) -> Simulator:
-    """The backend named ``engine``: ``ngspice`` (binary) or ``pyspice`` (in process)."""
+    """The backend named ``engine``: ``ngspice`` (binary) or ``pyspice`` (in process).
+
+    Parameters
+    ----------
+    engine : str
+        ``"ngspice"`` (the ``ngspice -b`` binary) or ``"pyspice"`` (libngspice in process).
+
+    Returns
+    -------
+    Simulator
+        An object with ``run(netlist, vectors, dialect)``.
+    """
     if engine in ("ngspice", "batch"):
         return NgspiceBatch()
     if engine in ("pyspice", "shared"):

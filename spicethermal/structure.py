@@ -195,6 +195,20 @@ def structure_function(source: ZthCurve | Spectrum | Foster | Cauer, *,
     """Structure function of a Zth curve (through its time-constant spectrum), a spectrum or
     a ladder.
 
+    Parameters
+    ----------
+    source : ZthCurve, Spectrum, Foster or Cauer
+        What to analyse; a curve goes through :func:`~spicethermal.spectrum.time_constant_spectrum`.
+    n_per_decade : float
+        Foster stages per decade of τ when a spectrum is lumped.
+    **spectrum_options
+        Passed to the spectrum of a curve.
+
+    Returns
+    -------
+    StructureFunction
+        Cumulative ΣR, ΣC from the junction outwards and the differential function.
+
     >>> from spicethermal.ladder import Foster
     >>> sf = structure_function(Foster.from_tau([1.0, 2.0], [1e-3, 1e-1]))
     >>> round(sf.rth_k_per_w, 12), sf.order

@@ -181,7 +181,18 @@ def _assignments(text: str) -> dict[str, str]:
 
 
 def read_library(path: str | os.PathLike) -> Library:
-    """Read the subcircuits and global parameters of a SPICE library file."""
+    """Read the subcircuits and global parameters of a SPICE library file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The SPICE library file.
+
+    Returns
+    -------
+    Library
+        Its subcircuits (by name) and ``.param`` values.
+    """
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -442,7 +453,22 @@ def import_table(path: str | os.PathLike, reference: str = "case") -> ThermalMod
 
 def import_model(path: str | os.PathLike, subckt: str | None = None,
                  reference: str | None = None) -> ThermalModel:
-    """A vendor's thermal model from a SPICE library or a datasheet Foster table (``.csv``)."""
+    """A vendor's thermal model from a SPICE library or a datasheet Foster table (``.csv``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A SPICE library (``.lib``, ``.mod``, ...) or a Foster table CSV.
+    subckt : str, optional
+        The subcircuit to import when the library holds several.
+    reference : str, optional
+        ``"case"`` or ``"ambient"``: what the network is measured to.
+
+    Returns
+    -------
+    ThermalModel
+        The vendor's network, exactly (no refit).
+    """
     if Path(path).suffix.lower() == ".csv":
         if subckt is not None:
             raise DataFormatError(f"{path}: --subckt applies to SPICE libraries, not CSV tables")

@@ -28,7 +28,12 @@ def test_every_public_name_resolves_and_is_documented(name: str) -> None:
     if name == "__version__":
         assert re.fullmatch(r"\d+\.\d+\.\d+", obj)
         return
-    assert (inspect.getdoc(obj) or "").strip(), f"{name} has no docstring"
+    doc = inspect.getdoc(obj) or ""
+    assert doc.strip(), f"{name} has no docstring"
+    if inspect.isfunction(obj):  # numpydoc sections of every public function
+        if inspect.signature(obj).parameters:
+            assert "\nParameters\n----------" in doc, f"{name}: numpydoc 'Parameters' missing"
+        assert "\nReturns\n-------" in doc, f"{name}: numpydoc 'Returns' missing"
 
 
 def test_unknown_name_is_an_attribute_error() -> None:

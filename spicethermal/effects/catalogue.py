@@ -73,7 +73,18 @@ _PLUGINS_LOADED = False
 
 
 def register(effect_spec: EffectSpec) -> EffectSpec:
-    """Add ``effect_spec`` to the catalogue (replacing one of the same name); returns it."""
+    """Add ``effect_spec`` to the catalogue (replacing one of the same name); returns it.
+
+    Parameters
+    ----------
+    effect_spec : EffectSpec
+        The effect's specification.
+
+    Returns
+    -------
+    EffectSpec
+        ``effect_spec`` itself (usable as a decorator-style call).
+    """
     if effect_spec.kind not in (DEVICE, MEASUREMENT):
         raise DataFormatError(f"effect {effect_spec.name}: kind {effect_spec.kind!r} must be "
                               f"{DEVICE} or {MEASUREMENT}")
@@ -117,7 +128,13 @@ CATALOGUE: Mapping[str, EffectSpec] = _Catalogue()
 
 
 def known_names() -> list[str]:
-    """Effect names of the catalogue, sorted."""
+    """Effect names of the catalogue, sorted.
+
+    Returns
+    -------
+    list of str
+        The registered effect names.
+    """
     return sorted(CATALOGUE)
 
 
