@@ -25,6 +25,7 @@ import io
 import logging
 import os
 import sys
+import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -230,8 +231,12 @@ def run_batch(paths: Sequence[str | os.PathLike], out_dir: str | os.PathLike, *,
         else:
             pending.append(i)
     bar = _progress_bar(len(sources), len(records), progress)
+    # keys unique to this run: a key cancelled at the end of an earlier run may still be in
+    # the scheduler's hands, and a new future under it would be cancelled with it
+    run_id = uuid.uuid4().hex[:8]
     futures = {client.submit(task, sources[i], options, key=f"characterize-{sources[i].name}-"
-                             f"{sources[i].sha256[:12]}", pure=False): i for i in pending}
+                             f"{sources[i].sha256[:12]}-{run_id}", pure=False): i
+               for i in pending}
     try:
         from distributed import as_completed
 
@@ -245,7 +250,7 @@ def run_batch(paths: Sequence[str | os.PathLike], out_dir: str | os.PathLike, *,
             bar.update(1)
     finally:
         bar.close()
-        client.cancel(list(futures))
+        client.cancel([f for f in futures if not f.done()])  # only what an interrupt left
     results = tuple(records[i] for i in range(len(sources)))
     write_table([r["row"] for r in results], out)
     return BatchRun(results, len(pending), len(sources) - len(pending))
