@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 
 from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, ZthTable
 from spicethermal.curves import ZthCurve, detect_transient, log_grid
@@ -14,7 +15,7 @@ from spicethermal.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3
 from spicethermal.ladder import Foster
 from spicethermal.synthetic import mur880e_foster, synthetic_cooling
 
-PYRTH = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
+PYRTH = DATA / "pyrth_mosfet"
 
 LADDER = Foster.from_tau([0.2, 0.8, 1.5, 2.5], [1e-4, 3e-3, 0.1, 2.0])
 T = np.geomspace(1e-6, 30.0, 400)

@@ -8,13 +8,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 
 from spicethermal.bundle import Bundle, format_columns
 from spicethermal.calibration import KFactor
 from spicethermal.cli import main
 from spicethermal.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
 
-DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
+MOSFET = DATA / "pyrth_mosfet"
 #: PyRth's totals for these files (K per watt of the 1 W nominal step) and the ΣR where its
 #: structure functions of the two mountings part.
 PYRTH_RTH = {"dry": 13.667, "tim": 5.977}
@@ -28,7 +29,7 @@ def bundles(tmp_path_factory) -> dict[str, Path]:
     """Each transient in a bundle whose calibration is the K-factor of the PyRth calibration
     points, anchored at the end of the record (the device back at 25 degC)."""
     root = tmp_path_factory.mktemp("mosfet")
-    return {name: read_pyrth(DATA / f"MOSFET_{name}.txt", PYRTH_MOSFET_CALIBRATION,
+    return {name: read_pyrth(MOSFET / f"MOSFET_{name}.txt", PYRTH_MOSFET_CALIBRATION,
                              tref_c=25.0).write(root / name) for name in ("dry", "tim")}
 
 
@@ -50,7 +51,7 @@ def test_the_absolute_table_alone_puts_the_device_below_room_temperature(tmp_pat
     """The physical reason of 'Tj at the cut (15.86 degC) is not above the reference': the
     transient's sensor voltage sits ~50 mV above the oven calibration's level, so the table
     reads the end of the record near 2 degC. The error now says what to do."""
-    b = read_pyrth(DATA / "MOSFET_dry.txt", PYRTH_MOSFET_CALIBRATION)
+    b = read_pyrth(MOSFET / "MOSFET_dry.txt", PYRTH_MOSFET_CALIBRATION)
     assert b.cooling[0].tref_steady_c == pytest.approx(2.07, abs=0.05)
     path = b.with_(ambient_c=25.0, cooling=(
         b.cooling[0].__class__(b.cooling[0].t_s, 1.0, v_tsp_v=b.cooling[0].v_tsp_v,
@@ -126,12 +127,12 @@ def _sources(tmp_path: Path, bundles) -> dict[str, list[str]]:
                                     ["digitized datasheet curve"]))
     cooling = tmp_path / "cooling.csv"
     cooling.write_text(format_columns({"t_s": t, "tj_c": 25.0 + 2.0 * ladder.cooling(t)}))
-    cal = ["--calibration", str(DATA / "calibration.csv"), "--tref", "25"]
+    cal = ["--calibration", str(MOSFET / "calibration.csv"), "--tref", "25"]
     return {"bundle": [str(bundles["tim"])], "zth": [str(zth)],
             "datasheet": [str(sheet), "--rth", "1.7"],
             "cooling": [str(cooling), "--tref", "25", "--power", "2"],
-            "pyrth": [str(DATA / "MOSFET_tim.txt"), *cal],
-            "t3ster": [str(DATA / "t3ster" / "T25_I-m5m-I-h600m_100s.raw")]}
+            "pyrth": [str(MOSFET / "MOSFET_tim.txt"), *cal],
+            "t3ster": [str(MOSFET / "t3ster" / "T25_I-m5m-I-h600m_100s.raw")]}
 
 
 @pytest.mark.parametrize("command", ["fit", "compare", "spectrum", "table1"])
@@ -154,7 +155,7 @@ def test_every_command_takes_every_source(command, bundles, tmp_path, capsys) ->
 
 
 def test_a_raw_transient_without_calibration_names_the_options(capsys) -> None:
-    raw = str(DATA / "MOSFET_dry.txt")
+    raw = str(MOSFET / "MOSFET_dry.txt")
     for args in (["fit", raw, "-o", "x.json"], ["spectrum", raw], ["structure", raw],
                  ["diagnose", raw], ["table1", raw, "--datasheet", "mur880e"]):
         assert main(args) == 2

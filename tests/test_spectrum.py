@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 
 from spicethermal.errors import DataFormatError
 from spicethermal.ladder import Cauer, Foster
@@ -19,7 +19,7 @@ from spicethermal.spectrum import (
 )
 from spicethermal.synthetic import synthetic_cooling
 
-DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
+MOSFET = DATA / "pyrth_mosfet"
 
 
 # ------------------------------------------------------------------------ closed forms
@@ -110,7 +110,8 @@ def test_spectrum_is_immutable_and_validated():
 def mosfet():
     from spicethermal.sources import read_source
 
-    curves = {name: read_source(DATA / f"MOSFET_{name}.txt", calibration=DATA / "calibration.csv",
+    cal = MOSFET / "calibration.csv"
+    curves = {name: read_source(MOSFET / f"MOSFET_{name}.txt", calibration=cal,
                                 tref_c=25.0).curve() for name in ("dry", "tim")}
     return {name: (c, time_constant_spectrum(c)) for name, c in curves.items()}
 

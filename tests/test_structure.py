@@ -4,10 +4,10 @@ noisy Zth data, separation of two mountings (synthetic and the real MOSFET trans
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 
 from spicethermal.errors import DataFormatError
 from spicethermal.ladder import Cauer, Foster
@@ -19,7 +19,7 @@ from spicethermal.structure import (
     structure_function,
 )
 
-DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
+MOSFET = DATA / "pyrth_mosfet"
 
 #: The known heat path of the recovery test: die, die attach, base plate, heat sink
 #: (r in K/W, c in J/K); its Foster time constants are 0.1 ms, 27 ms, 0.53 s and 31 s.
@@ -135,7 +135,7 @@ def mosfet():
 
     out = {}
     for name in ("dry", "tim"):
-        curve = read_source(DATA / f"MOSFET_{name}.txt", calibration=DATA / "calibration.csv",
+        curve = read_source(MOSFET / f"MOSFET_{name}.txt", calibration=MOSFET / "calibration.csv",
                                 tref_c=25.0).curve()
         out[name] = (curve, structure_function(curve))
     return out

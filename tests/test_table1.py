@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 
 from spicethermal import cli
 from spicethermal.bundle import Bundle, CoolingTable, format_columns, parse_columns
@@ -32,7 +33,7 @@ def test_table1_rebuilds_the_papers_error_column() -> None:
     ds = mur880e()
     paper = ZthCurve.from_points(ds.t_s, r=ds.reference_r, rth_k_per_w=1.51)
     t = table1(paper)
-    text = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "mur880e_table1.csv"
+    text = DATA / "mur880e_table1.csv"
     published = parse_columns(text.read_text(), ["error_percent"])["error_percent"]
     # the paper truncates (5.56 -> 5.5): agree within 0.06 percentage points
     np.testing.assert_allclose(t.error_percent, published, atol=0.06)
