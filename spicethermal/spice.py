@@ -23,12 +23,14 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from .effects.spice import number
 from .errors import DataFormatError, SimulationError
 from .files import atomic_write_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
+    from .effects import Effect
     from .ladder import Cauer, Foster
     from .model import ThermalModel
 
@@ -69,13 +71,8 @@ def environment():
     return env
 
 
-def fmt(x: float) -> str:
-    """A number in SPICE syntax with full double precision (no engineering suffixes).
-
-    >>> fmt(1e-4), fmt(146.0)
-    ('0.0001', '146.0')
-    """
-    return repr(float(x))
+#: A number in SPICE syntax with full double precision (no engineering suffixes).
+fmt = number
 
 
 def check_name(name: str) -> str:
@@ -251,6 +248,38 @@ def _stages(ladder: Foster | Cauer, pins: Pins) -> list[dict]:
     return out
 
 
+def _temperature(node: str, offset: str) -> str:
+    """SPICE expression of a node's temperature in °C (a rise plus ``TOFFSET`` in rise mode)."""
+    return f"V({node}){offset}"
+
+
+def _resistance_expression(effects: Sequence[Effect], layer: int, stage: Mapping, pins: Pins,
+                           offset: str) -> str | None:
+    """``R·f1·f2…`` for the stage's behavioural resistance, ``None`` when no effect touches it.
+
+    The layer's temperature is the mean of its two end nodes (the reference pin counts as a
+    node: its voltage is the reference temperature).
+    """
+    t_layer = (f"(({_temperature(stage['a'], offset)})"
+               f"+({_temperature(stage['b'], offset)}))/2")
+    t_junction = _temperature(pins.junction, offset)
+    factors = [f for e in effects
+               if (f := e.spice_resistance_scale(layer, t_layer, t_junction)) is not None]
+    return "*".join([fmt(stage["r"]), *factors]) if factors else None
+
+
+def _stored_heats(effects: Sequence[Effect], nodes: Sequence[str], offset: str) -> list[dict]:
+    """Per node, the SPICE expression of the heat stored beyond the linear capacity."""
+    out = []
+    for index, node in enumerate(nodes):
+        terms = [q for e in effects
+                 if (q := e.spice_stored_heat(index, _temperature(node, offset)))
+                 is not None]
+        if terms:
+            out.append({"node": node, "expr": "+".join(terms)})
+    return out
+
+
 def internal_nodes(model: ThermalModel) -> list[str]:
     """Names of the ladder nodes inside the subcircuit, junction first (``TJ``, ``N1``, ...)."""
     return ["TJ", *[f"N{k}" for k in range(1, model.ladder.order)]]
@@ -370,20 +399,18 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
         raise DataFormatError("--pins: an ambient pin (thermal ground) needs --topology cauer; "
                               "a Foster ladder has no node for it")
     ladder, notes = simulator_ready(model.ladder)
-    tc = model.effect("temperature-coefficient")
-    pcs = []
-    nodes = [pins.junction, *internal_nodes(model)[1:]]
-    for e in model.device_effects:
-        if e.name == "phase-change":
-            p = e.params
-            pcs.append({"node": nodes[int(p["node"])], "latent_j": p["latent_j"],
-                        "t_c": p["t_c"], "scale_k": e.logistic_scale_k})
+    offset = "+TOFFSET" if temperature == "rise" else ""
+    stages = _stages(ladder, pins)
+    for layer, stage in enumerate(stages):
+        stage["rexpr"] = _resistance_expression(model.device_effects, layer, stage, pins, offset)
+    heats = _stored_heats(model.device_effects, [pins.junction, *internal_nodes(model)[1:]],
+                          offset)
     ctx = {
         "name": name, "dialect": dialect, "topology": ladder.topology,
         "order": ladder.order, "version": __version__, "rth": model.rth,
         "reference": model.reference, "reference_label": _REFERENCE_LABEL[model.reference],
         "filename": sanitize_comment(filename, 80), "pins": pins, "temperature": temperature,
-        "offset": "+TOFFSET" if temperature == "rise" else "",
+        "offset": offset,
         "usage_nodes": [{"junction": "TJ", "reference": "TREF",
                          "ambient": "TAMB" if temperature == "absolute" else "0"}[role]
                         for role in pins.order],
@@ -391,7 +418,7 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
         "provenance": _provenance_lines(model.provenance), "facts": _facts(model),
         "notes": notes, "case_c": model.case_c_j_per_k if ladder.topology == "cauer" else 0.0,
         "effects": [e for e in model.device_effects],
-        "stages": _stages(ladder, pins), "tc": dict(tc.params) if tc else None, "pc": pcs,
+        "stages": stages, "heats": heats,
     }
     return environment().get_template(f"lib/{dialect}.lib.j2").render(**ctx)
 

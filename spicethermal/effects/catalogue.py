@@ -46,6 +46,16 @@ class EffectSpec:
     hooks take the :class:`Effect` first: ``resistance_scale(effect, tj_c)`` (factor on every
     resistance), ``extra_capacitance(effect, node, t_c)`` (J/K) and
     ``latent_heat(effect, node, t_c)`` (J absorbed on the way up to ``t_c``).
+
+    Their SPICE renderings are the same physics as dialect-neutral behavioural expressions
+    (``+ - * /``, ``EXP``, ``MAX``, ``MIN``, ``PWR``; temperatures in °C):
+    ``spice_resistance_scale(effect, layer, t_layer, t_junction)`` returns the factor on the
+    resistance of ladder layer ``layer`` (0 = the one at the junction) given the expressions
+    of that layer's temperature and the junction temperature, or ``None`` when the layer is
+    untouched; ``spice_stored_heat(effect, node, t_node)`` returns the heat (J) stored at
+    ``node`` beyond its linear capacity as a function of the node's temperature expression
+    (the integral of ``extra_capacitance``), or ``None``. The SPICE writer asks every device
+    effect for these and knows no effect by name.
     """
 
     name: str
@@ -56,6 +66,8 @@ class EffectSpec:
     resistance_scale: Callable[..., float] | None = None
     extra_capacitance: Callable[..., float] | None = None
     latent_heat: Callable[..., float] | None = None
+    spice_resistance_scale: Callable[..., str | None] | None = None
+    spice_stored_heat: Callable[..., str | None] | None = None
 
     @classmethod
     def create(cls, name: str, kind: str, summary: str, forms: tuple[str, ...] = ("standard",),
@@ -241,6 +253,29 @@ class Effect:
         """
         hook = spec(self.name).extra_capacitance
         return 0.0 if hook is None else float(hook(self, node, t_c))
+
+    # -- SPICE renderings of the same physics (``None`` where the effect does not apply) ------
+    def spice_resistance_scale(self, layer: int, t_layer: str, t_junction: str) -> str | None:
+        """SPICE expression of the factor on layer ``layer``'s resistance, or ``None``.
+
+        >>> e = Effect.create("temperature-coefficient", alpha_per_k=-3e-3)
+        >>> e.spice_resistance_scale(0, "V(N1)", "V(TJ)")
+        'MAX(0.05,1+(-0.003)*(V(TJ)-(25.0)))'
+        >>> Effect.create("sample-window").spice_resistance_scale(0, "V(N1)", "V(TJ)") is None
+        True
+        """
+        hook = spec(self.name).spice_resistance_scale
+        return None if hook is None else hook(self, layer, t_layer, t_junction)
+
+    def spice_stored_heat(self, node: int, t_node: str) -> str | None:
+        """SPICE expression of the heat (J) stored at ``node`` beyond its linear capacity.
+
+        >>> e = Effect.create("phase-change", t_c=60.0, width_k=1.0, latent_j=2.0, node=1)
+        >>> e.spice_stored_heat(0, "V(TJ)") is None
+        True
+        """
+        hook = spec(self.name).spice_stored_heat
+        return None if hook is None else hook(self, node, t_node)
 
     @property
     def logistic_scale_k(self) -> float:

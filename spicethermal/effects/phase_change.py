@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 from .catalogue import DEVICE, EffectSpec, Param, register
+from .spice import number
 
 
 def _z(effect, node: int, t_c: float) -> float | None:
@@ -44,6 +45,15 @@ def extra_capacitance(effect, node: int, t_c: float) -> float:
     return effect.params["latent_j"] * e / (effect.logistic_scale_k * (1.0 + e) ** 2)
 
 
+def spice_stored_heat(effect, node: int, t_node: str) -> str | None:
+    """The heat absorbed up to ``t_node`` as a SPICE expression (``None`` at other nodes)."""
+    if node != int(effect.params["node"]):
+        return None
+    p = effect.params
+    return (f"({number(p['latent_j'])})/(1+EXP(-({t_node}-({number(p['t_c'])}))"
+            f"/({number(effect.logistic_scale_k)})))")
+
+
 SPEC = register(EffectSpec(
     "phase-change", DEVICE,
     "latent heat (cavity fluid, solder, TIM): extra heat capacity over a temperature band",
@@ -51,4 +61,5 @@ SPEC = register(EffectSpec(
      "width_k": Param("K", 2.0, 0.05, 100.0, "standard deviation of the band"),
      "latent_j": Param("J", 0.0, 0.0, 1e6, "latent heat absorbed across the band"),
      "node": Param("", 0, 0, 1000, "ladder node holding the latent heat (0 = junction)")},
-    ("logistic",), extra_capacitance=extra_capacitance, latent_heat=latent_heat))
+    ("logistic",), extra_capacitance=extra_capacitance, latent_heat=latent_heat,
+    spice_stored_heat=spice_stored_heat))

@@ -13,6 +13,7 @@ kelvin: the fit then reports an effective α.
 from __future__ import annotations
 
 from .catalogue import DEVICE, EffectSpec, Param, register
+from .spice import number
 
 
 def resistance_scale(effect, tj_c: float) -> float:
@@ -21,8 +22,15 @@ def resistance_scale(effect, tj_c: float) -> float:
     return max(0.05, 1.0 + p["alpha_per_k"] * (tj_c - p["t0_c"]))
 
 
+def spice_resistance_scale(effect, _layer: int, _t_layer: str, t_junction: str) -> str:
+    """The same factor as a SPICE expression of the junction temperature."""
+    p = effect.params
+    return f"MAX(0.05,1+({number(p['alpha_per_k'])})*({t_junction}-({number(p['t0_c'])})))"
+
+
 SPEC = register(EffectSpec(
     "temperature-coefficient", DEVICE, "Rth changes with temperature, R(T) = R0·(1 + α·(T − T0))",
     {"alpha_per_k": Param("1/K", 0.0, -0.02, 0.02, "relative change of every R per kelvin"),
      "t0_c": Param("°C", 25.0, -273.15, 1000.0, "temperature at which R = R0")},
-    ("junction",), resistance_scale=resistance_scale))
+    ("junction",), resistance_scale=resistance_scale,
+    spice_resistance_scale=spice_resistance_scale))
