@@ -32,7 +32,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .bundle import CoolingTable, ZthTable, _frozen
+from .columns import frozen
+from .datasets import CoolingTable, ZthTable
 from .errors import DataFormatError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -335,7 +336,7 @@ class ZthCurve:
     @property
     def r(self) -> NDArray:
         """Normalized impedance r(t) = Zth(t)/Rth (eq. 2)."""
-        return _frozen(self.zth_k_per_w / self.rth_k_per_w)
+        return frozen(self.zth_k_per_w / self.rth_k_per_w)
 
     def normalized(self) -> NDArray:
         """r(t) = Zth(t)/Rth at the curve's times (eq. 2 of the paper)."""

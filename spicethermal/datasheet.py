@@ -26,7 +26,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .bundle import Bundle, _frozen, parse_columns, read_columns
+from .bundle import Bundle
+from .columns import frozen, parse_columns, read_columns
 from .curves import ZthCurve
 from .errors import DataFormatError, where
 from .ladder import Foster
@@ -278,6 +279,6 @@ def table1(source: ZthCurve | Bundle, datasheet: Datasheet | None = None, *,
     ref_err = None if ds.reference_r is None else _percent(ds.reference_r, ds.r)
     if not np.all(np.isfinite(measured)) or math.isnan(rth):
         raise DataFormatError("table1: the measured curve gives no finite r(t)")
-    return Table1(ds.device, ds.t_s, _frozen(measured), ds.r, _frozen(_percent(measured, ds.r)),
+    return Table1(ds.device, ds.t_s, frozen(measured), ds.r, frozen(_percent(measured, ds.r)),
                   zc.rth_k_per_w, ds.rth_k_per_w, extrapolated, ds.reference_r, ref_err,
                   ds.reference_label, zc.label, str(zc.early) if zc.early else "")
