@@ -79,6 +79,27 @@ class Bundle:
     :meth:`write`. Unknown keys of ``bundle.json`` are kept in ``extra`` (and in each
     table's ``extra``) and written back.
 
+    Attributes
+    ----------
+    device : str
+        The device's name (``""`` when not given).
+    reference : str
+        The reference node of every temperature: ``"case"``, ``"ambient"`` (default), ...
+    ambient_c : float or None
+        The ambient temperature (degC), when known.
+    calibration : CalibrationTable, KFactor or None
+        The TSP calibration (points or a K-factor).
+    cooling : tuple of CoolingTable
+        The cooling curves.
+    pwm : PwmTable or None
+        The PWM grid of junction temperatures.
+    zth : tuple of ZthTable
+        Zth(t) curves given as such (datasheet or measured).
+    extra : Mapping
+        Unknown keys of ``bundle.json``, kept and written back.
+    source : str or None
+        The directory the bundle was read from (None when built in memory).
+
     >>> b = Bundle(calibration=CalibrationTable([25, 75], [0.60, 0.50]))
     >>> round(b.calibration_fit().k_factor_mv_per_k, 6)
     -2.0

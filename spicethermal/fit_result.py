@@ -58,12 +58,16 @@ class FitResult:
     rth_fixed : bool
         Whether ``ΣR = Rth`` was imposed.
     converged : bool
-        The optimiser's convergence flag for the returned fit; ``message`` says more.
+        The optimiser's convergence flag for the returned fit.
+    message : str
+        The optimiser's message.
     warnings : tuple of str
         What the user should know about an accepted fit (a given order the data do not
         support, an undetermined time constant, an order at ``max_order``).
     n_fit_points : int
         Points actually fitted (fewer than the data when dense data were binned).
+    weighting : str
+        How the residuals were weighted, in words (absolute or relative).
     """
 
     foster: Foster
