@@ -30,6 +30,7 @@ from .bundle import Bundle
 from .columns import frozen, parse_columns, read_columns
 from .curves import ZthCurve
 from .errors import DataFormatError, where
+from .jsondoc import JsonDocument
 from .ladder import Foster
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -161,7 +162,7 @@ def _percent(measured: NDArray, reference: NDArray) -> NDArray:
 
 
 @dataclass(frozen=True, eq=False)
-class Table1:
+class Table1(JsonDocument):
     """Measured vs datasheet r(t) (the paper's Table 1 for any device and curve)."""
 
     device: str
@@ -179,7 +180,7 @@ class Table1:
     early: str = ""
     meta: dict[str, Any] = field(default_factory=dict, repr=False)
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict (``format: spicethermal-table1/1``)."""
         rows = []
         for i, t in enumerate(self.t_s):

@@ -8,8 +8,8 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from .files import dumps_json
 from .fit_problem import CRITERION, CRITERION_RULE
+from .jsondoc import JsonDocument
 from .ladder import Foster
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 # ----------------------------------------------------------------------------- results
 @dataclass(frozen=True)
-class OrderTrial:
+class OrderTrial(JsonDocument):
     """What happened at one order: its fit quality, criterion value and verdict."""
 
     order: int
@@ -28,6 +28,7 @@ class OrderTrial:
     reason: str = ""
 
     def to_dict(self) -> dict[str, Any]:
+        """The trial as JSON-ready data (a criterion value that is not finite is None)."""
         return {
             "order": self.order,
             "criterion_value": _json_float(self.criterion_value),
@@ -36,9 +37,23 @@ class OrderTrial:
             "reason": self.reason,
         }
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> OrderTrial:
+        """The trial :meth:`to_dict` described (None back to NaN).
+
+        >>> t = OrderTrial(3, float("nan"), 0.5, False, "no convergence")
+        >>> OrderTrial.from_json(t.to_json()).reason
+        'no convergence'
+        """
+        nan = float("nan")
+        return cls(int(data["order"]),
+                   nan if data["criterion_value"] is None else float(data["criterion_value"]),
+                   nan if data["rms_k_per_w"] is None else float(data["rms_k_per_w"]),
+                   bool(data["accepted"]), str(data.get("reason", "")))
+
 
 @dataclass(frozen=True, eq=False)
-class FitResult:
+class FitResult(JsonDocument):
     """A fitted Foster ladder with its diagnostics. Immutable; prints as a table.
 
     Attributes
@@ -135,10 +150,6 @@ class FitResult:
             "message": self.message,
             "warnings": list(self.warnings),
         }
-
-    def to_json(self, indent: int | None = 2) -> str:
-        """:meth:`to_dict` as a JSON string."""
-        return dumps_json(self.to_dict(), indent=indent)
 
     def __str__(self) -> str:
         head = (f"Foster ladder, order {self.order} ({self._order_note()}), "
