@@ -130,9 +130,9 @@ class Foster(_Ladder):
     Attributes
     ----------
     r : tuple of float
-        Stage resistances (K/W).
+        Stage resistances (K/W), fastest stage first.
     c : tuple of float
-        Stage capacitances (J/K).
+        Stage capacitances (J/K), in the same order.
 
     >>> f = Foster.from_tau([1.0, 2.0], [1e-3, 1.0])
     >>> f.rth
@@ -222,9 +222,9 @@ class Cauer(_Ladder):
     Attributes
     ----------
     r : tuple of float
-        Stage resistances (K/W).
+        Resistances (K/W): ``r[i]`` from node i to node i+1 (the last one to the reference).
     c : tuple of float
-        Stage capacitances (J/K).
+        Capacitances (J/K): ``c[i]`` from node i to the thermal ground.
 
     >>> c = Foster.from_tau([1.0], [2.0]).to_cauer()
     >>> c.r, c.c

@@ -49,3 +49,12 @@ def eng(x: float, unit: str) -> str:
     k = max(-4, min(2, k))
     prefix = {-4: "p", -3: "n", -2: "µ", -1: "m", 0: "", 1: "k", 2: "M"}[k]
     return f"{x / 10 ** (3 * k):.3g} {prefix}{unit}"
+
+
+def finish(ax: Axes, xlabel: str, ylabel: str) -> Axes:
+    """Label the axes, draw the grid (major and minor) and the legend; return ``ax``."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small")
+    return ax

@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .fit import FitResult
     from .ladder import Cauer, Foster
 
-from .plot_base import axes, eng, new_figure, save_figure
+from .plot_base import axes, eng, finish, new_figure, save_figure
 
 
 # ------------------------------------------------------------------ Fig. 7 (a), (b)
@@ -57,11 +57,7 @@ def plot_fit(result: FitResult, ax: Axes | None = None, stages: bool = True) -> 
             ax.plot(tt, r * -np.expm1(-tt / tau), ":", lw=0.9, color="0.45",
                     label="stages" if i == 1 else None)
     ax.set_xscale("log")
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel("Zth (K/W)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
-    return ax
+    return finish(ax, "t (s)", "Zth (K/W)")
 
 
 def plot_residuals(result: FitResult, ax: Axes | None = None) -> Axes:

@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .spectrum import Spectrum
     from .structure import Separation, StructureFunction
 
-from .plot_base import axes, new_figure, save_figure
+from .plot_base import axes, finish, new_figure, save_figure
 
 # ------------------------------------- NID: time-constant spectrum and structure functions
 
@@ -47,11 +47,7 @@ def plot_spectrum_fit(spectrum: Spectrum, ax: Axes | None = None,
     ax.axvspan(t[0], lo, color="0.85", lw=0, label="extension / masked")
     ax.axvspan(hi, t[-1], color="0.85", lw=0)
     ax.set_xscale("log")
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel("dZth/d(ln t) (K/W)" if derivative else "Zth (K/W)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
-    return ax
+    return finish(ax, "t (s)", "dZth/d(ln t) (K/W)" if derivative else "Zth (K/W)")
 
 
 def plot_spectrum(spectrum: Spectrum, ax: Axes | None = None, label: str | None = None,
@@ -75,11 +71,7 @@ def plot_spectrum(spectrum: Spectrum, ax: Axes | None = None, label: str | None 
     ax.axvline(lo, color="0.5", lw=0.8, ls="--")
     ax.axvline(hi, color="0.5", lw=0.8, ls="--")
     ax.set_xscale("log")
-    ax.set_xlabel("τ (s)")
-    ax.set_ylabel("R(τ) (K/W per decade)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
-    return ax
+    return finish(ax, "τ (s)", "R(τ) (K/W per decade)")
 
 
 def fig_spectrum(spectra: Spectrum | Sequence[Spectrum], path: str | os.PathLike) -> Path:
@@ -132,11 +124,7 @@ def plot_cumulative_structure(functions: StructureFunction | Sequence[StructureF
     lo = min(float(np.asarray(sf.c_j_per_k)[0]) for sf in items)
     if hi > lo > 0:
         ax.set_ylim(lo / 2, hi * 20)
-    ax.set_xlabel("ΣR from the junction (K/W)")
-    ax.set_ylabel("ΣC (J/K)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
-    return ax
+    return finish(ax, "ΣR from the junction (K/W)", "ΣC (J/K)")
 
 
 def plot_differential_structure(functions: StructureFunction | Sequence[StructureFunction],
@@ -153,11 +141,7 @@ def plot_differential_structure(functions: StructureFunction | Sequence[Structur
     if separation is not None and separation.r_k_per_w is not None:
         ax.axvline(separation.r_k_per_w, color="k", ls="--", lw=1.0)
     ax.set_yscale("log")
-    ax.set_xlabel("ΣR from the junction (K/W)")
-    ax.set_ylabel("K = dΣC/dΣR (W²·s/K²)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
-    return ax
+    return finish(ax, "ΣR from the junction (K/W)", "K = dΣC/dΣR (W²·s/K²)")
 
 
 def fig_structure(functions: StructureFunction | Sequence[StructureFunction],
