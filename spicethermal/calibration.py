@@ -99,6 +99,17 @@ class Calibration:
     """A fitted TSP calibration ``V(T) = Σ coefficients[k] · T^k`` (T in degC, V in volts).
 
     Build it with :meth:`fit`. Immutable.
+
+    Attributes
+    ----------
+    temp_c, v_tsp_v : tuple of float
+        The calibration points: temperatures (degC) and TSP voltages (V).
+    degree : int
+        Degree of the polynomial.
+    coefficients : tuple of float
+        ``V(T)`` coefficients, ascending powers of T (V per degC^k).
+    given : bool
+        Whether the coefficients were given (a polynomial calibration) rather than fitted.
     """
 
     temp_c: tuple[float, ...]

@@ -32,7 +32,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .bundle import CoolingTable, ZthTable, _frozen
+from .columns import frozen
+from .datasets import CoolingTable, ZthTable
 from .errors import DataFormatError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -168,6 +169,27 @@ class ZthCurve:
 
     Immutable. Build it with :meth:`from_cooling`, :meth:`from_points` or
     :meth:`from_bundle`; ``t_s`` must be > 0 and strictly increasing.
+
+    Attributes
+    ----------
+    t_s : ndarray (read-only)
+        Times (s), positive and strictly increasing.
+    zth_k_per_w : ndarray (read-only)
+        Thermal impedance (K/W) at ``t_s``.
+    rth_k_per_w : float
+        Thermal resistance (K/W), the steady-state value of Zth.
+    power_w : float or None
+        The heating power (W) of the measurement, when known.
+    label : str
+        A name for tables and plots.
+    early : EarlyTimeFix or None
+        The early-time (√t) correction applied to a cooling curve, when one was.
+    tj_max_c : float or None
+        The junction temperature (degC) in the heated steady state.
+    tref_steady_c : float or None
+        The reference temperature (degC) just before the power was cut.
+    meta : dict
+        Free-form provenance (e.g. how the curve was resampled).
     """
 
     t_s: NDArray
@@ -335,7 +357,7 @@ class ZthCurve:
     @property
     def r(self) -> NDArray:
         """Normalized impedance r(t) = Zth(t)/Rth (eq. 2)."""
-        return _frozen(self.zth_k_per_w / self.rth_k_per_w)
+        return frozen(self.zth_k_per_w / self.rth_k_per_w)
 
     def normalized(self) -> NDArray:
         """r(t) = Zth(t)/Rth at the curve's times (eq. 2 of the paper)."""

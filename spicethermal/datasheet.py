@@ -26,9 +26,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .bundle import Bundle, _frozen, parse_columns, read_columns
+from .bundle import Bundle
+from .columns import frozen, parse_columns, read_columns
 from .curves import ZthCurve
 from .errors import DataFormatError, where
+from .jsondoc import JsonDocument
 from .ladder import Foster
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -160,7 +162,7 @@ def _percent(measured: NDArray, reference: NDArray) -> NDArray:
 
 
 @dataclass(frozen=True, eq=False)
-class Table1:
+class Table1(JsonDocument):
     """Measured vs datasheet r(t) (the paper's Table 1 for any device and curve)."""
 
     device: str
@@ -178,7 +180,7 @@ class Table1:
     early: str = ""
     meta: dict[str, Any] = field(default_factory=dict, repr=False)
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict (``format: spicethermal-table1/1``)."""
         rows = []
         for i, t in enumerate(self.t_s):
@@ -278,6 +280,6 @@ def table1(source: ZthCurve | Bundle, datasheet: Datasheet | None = None, *,
     ref_err = None if ds.reference_r is None else _percent(ds.reference_r, ds.r)
     if not np.all(np.isfinite(measured)) or math.isnan(rth):
         raise DataFormatError("table1: the measured curve gives no finite r(t)")
-    return Table1(ds.device, ds.t_s, _frozen(measured), ds.r, _frozen(_percent(measured, ds.r)),
+    return Table1(ds.device, ds.t_s, frozen(measured), ds.r, frozen(_percent(measured, ds.r)),
                   zc.rth_k_per_w, ds.rth_k_per_w, extrapolated, ds.reference_r, ref_err,
                   ds.reference_label, zc.label, str(zc.early) if zc.early else "")

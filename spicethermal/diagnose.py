@@ -788,19 +788,14 @@ def bic_drop(cand: Candidate, base: Comparison, noise: Mapping[str, float]) -> f
 def write_report(result: Diagnosis, out_dir: str | Path) -> Path:
     """Write the HTML report of a diagnosis (``index.html``, self-contained but for its PNG
     figures beside it, from ``templates/report/diagnosis.html.j2``) into ``out_dir``."""
-    import jinja2
-
     from .files import atomic_write_text
     from .plots import diagnosis_figures
-    from .spice import _template_dir
+    from .templates import environment
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figs = diagnosis_figures(result, out)
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(_template_dir())),
-                             undefined=jinja2.StrictUndefined,
-                             autoescape=jinja2.select_autoescape(["html", "j2"]))
-    html = env.get_template("report/diagnosis.html.j2").render(
+    html = environment().get_template("report/diagnosis.html.j2").render(
         diagnosis=result, doc=result.to_json(), figures=[p.name for p in figs],
         text=str(result))
     return atomic_write_text(out / "index.html", html)

@@ -63,13 +63,37 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from .errors import DataFormatError, FitError
-from .files import dumps_json
+from .fit_problem import (
+    BINS_PER_DECADE,
+    CRITERION,
+    CRITERION_RULE,
+    DENSE_POINTS,
+    MIN_SIGNIFICANCE,
+    MIN_STAGE_FRACTION,
+    MIN_TAU_RATIO,
+    PATIENCE,
+    RELATIVE_FLOOR,
+    RELATIVE_PRECISION,
+    SEEDS_PER_ORDER,
+    WINDOW_MARGIN,
+    Problem,
+    Solution,
+    as_data,
+    bin_data,
+    bin_noise,
+    grown_seeds,
+    guard,
+    log_bins,
+    reduce_clusters,
+    spectrum_clusters,
+)
+from .fit_result import FitResult, OrderTrial
 from .ladder import Foster
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -94,507 +118,6 @@ __all__ = [
     "fit_model",
     "log_bins",
 ]
-
-#: Name of the order-selection criterion (see the module docstring).
-CRITERION = "BIC"
-#: An order is rejected when two of its time constants are closer than this factor.
-MIN_TAU_RATIO = 2.0
-#: An order is rejected when one of its stages carries less than this fraction of Rth.
-MIN_STAGE_FRACTION = 0.002
-#: An order is rejected when a stage's R, or the log-ratio of two neighbouring time constants,
-#: is less than this many standard uncertainties from zero (the stage is not resolved).
-MIN_SIGNIFICANCE = 2.0
-#: An order is rejected when a time constant lies beyond [t_min / m, t_max · m], m this margin.
-WINDOW_MARGIN = 100.0
-#: Data with more points than this are averaged into log-spaced bins before fitting.
-DENSE_POINTS = 400
-#: Bins per decade of time used for dense data.
-BINS_PER_DECADE = 40
-#: Relative weighting: residuals are divided by sqrt(Zth² + f²), f this fraction of max Zth.
-RELATIVE_FLOOR = 1e-4
-#: Relative weighting of dense noisy data: where the noise of a bin exceeds this fraction of
-#: Zth, its residual is weighted by the noise instead (absolute), so noise never dominates.
-RELATIVE_PRECISION = 0.01
-
-#: The order-selection rule in one sentence (stored with every automatic fit).
-CRITERION_RULE = (
-    f"lowest BIC = n ln(RSS/n) + k ln(n) (chi2 + k ln(n) with sigma given) among orders whose "
-    f"time constants are >= {MIN_TAU_RATIO:g}x apart and >= {MIN_SIGNIFICANCE:g} standard "
-    f"uncertainties apart in log, whose every stage carries >= {100 * MIN_STAGE_FRACTION:g} % "
-    f"of Rth and >= {MIN_SIGNIFICANCE:g} standard uncertainties, and whose time constants lie "
-    f"within {WINDOW_MARGIN:g}x of the data window")
-
-_SPECTRUM_PER_DECADE = 8
-_SEEDS_PER_ORDER = 2
-_PATIENCE = 1
-
-
-# ----------------------------------------------------------------------------- results
-@dataclass(frozen=True)
-class OrderTrial:
-    """What happened at one order: its fit quality, criterion value and verdict."""
-
-    order: int
-    criterion_value: float
-    rms_k_per_w: float
-    accepted: bool
-    reason: str = ""
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "order": self.order,
-            "criterion_value": _json_float(self.criterion_value),
-            "rms_k_per_w": _json_float(self.rms_k_per_w),
-            "accepted": self.accepted,
-            "reason": self.reason,
-        }
-
-
-@dataclass(frozen=True, eq=False)
-class FitResult:
-    """A fitted Foster ladder with its diagnostics. Immutable; prints as a table.
-
-    Attributes
-    ----------
-    foster : Foster
-        The fitted ladder, stages sorted fastest first.
-    u_r_k_per_w, u_tau_s : tuple of float
-        Standard uncertainties of each ``r_i`` (K/W) and ``τ_i`` (s), in stage order.
-    t_s, zth_k_per_w, residuals : ndarray (read-only)
-        The data as given and the residuals ``data - model`` (K/W) at every data point.
-    rms_k_per_w : float
-        Root-mean-square of ``residuals``.
-    criterion : str
-        Name of the order-selection criterion (``"BIC"``; ``"fixed"`` when the order was given).
-    trials : tuple of OrderTrial
-        Every order tried, with its criterion value and why it was accepted or rejected.
-    rth_fixed : bool
-        Whether ``ΣR = Rth`` was imposed.
-    converged : bool
-        The optimiser's convergence flag for the returned fit; ``message`` says more.
-    warnings : tuple of str
-        What the user should know about an accepted fit (a given order the data do not
-        support, an undetermined time constant, an order at ``max_order``).
-    n_fit_points : int
-        Points actually fitted (fewer than the data when dense data were binned).
-    """
-
-    foster: Foster
-    u_r_k_per_w: tuple[float, ...]
-    u_tau_s: tuple[float, ...]
-    t_s: NDArray
-    zth_k_per_w: NDArray
-    residuals: NDArray
-    rms_k_per_w: float
-    criterion: str
-    trials: tuple[OrderTrial, ...]
-    rth_fixed: bool
-    converged: bool
-    message: str
-    n_fit_points: int
-    warnings: tuple[str, ...] = ()
-    weighting: str = field(default="absolute K/W, equal weight per point on the log-time grid")
-
-    @property
-    def order(self) -> int:
-        """Number of stages of the fitted ladder."""
-        return self.foster.order
-
-    @property
-    def rth_k_per_w(self) -> float:
-        """Fitted total thermal resistance ΣR (K/W)."""
-        return self.foster.rth
-
-    @property
-    def resampled(self) -> bool:
-        """Whether dense data were averaged into log-spaced bins before fitting."""
-        return self.n_fit_points != len(self.t_s)
-
-    @property
-    def criterion_values(self) -> dict[int, float]:
-        """Criterion value of every order tried (lower is better)."""
-        return {tr.order: tr.criterion_value for tr in self.trials}
-
-    @property
-    def stages(self) -> list[dict[str, float]]:
-        """Stage table: r, u(r), τ, u(τ), C for each stage, fastest first."""
-        return [
-            {"r_k_per_w": r, "u_r_k_per_w": ur, "tau_s": tau, "u_tau_s": ut, "c_j_per_k": c}
-            for r, ur, tau, ut, c in zip(self.foster.r, self.u_r_k_per_w, self.foster.tau,
-                                         self.u_tau_s, self.foster.c, strict=True)
-        ]
-
-    def to_dict(self) -> dict[str, Any]:
-        """The fit report as plain JSON-ready data (without the data arrays)."""
-        return {
-            "order": self.order,
-            "criterion": self.criterion,
-            "criterion_rule": CRITERION_RULE if self.criterion == CRITERION else
-            "order given by the user",
-            "criterion_values": {str(k): _json_float(v) for k, v in self.criterion_values.items()},
-            "trials": [tr.to_dict() for tr in self.trials],
-            "rth_k_per_w": self.rth_k_per_w,
-            "rth_fixed": self.rth_fixed,
-            "stages": self.stages,
-            "rms_k_per_w": self.rms_k_per_w,
-            "n_points": len(self.t_s),
-            "n_fit_points": self.n_fit_points,
-            "weighting": self.weighting,
-            "converged": self.converged,
-            "message": self.message,
-            "warnings": list(self.warnings),
-        }
-
-    def to_json(self, indent: int | None = 2) -> str:
-        """:meth:`to_dict` as a JSON string."""
-        return dumps_json(self.to_dict(), indent=indent)
-
-    def __str__(self) -> str:
-        head = (f"Foster ladder, order {self.order} ({self._order_note()}), "
-                f"Rth = {_g(self.rth_k_per_w)} K/W{' (held)' if self.rth_fixed else ''}, "
-                f"rms residual = {_g(self.rms_k_per_w, 3)} K/W over {len(self.t_s)} points")
-        rows = [("stage", "R (K/W)", "± u", "tau (s)", "± u", "C (J/K)")]
-        for i, s in enumerate(self.stages, 1):
-            rows.append((str(i), _g(s["r_k_per_w"]), _g(s["u_r_k_per_w"], 2), _g(s["tau_s"]),
-                         _g(s["u_tau_s"], 2), _g(s["c_j_per_k"])))
-        widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
-        lines = [head]
-        for j, row in enumerate(rows):
-            lines.append("  ".join(x.rjust(w) for x, w in zip(row, widths, strict=True)))
-            if j == 0:
-                lines.append("  ".join("-" * w for w in widths))
-        if len(self.trials) > 1:
-            lines.append(f"{self.criterion} per order: " + ", ".join(
-                f"{tr.order}: {tr.criterion_value:.1f}{'' if tr.accepted else ' (rejected)'}"
-                for tr in self.trials))
-        lines.extend(f"warning: {w}" for w in self.warnings)
-        return "\n".join(lines)
-
-    def _order_note(self) -> str:
-        if self.criterion == "fixed":
-            return "given"
-        return f"chosen by {self.criterion}"
-
-
-def _g(x: float, digits: int = 5) -> str:
-    return f"{x:.{digits}g}"
-
-
-def _json_float(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
-
-
-# ------------------------------------------------------------------------ input checking
-def _as_data(t_s: ArrayLike, zth: ArrayLike, sigma: ArrayLike | None,
-             rth: float | None) -> tuple[NDArray, NDArray, NDArray | None]:
-    try:
-        t = np.array(t_s, dtype=float).ravel()  # copies: the result freezes its own arrays
-        z = np.array(zth, dtype=float).ravel()
-    except (TypeError, ValueError) as exc:
-        raise DataFormatError(f"t_s/zth_k_per_w: not numeric ({exc})") from None
-    if t.size != z.size:
-        raise DataFormatError(f"t_s has {t.size} points but zth_k_per_w has {z.size}")
-    if t.size < 3:
-        raise DataFormatError(f"need at least 3 data points to fit a ladder, got {t.size}")
-    for name, arr in (("t_s", t), ("zth_k_per_w", z)):
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            raise DataFormatError(f"{name}[{bad[0]}] = {arr[bad[0]]!r}: not a finite number")
-    if t[0] <= 0:
-        raise DataFormatError(f"t_s[0] = {t[0]!r}: times must be positive (Zth(0) = 0 is implied)")
-    dec = np.flatnonzero(np.diff(t) <= 0)
-    if dec.size:
-        i = int(dec[0]) + 1
-        raise DataFormatError(f"t_s[{i}] = {t[i]!r}: times must increase strictly "
-                              f"(previous {t[i - 1]!r})")
-    if not np.any(z > 0):
-        raise DataFormatError("zth_k_per_w: no positive value, nothing to fit")
-    s = None
-    if sigma is not None:
-        s = np.broadcast_to(np.asarray(sigma, dtype=float), t.shape).copy()
-        bad = np.flatnonzero(~(np.isfinite(s) & (s > 0)))
-        if bad.size:
-            raise DataFormatError(f"sigma[{bad[0]}] = {s[bad[0]]!r}: must be positive and finite")
-    if rth is not None and not (math.isfinite(rth) and rth > 0):
-        raise DataFormatError(f"rth_k_per_w = {rth!r}: must be positive and finite")
-    return t, z, s
-
-
-def log_bins(t_s: NDArray, per_decade: int) -> tuple[NDArray, NDArray]:
-    """Log-spaced bins of increasing times ``t_s`` (> 0), ``per_decade`` to a decade, each
-    from ``10^(k/per_decade)``: the index of each bin's first sample and its sample count
-    (average any column ``x`` with ``np.add.reduceat(x, start) / counts``).
-
-    >>> start, counts = log_bins(np.array([1.0, 1.5, 2.0, 20.0]), 2)
-    >>> start.tolist(), counts.tolist()
-    ([0, 3], [3, 1])
-    """
-    idx = np.floor(np.log10(t_s) * per_decade + 1e-9).astype(np.int64)
-    _, start = np.unique(idx, return_index=True)
-    return start, np.diff(np.append(start, idx.size))
-
-
-def _log_bins(t: NDArray, z: NDArray, s: NDArray | None,
-              per_decade: int) -> tuple[NDArray, NDArray, NDArray | None]:
-    """Average dense data into log-spaced bins; bins holding one point keep it exactly."""
-    start, counts = log_bins(t, per_decade)
-    tb = np.add.reduceat(t, start) / counts
-    zb = np.add.reduceat(z, start) / counts
-    sb = None if s is None else np.sqrt(np.add.reduceat(s * s, start)) / counts
-    return tb, zb, sb
-
-
-def _bin_noise(t: NDArray, z: NDArray, tf: NDArray) -> NDArray:
-    """Standard error of each fitted point: 0 for sparse data (taken as exact, e.g. datasheet
-    points); for dense data binned into ``tf``, the sample noise (from successive differences,
-    robust) over the square root of the bin's sample count."""
-    if tf.size == t.size:
-        return np.zeros(tf.size)
-    sigma = 1.4826 * float(np.median(np.abs(np.diff(z)))) / math.sqrt(2.0)
-    return sigma / np.sqrt(log_bins(t, BINS_PER_DECADE)[1])
-
-
-# ------------------------------------------------------------------------------ numerics
-class _Problem:
-    """The weighted data and the model's residual/Jacobian for one parametrisation."""
-
-    def __init__(self, t: NDArray, z: NDArray, w: NDArray, rth: float | None,
-                 relative: bool = False) -> None:
-        self.t, self.z, self.w, self.rth, self.relative = t, z, w, rth, relative
-        self.wz = w * z
-        self.n = t.size
-        # parameter ranges that keep every exp() finite; solutions near them are rejected anyway
-        lz = math.log(max(float(np.max(np.abs(z))), 1e-300))
-        self.log_r_range = (lz - 60.0, lz + 25.0) if rth is None else (-60.0, 60.0)
-        self.log_tau_range = (math.log(t[0]) - 25.0, math.log(t[-1]) + 25.0)
-
-    # -- basis
-    def phi(self, tau: NDArray) -> NDArray:
-        return -np.expm1(-self.t[:, None] / tau[None, :])
-
-    def project(self, tau: NDArray) -> tuple[NDArray, float]:
-        """Best non-negative r for fixed τ (variable projection); returns (r, RSS)."""
-        from scipy.optimize import nnls
-
-        a = self.w[:, None] * self.phi(tau)
-        b = self.wz
-        if self.rth is not None:
-            lam = 1e3 * max(float(np.linalg.norm(a, axis=0).max()), 1e-300)
-            a = np.vstack([a, lam * np.ones(tau.size)])
-            b = np.append(b, lam * self.rth)
-        try:
-            r, _ = nnls(a, b, maxiter=50 * tau.size + 100)
-        except RuntimeError:  # pragma: no cover - NNLS iteration limit
-            r = np.full(tau.size, (self.rth or float(np.max(self.z))) / tau.size)
-        res = self.w * (self.phi(tau) @ r) - self.wz
-        return r, float(res @ res)
-
-    # -- log parametrisation: p = [a..., log τ...]
-    def pack(self, r: NDArray, tau: NDArray) -> tuple[NDArray, int]:
-        if self.rth is None:
-            return np.concatenate([np.log(r), np.log(tau)]), -1
-        ref = int(np.argmax(r))
-        a = np.log(r) - math.log(r[ref])
-        return np.concatenate([np.delete(a, ref), np.log(tau)]), ref
-
-    def unpack(self, p: NDArray, m: int, ref: int) -> tuple[NDArray, NDArray]:
-        k = m if self.rth is None else m - 1
-        a = np.clip(p[:k], *self.log_r_range)
-        tau = np.exp(np.clip(p[k:], *self.log_tau_range))
-        if self.rth is None:
-            return np.exp(a), tau
-        a = np.insert(a, ref, 0.0)
-        e = np.exp(a - a.max())
-        return self.rth * e / e.sum(), tau
-
-    def residual_jac(self, p: NDArray, m: int, ref: int) -> tuple[NDArray, NDArray]:
-        r, tau = self.unpack(p, m, ref)
-        x = self.t[:, None] / tau[None, :]
-        e = np.exp(-x)
-        ph = -np.expm1(-x)
-        model = ph @ r
-        res = self.w * model - self.wz
-        d_logtau = -(r[None, :] * x * e)
-        if self.rth is None:
-            d_a = r[None, :] * ph
-        else:
-            d_a = r[None, :] * (ph - model[:, None] / self.rth)
-            d_a = np.delete(d_a, ref, axis=1)
-        jac = self.w[:, None] * np.hstack([d_a, d_logtau])
-        return res, jac
-
-    def refine(self, r0: NDArray, tau0: NDArray, tol: float = 1e-10,
-               max_nfev_per_param: int = 30) -> _Solution:
-        """Levenberg-Marquardt on the log parameters from (r0, τ0)."""
-        from scipy.optimize import least_squares
-
-        m = tau0.size
-        p0, ref = self.pack(r0, tau0)
-        cache: dict[str, Any] = {}
-
-        def fun(p: NDArray) -> NDArray:
-            res, jac = self.residual_jac(p, m, ref)
-            cache["p"], cache["jac"] = p.copy(), jac
-            return res
-
-        def jac(p: NDArray) -> NDArray:
-            if "p" in cache and np.array_equal(cache["p"], p):
-                return cache["jac"]
-            return self.residual_jac(p, m, ref)[1]
-
-        k = p0.size
-        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-            sol = least_squares(fun, p0, jac=jac, method="lm", xtol=tol, ftol=tol, gtol=tol,
-                                max_nfev=max_nfev_per_param * (k + 1))
-        r, tau = self.unpack(sol.x, m, ref)
-        ok = bool(np.all(np.isfinite(r)) and np.all(np.isfinite(tau)) and np.all(tau > 0)
-                  and np.all(r > 0))
-        if self.rth is not None and ok:
-            r = r * (self.rth / r.sum())
-        order = np.argsort(tau)
-        r, tau = r[order], tau[order]
-        res = self.w * (self.phi(tau) @ r) - self.wz if ok else np.full(self.n, np.inf)
-        rss = float(res @ res)
-        converged = ok and sol.status > 0
-        msg = sol.message if ok else "parameters left the finite positive range"
-        return _Solution(r, tau, rss, converged, str(msg), int(sol.nfev))
-
-    def covariance(self, r: NDArray, tau: NDArray, scale: float) -> NDArray:
-        """Covariance of (r, τ): ``scale · N (Nᵀ JᵀJ N)⁻¹ Nᵀ`` with N the constraint null space."""
-        m = tau.size
-        x = self.t[:, None] / tau[None, :]
-        jac = self.w[:, None] * np.hstack([-np.expm1(-x), -(r / tau)[None, :] * x * np.exp(-x)])
-        if self.rth is None:
-            null = np.eye(2 * m)
-        else:
-            c = np.concatenate([np.ones(m), np.zeros(m)])[None, :]
-            _, _, vt = np.linalg.svd(c)
-            null = vt[1:].T
-        jn = jac @ null
-        col = np.linalg.norm(jn, axis=0)
-        if not (np.all(np.isfinite(jn)) and np.all(col > 0) and math.isfinite(scale)):
-            return np.full((2 * m, 2 * m), np.inf)
-        try:
-            with np.errstate(all="ignore"):
-                cov_n = np.linalg.pinv((jn / col).T @ (jn / col), rcond=1e-15, hermitian=True)
-                cov = scale * null @ (cov_n / np.outer(col, col)) @ null.T
-        except np.linalg.LinAlgError:  # pragma: no cover - degenerate Jacobian
-            return np.full((2 * m, 2 * m), np.inf)
-        return cov if np.all(np.isfinite(cov)) else np.full((2 * m, 2 * m), np.inf)
-
-
-@dataclass(frozen=True)
-class _Solution:
-    r: NDArray
-    tau: NDArray
-    rss: float
-    converged: bool
-    message: str
-    nfev: int
-    cov: NDArray | None = None
-    why: str = ""
-
-
-# ------------------------------------------------------------------------------- seeds
-def _spectrum_clusters(prob: _Problem, t_lo: float, t_hi: float) -> list[tuple[float, float]]:
-    """NNLS relaxation spectrum on a log τ grid; returns clusters as (weight, log τ)."""
-    grid = np.logspace(math.log10(t_lo) - 1, math.log10(t_hi) + 0.5,
-                       int((math.log10(t_hi) - math.log10(t_lo) + 1.5) * _SPECTRUM_PER_DECADE) + 1)
-    r, _ = prob.project(grid)
-    clusters: list[tuple[float, float]] = []
-    i = 0
-    while i < grid.size:
-        if r[i] <= 0:
-            i += 1
-            continue
-        j = i
-        while j + 1 < grid.size and r[j + 1] > 0:
-            j += 1
-        wts = r[i:j + 1]
-        clusters.append((float(wts.sum()), float(wts @ np.log(grid[i:j + 1]) / wts.sum())))
-        i = j + 1
-    return clusters
-
-
-def _reduce_clusters(clusters: list[tuple[float, float]], m: int) -> NDArray:
-    """m seed time constants from the spectrum clusters (merge smallest or split largest)."""
-    cl = sorted(clusters, key=lambda c: c[1])
-    while len(cl) > m:
-        k = min(range(len(cl)), key=lambda i: cl[i][0])
-        if k == 0:
-            nb = 1
-        elif k == len(cl) - 1:
-            nb = k - 1
-        else:
-            nb = k - 1 if cl[k][1] - cl[k - 1][1] < cl[k + 1][1] - cl[k][1] else k + 1
-        w = cl[k][0] + cl[nb][0]
-        merged = (w, (cl[k][0] * cl[k][1] + cl[nb][0] * cl[nb][1]) / w)
-        lo, hi = sorted((k, nb))
-        cl = cl[:lo] + [merged] + cl[hi + 1:]
-    while len(cl) < m:
-        k = max(range(len(cl)), key=lambda i: cl[i][0])
-        w, lt = cl[k]
-        cl = cl[:k] + [(w / 2, lt - 0.7), (w / 2, lt + 0.7)] + cl[k + 1:]
-    return np.exp(np.array([c[1] for c in cl]))
-
-
-def _grown_seeds(tau: NDArray, t_lo: float, t_hi: float) -> list[NDArray]:
-    """Seeds of order m + 1 from an order-m solution: a stage added in each gap, or split."""
-    lt = np.log(np.sort(tau))
-    new = [lt[0] - 1.5, lt[-1] + 1.5, *((lt[:-1] + lt[1:]) / 2)]
-    seeds = [np.exp(np.sort(np.append(lt, x))) for x in new]
-    for i in range(lt.size):
-        split = np.concatenate([np.delete(lt, i), [lt[i] - 0.7, lt[i] + 0.7]])
-        seeds.append(np.exp(np.sort(split)))
-    lo, hi = math.log(t_lo / 10), math.log(t_hi * 10)
-    return [np.exp(np.clip(np.log(s), lo, hi)) for s in seeds]
-
-
-# ----------------------------------------------------------------------------- checks
-def _guard(r: NDArray, tau: NDArray, cov: NDArray, t_lo: float, t_hi: float,
-           relative: bool = False) -> str:
-    """Why an order is not acceptable, or '' if it is (``relative``: a stage's share is of
-    Zth at its own time constant, as the log-domain fit sees it)."""
-    m = tau.size
-    rth = float(r.sum())
-    var = np.diag(cov)
-    if m > 1:
-        ratios = tau[1:] / tau[:-1]
-        i = int(np.argmin(ratios))
-        if ratios[i] < MIN_TAU_RATIO:
-            return (f"time constants of stages {i + 1} and {i + 2} within a factor "
-                    f"{ratios[i]:.2f} (< {MIN_TAU_RATIO:g}): one time constant split in two")
-    scale = (Foster.from_tau(r, tau).zth(np.asarray(tau)) if relative
-             else np.full(m, rth))
-    share = r / scale
-    i = int(np.argmin(share))
-    if share[i] < MIN_STAGE_FRACTION:
-        of = "Zth at its time constant" if relative else "Rth"
-        return (f"stage {i + 1} carries {100 * share[i]:.3g} % of {of} "
-                f"(< {100 * MIN_STAGE_FRACTION:g} %): fits noise")
-    if tau[0] < t_lo / WINDOW_MARGIN or tau[-1] > t_hi * WINDOW_MARGIN:
-        bad = 1 if tau[0] < t_lo / WINDOW_MARGIN else m
-        return (f"time constant of stage {bad} ({tau[bad - 1]:.3g} s) lies far outside the data "
-                f"window [{t_lo:.3g}, {t_hi:.3g}] s: not identifiable")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z_r = r / np.sqrt(var[:m])
-        if m > 1:
-            ct = cov[m:, m:] / np.outer(tau, tau)  # covariance of ln τ
-            d = np.diag(ct)
-            var_gap = d[1:] + d[:-1] - 2 * np.diag(ct, 1)
-            z_gap = np.log(tau[1:] / tau[:-1]) / np.sqrt(np.clip(var_gap, 0, None))
-        else:
-            z_gap = np.array([np.inf])
-    i = int(np.nanargmin(z_r)) if np.all(np.isfinite(var)) else 0
-    if not np.all(np.isfinite(var)) or z_r[i] < MIN_SIGNIFICANCE:
-        return (f"stage {i + 1}'s resistance is not significant ({z_r[i]:.2g} standard "
-                f"uncertainties, < {MIN_SIGNIFICANCE:g})")
-    j = int(np.argmin(z_gap))
-    if z_gap[j] < MIN_SIGNIFICANCE:
-        return (f"time constants of stages {j + 1} and {j + 2} are not significantly different "
-                f"({z_gap[j]:.2g} standard uncertainties, < {MIN_SIGNIFICANCE:g})")
-    return ""
-
 
 # ---------------------------------------------------------------------------------- fit
 def fit_foster(
@@ -663,7 +186,7 @@ def fit_foster(
     >>> [round(x, 6) for x in res.foster.tau]
     [0.001, 0.01, 0.1]
     """
-    t, z, s = _as_data(t_s, zth_k_per_w, sigma, rth_k_per_w)
+    t, z, s = as_data(t_s, zth_k_per_w, sigma, rth_k_per_w)
     if order != "auto":
         if isinstance(order, bool) or not isinstance(order, int | np.integer) or order < 1:
             raise DataFormatError(f"order = {order!r}: must be a positive integer or 'auto'")
@@ -675,13 +198,13 @@ def fit_foster(
         raise DataFormatError(f"weighting = {weighting!r}: 'absolute' or 'relative'")
     if weighting == "relative" and sigma is not None:
         raise DataFormatError("weighting='relative' and sigma exclude each other")
-    tf, zf, sf = (_log_bins(t, z, s, BINS_PER_DECADE) if t.size > DENSE_POINTS else (t, z, s))
+    tf, zf, sf = (bin_data(t, z, s, BINS_PER_DECADE) if t.size > DENSE_POINTS else (t, z, s))
     n = tf.size
     held = rth_k_per_w is not None
     relative = weighting == "relative"
     if relative:
         floor2 = (RELATIVE_FLOOR * float(np.max(np.abs(zf)))) ** 2 + (
-            _bin_noise(t, z, tf) / RELATIVE_PRECISION) ** 2
+            bin_noise(t, z, tf) / RELATIVE_PRECISION) ** 2
         w = 1.0 / np.sqrt(zf * zf + floor2)
     else:
         w = np.ones(n) if sf is None else 1.0 / sf
@@ -693,7 +216,7 @@ def fit_foster(
         raise FitError(f"order {order} has {n_free(order)} free parameters but only {n} data "
                        f"points; use a lower order or more data")
     largest = max([1] + [m for m in range(1, max_order + 1) if n_free(m) <= n - 1])
-    prob = _Problem(tf, zf, w, rth_k_per_w, relative)
+    prob = Problem(tf, zf, w, rth_k_per_w, relative)
     window = (float(tf[0]), float(tf[-1]))
     rss_floor = n * (1e-14 * float(np.max(np.abs(prob.wz)))) ** 2
 
@@ -703,15 +226,15 @@ def fit_foster(
             return n * math.log(rss / n) + n_free(m) * math.log(n)
         return rss + n_free(m) * math.log(n)
 
-    clusters = _spectrum_clusters(prob, *window)
+    clusters = spectrum_clusters(prob, *window)
     trials: list[OrderTrial] = []
-    chosen: _Solution | None = None
+    chosen: Solution | None = None
     best_val, since_best = math.inf, 0
-    prev: _Solution | None = None
+    prev: Solution | None = None
     for m in [order] if order != "auto" else range(1, largest + 1):
-        seeds = [_reduce_clusters(clusters, m)] if clusters else []
+        seeds = [reduce_clusters(clusters, m)] if clusters else []
         if prev is not None:
-            seeds += _grown_seeds(prev.tau, *window)
+            seeds += grown_seeds(prev.tau, *window)
         if not seeds:
             seeds = [np.logspace(math.log10(window[0]), math.log10(window[1]), m)]
         sol, overall = _fit_order(prob, seeds, window, n - n_free(m), sf is None)
@@ -730,10 +253,10 @@ def fit_foster(
         else:
             # an order that did not converge says nothing about saturation: try the next one
             since_best += 0 if sol is None or not sol.converged else 1
-            if chosen is not None and since_best >= _PATIENCE:
+            if chosen is not None and since_best >= PATIENCE:
                 break
 
-    def polish(sol: _Solution) -> _Solution:
+    def polish(sol: Solution) -> Solution:
         better = prob.refine(sol.r, sol.tau, tol=1e-15, max_nfev_per_param=100)
         if better.converged and (better.rss <= sol.rss or not sol.converged):
             return _assessed(prob, better, n - n_free(sol.tau.size), sf is None, window)
@@ -789,23 +312,23 @@ def fit_foster(
     )
 
 
-def _assessed(prob: _Problem, sol: _Solution, dof: int, estimate_noise: bool,
-              window: tuple[float, float]) -> _Solution:
+def _assessed(prob: Problem, sol: Solution, dof: int, estimate_noise: bool,
+              window: tuple[float, float]) -> Solution:
     """The solution with its covariance and the guard's verdict filled in."""
     scale = sol.rss / max(dof, 1) if estimate_noise else 1.0
     cov = prob.covariance(sol.r, sol.tau, scale)
-    why = (_guard(sol.r, sol.tau, cov, *window, relative=prob.relative) if sol.converged
+    why = (guard(sol.r, sol.tau, cov, *window, relative=prob.relative) if sol.converged
            else f"did not converge: {sol.message}")
     return replace(sol, cov=cov, why=why)
 
 
-def _fit_order(prob: _Problem, seeds: list[NDArray], window: tuple[float, float], dof: int,
-               estimate_noise: bool) -> tuple[_Solution | None, _Solution | None]:
+def _fit_order(prob: Problem, seeds: list[NDArray], window: tuple[float, float], dof: int,
+               estimate_noise: bool) -> tuple[Solution | None, Solution | None]:
     """Best acceptable solution of one order (else the best one) and the lowest-RSS one."""
     ranked = sorted(((prob.project(sd), sd) for sd in seeds), key=lambda x: x[0][1])
     scale_ref = float(np.max(np.abs(prob.z)))
-    runs: list[_Solution] = []
-    for (r0, _), tau0 in ranked[:_SEEDS_PER_ORDER]:
+    runs: list[Solution] = []
+    for (r0, _), tau0 in ranked[:SEEDS_PER_ORDER]:
         m = tau0.size
         sol = prob.refine(np.maximum(r0, 1e-3 * max(float(r0.sum()), scale_ref) / m), tau0)
         if np.isfinite(sol.rss):

@@ -127,6 +127,13 @@ class Foster(_Ladder):
 
     Stages are kept sorted by time constant, fastest first.
 
+    Attributes
+    ----------
+    r : tuple of float
+        Stage resistances (K/W), fastest stage first.
+    c : tuple of float
+        Stage capacitances (J/K), in the same order.
+
     >>> f = Foster.from_tau([1.0, 2.0], [1e-3, 1.0])
     >>> f.rth
     3.0
@@ -211,6 +218,13 @@ class Cauer(_Ladder):
 
     Node 0 is the junction; the last resistor ends at the reference. A capacitance may be zero
     (a node without heat capacity, as some vendors' ladders have), but not all of them.
+
+    Attributes
+    ----------
+    r : tuple of float
+        Resistances (K/W): ``r[i]`` from node i to node i+1 (the last one to the reference).
+    c : tuple of float
+        Capacitances (J/K): ``c[i]`` from node i to the thermal ground.
 
     >>> c = Foster.from_tau([1.0], [2.0]).to_cauer()
     >>> c.r, c.c

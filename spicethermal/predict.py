@@ -46,7 +46,19 @@ DEFAULT_POINTS = 1000
 @dataclass(frozen=True, eq=False)
 class PowerProfile:
     """Power ``power_w`` (W, >= 0) at times ``t_s`` (s, from 0, increasing); linear between
-    samples, held after the last. Raises :class:`DataFormatError` naming the bad row."""
+    samples, held after the last. Raises :class:`DataFormatError` naming the bad row.
+
+    Attributes
+    ----------
+    t_s : ndarray
+        Sample times (s), from 0, increasing.
+    power_w : ndarray
+        Power (W, >= 0) at ``t_s``.
+    label : str
+        Where the profile came from (error messages name it).
+    rows : ndarray or None
+        The file row of each sample, when read from a file.
+    """
 
     t_s: NDArray
     power_w: NDArray

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import DataFormatError
+from .jsondoc import JsonDocument
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -56,7 +57,7 @@ def _stage_peaks(r: NDArray, tau: NDArray, period: float, duty: float) -> NDArra
 
 
 @dataclass(frozen=True)
-class PwmState:
+class PwmState(JsonDocument):
     """Periodic steady state of a ladder under PWM. Temperatures are rises in K over the reference.
 
     >>> from spicethermal.ladder import Foster
@@ -74,10 +75,19 @@ class PwmState:
     valley_k: float
     reading_k: float
 
-    def as_json(self) -> dict[str, float]:
-        """The ``spicethermal pwm --json`` document."""
+    def to_dict(self) -> dict[str, float]:
+        """The ``spicethermal pwm --json`` document.
+
+        Returns
+        -------
+        dict
+            ``peak_k``, ``mean_k``, ``valley_k`` and ``reading_k``.
+        """
         return {"peak_k": self.peak_k, "mean_k": self.mean_k, "valley_k": self.valley_k,
                 "reading_k": self.reading_k}
+
+    #: Deprecated spelling of :meth:`to_dict` (kept for existing callers).
+    as_json = to_dict
 
 
 def steady_state(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: float,

@@ -9,13 +9,13 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .files import atomic_write_text
+from .templates import environment
 
 SECTION_IDS = ("calibration", "fit", "impedance", "table1", "table2", "diagnosis", "netlists",
                "limits")
@@ -41,23 +41,12 @@ class Section:
                             "caption": caption})
 
 
-@lru_cache(maxsize=1)
-def _environment():
-    import jinja2
-
-    from .spice import _template_dir
-
-    return jinja2.Environment(loader=jinja2.FileSystemLoader(str(_template_dir())),
-                              undefined=jinja2.StrictUndefined,
-                              autoescape=jinja2.select_autoescape(["html", "j2"]))
-
-
 def render(title: str, subtitle: str, summary: Sequence[str], sections: Sequence[Section],
            elapsed_s: float) -> str:
     """The report page as HTML text."""
     from . import __version__
 
-    return _environment().get_template("report/index.html.j2").render(
+    return environment().get_template("report/index.html.j2").render(
         title=title, subtitle=subtitle, summary=list(summary), sections=list(sections),
         elapsed_s=elapsed_s, version=__version__)
 

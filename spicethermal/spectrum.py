@@ -61,13 +61,22 @@ which goes to Cauer and to a ``.lib`` through the existing code
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from .deconvolution import (
+    bayes,
+    bayes_resolution,
+    fwhm_decades,
+    kernel,
+    kernel_matrix,
+    nnls_tikhonov,
+    noise_sigma,
+    second_difference,
+)
 from .errors import DataFormatError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -93,20 +102,8 @@ SG_WINDOW = 5
 #: Default extension before the first sample (√t law) and after the last (steady state).
 PRE_DECADES = 1.0
 POST_DECADES = 1.0
-#: Number of λ values of the sweep of ``"nnls"``.
-LCURVE_POINTS = 24
 
 Method = Literal["bayes", "nnls"]
-
-
-def kernel(x: ArrayLike) -> NDArray:
-    """The NID kernel ``w(x) = exp(x − eˣ)``: ``da/dz`` of one time constant, ``x = z − ζ``.
-
-    >>> round(float(kernel(0.0)), 6)          # peak at t = τ: 1/e
-    0.367879
-    """
-    x = np.asarray(x, dtype=float)
-    return np.exp(x - np.exp(np.minimum(x, 700.0)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -340,115 +337,6 @@ def log_derivative(t_s: ArrayLike, zth_k_per_w: ArrayLike) -> NDArray:
     return d
 
 
-def _kernel_matrix(z: NDArray, zeta: NDArray) -> NDArray:
-    dzeta = float(zeta[1] - zeta[0])
-    return kernel(z[:, None] - zeta[None, :]) * dzeta
-
-
-def _bayes(w: NDArray, d: NDArray, iterations: int, background: float = 0.0) -> NDArray:
-    """Kennett's Bayesian (Richardson–Lucy) iteration for ``d = W R``, ``R >= 0``.
-
-    A constant ``background`` is added to data and model (RL with a known background), so
-    that noisy samples of ``d`` near zero are used as they are instead of being clipped at
-    zero, which would bias the spectrum upwards where it is small."""
-    d = np.clip(d + background, 0.0, None)
-    colsum = w.sum(axis=0)
-    colsum[colsum <= 0] = np.inf
-    wt = (w / colsum).T.copy()
-    tiny = 1e-300
-    r = np.full(w.shape[1], max(float(d.mean()), tiny))    # flat start (columns sum to ~1)
-    for _ in range(int(iterations)):
-        model = w @ r + background
-        ratio = np.divide(d, model, out=np.zeros_like(d), where=model > tiny)
-        r = r * (wt @ ratio)
-    return r
-
-
-def _noise_sigma(d: NDArray) -> float:
-    """Robust noise estimate of a smooth sampled curve: the MAD of its second differences
-    (white noise of σ gives second differences of σ√6)."""
-    if d.size < 5:
-        return 0.0
-    return float(1.4826 * np.median(np.abs(np.diff(d, 2))) / math.sqrt(6.0))
-
-
-@functools.lru_cache(maxsize=32)
-def _bayes_resolution(points_per_decade: int, iterations: int) -> float:
-    """FWHM (decades) of the Bayesian iteration's point-spread function: the spectrum it
-    returns for one time constant (noise-free) in the middle of an 8-decade grid."""
-    z = np.arange(-4 * points_per_decade, 4 * points_per_decade + 1) * (
-        math.log(10) / points_per_decade)
-    w = _kernel_matrix(z, z)
-    return _fwhm_decades(z, _bayes(w, kernel(z), iterations))
-
-
-def _fwhm_decades(x_ln: NDArray, y: NDArray) -> float:
-    """Full width at half maximum of a single peak, in decades (x in ln units)."""
-    i = int(np.argmax(y))
-    half = 0.5 * y[i]
-    lo = i
-    while lo > 0 and y[lo] > half:
-        lo -= 1
-    hi = i
-    while hi < y.size - 1 and y[hi] > half:
-        hi += 1
-
-    def cross(a: int, b: int) -> float:
-        ya, yb = y[a], y[b]
-        if ya == yb:
-            return float(x_ln[a])
-        return float(x_ln[a] + (half - ya) * (x_ln[b] - x_ln[a]) / (yb - ya))
-
-    left = cross(lo, lo + 1) if y[lo] <= half else float(x_ln[0])
-    right = cross(hi - 1, hi) if y[hi] <= half else float(x_ln[-1])
-    return (right - left) / math.log(10)
-
-
-def _second_difference(n: int) -> NDArray:
-    d2 = np.zeros((n - 2, n))
-    idx = np.arange(n - 2)
-    d2[idx, idx] = 1.0
-    d2[idx, idx + 1] = -2.0
-    d2[idx, idx + 2] = 1.0
-    return d2
-
-
-def _nnls_tikhonov(w: NDArray, d: NDArray, rule: str = "discrepancy"
-                   ) -> tuple[NDArray, float, dict[str, Any]]:
-    """NNLS with second-difference Tikhonov regularisation over a sweep of λ; λ by the
-    discrepancy principle (default) or at the L-curve corner."""
-    from scipy.optimize import nnls
-
-    n = w.shape[1]
-    lmat = _second_difference(n)
-    scale = float(np.linalg.norm(w, 2))
-    lambdas = scale * np.logspace(-4, 0, LCURVE_POINTS)
-    sols, res, reg = [], [], []
-    for lam in lambdas:
-        a = np.vstack([w, lam * lmat])
-        b = np.concatenate([d, np.zeros(n - 2)])
-        x, _ = nnls(a, b, maxiter=50 * n)
-        sols.append(x)
-        res.append(max(float(np.linalg.norm(w @ x - d)), 1e-300))
-        reg.append(max(float(np.linalg.norm(lmat @ x)), 1e-300))
-    if rule == "discrepancy":
-        # Morozov: the largest λ whose residual stays within one standard deviation of χ²
-        # (‖r‖² ≤ ‖r₀‖² (1 + √(2/m)), m data) of the least-regularised fit's ‖r₀‖² = m σ̂²
-        limit = res[0] * math.sqrt(1.0 + math.sqrt(2.0 / d.size))
-        k = int(np.flatnonzero(np.asarray(res) <= limit)[-1])
-    else:
-        lr, lx, ll = np.log(res), np.log(reg), np.log(lambdas)
-        d1r, d1x = np.gradient(lr, ll), np.gradient(lx, ll)
-        d2r, d2x = np.gradient(d1r, ll), np.gradient(d1x, ll)
-        kappa = (d1r * d2x - d2r * d1x) / np.power(d1r**2 + d1x**2 + 1e-300, 1.5)
-        k = int(np.argmax(kappa[1:-1])) + 1
-    info = {"lambda": float(lambdas[k]), "lambda_rel": float(lambdas[k] / scale),
-            "lambda_rule": rule,
-            "l_curve": {"lambda": lambdas.tolist(), "residual": list(map(float, res)),
-                        "seminorm": list(map(float, reg))}}
-    return sols[k], float(lambdas[k]), info
-
-
 def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike | None = None,
                            *, method: Method = "bayes", points_per_decade: int = POINTS_PER_DECADE,
                            iterations: int = BAYES_ITERATIONS, pre_decades: float = PRE_DECADES,
@@ -500,23 +388,23 @@ def time_constant_spectrum(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike 
     z = np.log(t)
     d = log_derivative(t, a)
     d[i1 + 3:] = 0.0                 # exact zero in the steady-state hold
-    w = _kernel_matrix(z, z)
+    w = kernel_matrix(z, z)
     params: dict[str, Any] = {"points_per_decade": int(points_per_decade),
                               "pre_decades": float(pre_decades),
                               "post_decades": float(post_decades)}
     if method == "bayes":
-        sigma = _noise_sigma(d[i0:i1 + 1])
-        dens = _bayes(w, d, int(iterations), background=BACKGROUND_SIGMAS * sigma)
+        sigma = noise_sigma(d[i0:i1 + 1])
+        dens = bayes(w, d, int(iterations), background=BACKGROUND_SIGMAS * sigma)
         params["background_k_per_w"] = BACKGROUND_SIGMAS * sigma
-        resolution = _bayes_resolution(int(points_per_decade), int(iterations))
+        resolution = bayes_resolution(int(points_per_decade), int(iterations))
         params["iterations"] = int(iterations)
     else:
-        dens, lam, info = _nnls_tikhonov(w, d, lambda_rule)
+        dens, lam, info = nnls_tikhonov(w, d, lambda_rule)
         mid = (i0 + i1) // 2
-        lmat = _second_difference(w.shape[1])
+        lmat = second_difference(w.shape[1])
         wtw = w.T @ w
         psf = np.linalg.solve(wtw + lam**2 * (lmat.T @ lmat), wtw[:, mid])
-        resolution = _fwhm_decades(z, psf)
+        resolution = fwhm_decades(z, psf)
         params.update(info)
     # what the grid misses (Zth at its first point, mostly) goes into the first cell, so
     # that ΣR is not below the curve's final value

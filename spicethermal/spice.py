@@ -26,6 +26,7 @@ import numpy as np
 from .effects.spice import number
 from .errors import DataFormatError, SimulationError
 from .files import atomic_write_text
+from .templates import environment, template_dir
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -52,23 +53,9 @@ _ROLES = {"junction": "junction", "j": "junction", "case": "reference",
 
 
 # ------------------------------------------------------------------------------ templates
-def _template_dir() -> Path:
-    packaged = Path(__file__).parent / "_templates"
-    if packaged.is_dir():
-        return packaged
-    return Path(__file__).resolve().parent.parent / "templates"
-
-
-@lru_cache(maxsize=1)
-def environment():
-    """The jinja2 environment (StrictUndefined, no autoescape: the output is SPICE text)."""
-    import jinja2
-
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(_template_dir())),
-                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
-                             autoescape=False)
-    env.globals["fmt"] = fmt
-    return env
+#: The one template environment is :func:`spicethermal.templates.environment` (importable
+#: from here as before); this alias serves callers that predate it.
+_template_dir = template_dir
 
 
 #: A number in SPICE syntax with full double precision (no engineering suffixes).

@@ -48,10 +48,10 @@ def run(args: argparse.Namespace) -> int:
     state = pwm_state(model, args.power, args.freq, args.duty, args.window,
                       engine=args.engine, tref_c=args.tref)
     if args.json:
-        print(dumps_json(state.as_json()))
+        print(dumps_json(state.to_dict()))
         return 0
     print(f"# {args.model}: {args.power:g} W at {args.freq:g} Hz, duty {args.duty:g}, "
           f"window {args.window:g} s, engine {args.engine}; rises over the reference, K")
-    for key, value in state.as_json().items():
+    for key, value in state.to_dict().items():
         print(f"{key[:-2]:<8} {value:.6f}")
     return 0

@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
                       tj_steady_c=args.tj_steady)
     result = table1(curve, ds, normalize=args.normalize)
     if args.json:
-        doc = result.to_json()
+        doc = result.to_dict()
         doc["early_time"] = early_time_json(curve)
         print(dumps_json(doc, indent=2))
     else:
