@@ -154,7 +154,7 @@ def output_times(profile: PowerProfile, t_end_s: float | None = None,
 
 
 def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = None, *,
-            tref_c: float = 25.0, engine: str = "auto") -> Prediction:
+            tref_c: float = 25.0, engine: str = "auto", quiet: bool = True) -> Prediction:
     """Junction temperature of ``model`` under ``profile`` at times ``t_s``.
 
     Parameters
@@ -164,6 +164,7 @@ def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = 
     t_s : output times (default :func:`output_times`).
     tref_c : reference temperature, degC (the model starts there).
     engine : ``"auto"``, ``"analytic"`` or ``"ngspice"`` (module docstring).
+    quiet : no progress on stderr while ngspice runs (:func:`spicethermal.progress.task`).
 
     Returns
     -------
@@ -183,7 +184,7 @@ def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = 
                                   f"analytic engine is for linear models; use --engine ngspice")
         rise = pwl_response(model, profile, t)
     else:
-        rise = _ngspice_response(model, profile, t, tref_c)
+        rise = _ngspice_response(model, profile, t, tref_c, quiet)
     return Prediction(t, profile.at(t), tref_c + rise, float(tref_c), engine)
 
 
@@ -257,8 +258,9 @@ def _advance(z: NDArray, lam: NDArray, b: NDArray, p0: NDArray | float, slope: N
 
 
 def _ngspice_response(model: ThermalModel, profile: PowerProfile, t_s: NDArray,
-                      tref_c: float) -> NDArray:
+                      tref_c: float, quiet: bool = True) -> NDArray:
     """The junction rise from an ngspice transient run of the exported subcircuit."""
+    from .progress import task
     from .spice import reference_drive, render_bench, render_lib, simulator
 
     end = float(t_s[-1])
@@ -276,7 +278,8 @@ def _ngspice_response(model: ThermalModel, profile: PowerProfile, t_s: NDArray,
                             tmax_s=tmax, tref_c=bench_tref, toffset_c=toffset, pwl=corners,
                             title="spicethermal predict",
                             description=f"{len(corners)} PWL corners to {end:g} s")
-        waves = simulator("ngspice").run(text, ["V(TJ)"], "ngspice")
+        with task("ngspice transient", quiet=quiet):
+            waves = simulator("ngspice").run(text, ["V(TJ)"], "ngspice")
     t = np.asarray(waves.t_s, dtype=float)
     rise = np.asarray(waves["V(TJ)"], dtype=float) - bench_tref
     keep = np.concatenate([[True], np.diff(t) > 0])
