@@ -159,8 +159,6 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         for dialect in DIALECTS:
             export(better, out / "lib" / f"actuator_{effect}_{dialect}_cauer.lib", dialect,
                    "cauer", SUBCKT["actuator"] + "_TC")
-        plots.fig_before_after(before, after, figs / "effect_before_after.png",
-                               titles=("linear ladder", f"with {', '.join(diag.effects)}"))
         return better, before, after
 
     better, before, after = steps.run("add the effect and compare again", improve)
