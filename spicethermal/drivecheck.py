@@ -6,7 +6,8 @@ verification window (up to 4000 periods) and compares its junction peak with the
 The window is one long, serial transient; for a linear model it need not be: the switched state
 is known exactly at every period start (:meth:`DriveResult.switched_state
 <spicethermal.drive.DriveResult.switched_state>`), so the window is cut at period starts into as
-many pieces as there are cores (:func:`spicethermal.pwmsim.workers`), each started with ``.ic``
+many pieces as there are cores (:func:`spicethermal.pwmsim.workers`; a boost at constant power
+is one more, at a step not bound by the period), each started with ``.ic``
 in that exact state and run in its own ngspice. The pieces are joined by a check, not by trust:
 each must end where the next begins (``join_k``: the largest difference between ngspice's
 junction at the end of a piece and the exact one the next piece starts from), so a wrong start
@@ -25,20 +26,25 @@ if TYPE_CHECKING:  # pragma: no cover
     from .spice import Waveforms
 
 
-def cuts(result: DriveResult, pieces: int) -> list[float]:
-    """Times (s) cutting the verification window into ``pieces`` runs at period starts.
+def pieces(result: DriveResult, n: int) -> list[tuple[float, float, float]]:
+    """The verification window as ngspice runs ``(start_s, end_s, tmax_s)``, cut at period starts.
+
+    The switched stretches (0 < duty < 1) share ``n`` runs in proportion to their periods, at
+    a maximum step of 1/100 period; a stretch at constant power (duty 0 or 1: the boost) is one
+    run whose step only ngspice's error control bounds (at most 1/1000 of the stretch), not
+    the period. A model with device effects is one run over the window at 1/100 period.
 
     Parameters
     ----------
     result : DriveResult
         The drive to check.
-    pieces : int
-        Wanted number of runs (one for a model with device effects).
+    n : int
+        Runs wanted for the switched stretches.
 
     Returns
     -------
-    list of float
-        ``0, t_1, ..., window``: piece k runs from ``cuts[k]`` to ``cuts[k + 1]``.
+    list of (float, float, float)
+        Consecutive runs covering ``[0, verification_window_s]``.
 
     Examples
     --------
@@ -47,18 +53,41 @@ def cuts(result: DriveResult, pieces: int) -> list[float]:
     >>> from spicethermal.model import ThermalModel
     >>> r = optimize_drive(ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])),
     ...                    70.0, 55.0, p_max_w=1.0)
-    >>> c = cuts(r, 2)
-    >>> len(c), c[0], c[-1] == r.verification_window_s()
-    (3, 0.0, True)
+    >>> runs = pieces(r, 2)
+    >>> r.schedule[0][1], [(round(a / r.period_s), round(b / r.period_s)) for a, b, _ in runs]
+    (1.0, [(0, 27), (27, 443), (443, 859)])
+    >>> runs[-1][1] == r.verification_window_s(), runs[0][2] == runs[0][1] / 1000  # the boost
+    (True, True)
     """
-    window = result.verification_window_s()
-    periods = int(window * result.f_pwm_hz + 1e-9)
-    k = max(1, min(int(pieces), periods)) if result.model.is_linear else 1
-    inner = sorted({round(i * periods / k) * result.period_s for i in range(1, k)})
-    return [0.0, *[t for t in inner if 0 < t < window], window]
+    window, period = result.verification_window_s(), result.period_s
+    fine = period / 100
+    if not result.model.is_linear:
+        return [(0.0, window, fine)]
+    # stretches of the schedule inside the window: (start, end, switched)
+    stretches: list[list] = []
+    ends = [t for t, _ in result.schedule[1:]] + [window]
+    for (t, d), end in zip(result.schedule, ends, strict=True):
+        a, b, switched = t, min(end, window), 0 < d < 1
+        if a >= window:
+            break
+        if stretches and stretches[-1][2] == switched:
+            stretches[-1][1] = b
+        else:
+            stretches.append([a, b, switched])
+    total = sum(round((b - a) / period) for a, b, sw in stretches if sw)
+    runs = []
+    for a, b, switched in stretches:
+        if not switched:
+            runs.append((a, b, (b - a) / 1000))
+            continue
+        periods = round((b - a) / period)
+        k = max(1, min(periods, round(n * periods / max(total, 1))))
+        cut = [a + round(i * periods / k) * period for i in range(k)] + [b]
+        runs += [(x, y, fine) for x, y in zip(cut[:-1], cut[1:], strict=True) if y > x]
+    return runs
 
 
-def verify(result: DriveResult, pieces: int | None = None, *, quiet: bool = True
+def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True
            ) -> dict[str, float]:
     """Run the switched drive in ngspice and compare its junction peak with the prediction.
 
@@ -66,9 +95,9 @@ def verify(result: DriveResult, pieces: int | None = None, *, quiet: bool = True
     ----------
     result : DriveResult
         The drive to check.
-    pieces : int, optional
-        Parallel runs (default: the cores, :func:`spicethermal.pwmsim.workers`; always one
-        for a model with device effects).
+    n : int, optional
+        Parallel runs of the switched stretches (default: the cores,
+        :func:`spicethermal.pwmsim.workers`); see :func:`pieces`.
     quiet : bool
         No progress bar on stderr.
 
@@ -82,9 +111,8 @@ def verify(result: DriveResult, pieces: int | None = None, *, quiet: bool = True
     from .pwmsim import workers
     from .spice import NgspiceBatch
 
-    edges = cuts(result, workers() if pieces is None else pieces)
-    decks = [result.spice_bench(tstop_s=b, start_s=a)
-             for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    runs = pieces(result, workers() if n is None else n)
+    decks = [result.spice_bench(tstop_s=b, tmax_s=tmax, start_s=a) for a, b, tmax in runs]
 
     def run(deck: str) -> Waveforms:
         return NgspiceBatch().run(deck, ["V(TJ)"])
@@ -94,19 +122,20 @@ def verify(result: DriveResult, pieces: int | None = None, *, quiet: bool = True
                          quiet=quiet))
     offset = result.bench_offset_c
     peak, at, join = -np.inf, 0.0, 0.0
-    for start, end, wave in zip(edges[:-1], edges[1:], waves, strict=True):
+    window = runs[-1][1]
+    for (start, end, _), wave in zip(runs, waves, strict=True):
         tj = wave["V(TJ)"] + offset
         k = int(np.argmax(tj))
         if tj[k] > peak:
             peak, at = float(tj[k]), start + float(wave.t_s[k])
-        if end < edges[-1]:  # ngspice's end of this piece against the exact start of the next
+        if end < window:  # ngspice's end of this piece against the exact start of the next
             exact = result.ambient_c + float(result.switched_state(end)[0])
             join = max(join, abs(float(tj[-1]) - exact))
-    out = {"window_s": edges[-1], "pieces": len(decks), "ngspice_peak_junction_c": peak,
+    out = {"window_s": window, "pieces": len(decks), "ngspice_peak_junction_c": peak,
            "ngspice_peak_at_s": at}
     tr = result.trace
     if tr.exact_t_s.size:
-        sel = tr.exact_t_s <= edges[-1]
+        sel = tr.exact_t_s <= window
         out["predicted_peak_junction_c"] = float(np.max(tr.exact_peak_c[sel]))
         out["join_k"] = join
     return out
