@@ -87,8 +87,8 @@ def pieces(result: DriveResult, n: int) -> list[tuple[float, float, float]]:
     return runs
 
 
-def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True
-           ) -> dict[str, float]:
+def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True,
+           engine: str = "ngspice") -> dict[str, float]:
     """Run the switched drive in ngspice and compare its junction peak with the prediction.
 
     Parameters
@@ -100,24 +100,31 @@ def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True
         :func:`spicethermal.pwmsim.workers`); see :func:`pieces`.
     quiet : bool
         No progress bar on stderr.
+    engine : str
+        ``ngspice`` (``ngspice -b``, the runs in parallel) or ``pyspice`` (libngspice in
+        process, one run at a time).
 
     Returns
     -------
     dict
-        ``window_s``, ``pieces``, ``ngspice_peak_junction_c``, ``ngspice_peak_at_s``, and for a
-        linear model ``predicted_peak_junction_c`` and ``join_k`` (0 with one piece).
+        ``engine``, ``window_s``, ``pieces``, ``ngspice_peak_junction_c``,
+        ``ngspice_peak_at_s``, and for a linear model ``predicted_peak_junction_c`` and
+        ``join_k`` (0 with one piece).
     """
     from .progress import bar
     from .pwmsim import workers
-    from .spice import NgspiceBatch
+    from .spice import simulator
 
     runs = pieces(result, workers() if n is None else n)
     decks = [result.spice_bench(tstop_s=b, tmax_s=tmax, start_s=a) for a, b, tmax in runs]
 
-    def run(deck: str) -> Waveforms:
-        return NgspiceBatch().run(deck, ["V(TJ)"])
+    backend = simulator(engine)
 
-    with ThreadPoolExecutor(len(decks)) as pool:  # the work is in ngspice processes
+    def run(deck: str) -> Waveforms:
+        return backend.run(deck, ["V(TJ)"])
+
+    # the work is in ngspice processes; the shared library runs one simulation at a time
+    with ThreadPoolExecutor(len(decks) if backend.name == "ngspice" else 1) as pool:
         waves = list(bar(pool.map(run, decks), total=len(decks), desc="ngspice drive check",
                          quiet=quiet))
     offset = result.bench_offset_c
@@ -131,8 +138,8 @@ def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True
         if end < window:  # ngspice's end of this piece against the exact start of the next
             exact = result.ambient_c + float(result.switched_state(end)[0])
             join = max(join, abs(float(tj[-1]) - exact))
-    out = {"window_s": window, "pieces": len(decks), "ngspice_peak_junction_c": peak,
-           "ngspice_peak_at_s": at}
+    out = {"engine": backend.name, "window_s": window, "pieces": len(decks),
+           "ngspice_peak_junction_c": peak, "ngspice_peak_at_s": at}
     tr = result.trace
     if tr.exact_t_s.size:
         sel = tr.exact_t_s <= window

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..engines import NAMES
 from ..errors import DataFormatError
 from ..files import dumps_json
 from ._types import add_option, frequency
@@ -69,6 +70,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write a self-contained ngspice deck reproducing the switched drive")
     parser.add_argument("--verify", action="store_true",
                         help="run the deck in ngspice and compare the junction peak")
+    parser.add_argument("--engine", choices=NAMES, default="auto",
+                        help="engine of --verify: ngspice (ngspice -b, pieces in parallel; "
+                             "auto) or pyspice; the drive itself is computed in closed form")
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no progress bar on stderr (none either when it is not a terminal)")
 
@@ -93,7 +97,11 @@ def run(args: argparse.Namespace) -> int:
         from ..plots import fig_drive
 
         written.append(str(fig_drive(result, args.plot)))
-    check = verify(result, quiet=args.quiet) if args.verify else None
+    if args.engine == "analytic":
+        raise DataFormatError("--engine analytic: the drive is already computed in closed form; "
+                              "--verify runs it in ngspice or pyspice")
+    spice = "ngspice" if args.engine == "auto" else args.engine
+    check = verify(result, quiet=args.quiet, engine=spice) if args.verify else None
     if args.json:
         doc = result.as_json()
         if check is not None:

@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"{DEFAULT_POINTS})")
     parser.add_argument("--engine", choices=ENGINES, default="auto",
                         help="auto (analytic for linear models, ngspice with device effects), "
-                             "analytic or ngspice")
+                             "analytic, ngspice or pyspice")
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no progress bar on stderr (none either when it is not a terminal)")
 
