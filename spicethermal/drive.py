@@ -736,11 +736,13 @@ def _two_phase(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol: float
             dn = sn - resp(node, t - tb) * (t > tb)
             dj = sj - resp(0, t - tb) * (t > tb)
             extra = (dbs - hold_duty)[:, None] * dyn.p
-            y = hold_duty * dyn.p * sn + extra * dn
             jm = hold_duty * dyn.p * sj + extra * dj
             jp = np.where(t <= tb, jm + rip_b[:, None], jm + rip_h)
             peak[i] = jp.max(axis=1)
-            best_t[i] = np.where(peak[i] <= lim_k, _settle_rows(t, y, tgt_k, band)[0], np.inf)
+            ok = peak[i] <= lim_k  # only the safe candidates need their settling time
+            if ok.any():
+                y = hold_duty * dyn.p * sn + extra[ok] * dn
+                best_t[i, ok] = _settle_rows(t, y, tgt_k, band)[0]
         return best_t, peak, t
 
     tbs = np.unique(np.maximum(1, np.round(np.geomspace(period, horizon / 4, 160) / period)))
