@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import DataFormatError
+from .progress import bar
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -78,7 +79,8 @@ class Band:
                 "level": self.level}
 
 
-def resamples(model: NDArray, data: NDArray, n: int, seed: int = 0) -> Iterator[NDArray]:
+def resamples(model: NDArray, data: NDArray, n: int, seed: int = 0, *,
+              quiet: bool = True) -> Iterator[NDArray]:
     """``n`` curves ``model + residuals`` with the residuals ``data − model`` redrawn.
 
     Parameters
@@ -87,6 +89,7 @@ def resamples(model: NDArray, data: NDArray, n: int, seed: int = 0) -> Iterator[
     data : the data.
     n : number of resamples (>= 2).
     seed : random seed.
+    quiet : no progress bar on stderr (:func:`spicethermal.progress.bar`).
 
     Returns
     -------
@@ -96,7 +99,7 @@ def resamples(model: NDArray, data: NDArray, n: int, seed: int = 0) -> Iterator[
         raise DataFormatError(f"bootstrap: n = {n!r} resamples, need at least 2")
     resid = np.asarray(data, dtype=float) - np.asarray(model, dtype=float)
     rng = np.random.default_rng(seed)
-    for _ in range(int(n)):
+    for _ in bar(range(int(n)), desc="bootstrap resamples", quiet=quiet):
         yield model + rng.choice(resid, size=resid.size, replace=True)
 
 
@@ -172,7 +175,7 @@ class SpectrumBootstrap:
 
 
 def spectrum_bootstrap(curve: ZthCurve, spectrum: Spectrum, n: int = DEFAULT_N, seed: int = 0,
-                       stages_per_decade: float | None = None,
+                       stages_per_decade: float | None = None, *, quiet: bool = True,
                        **options: Any) -> SpectrumBootstrap:
     """Deconvolve ``n`` resamples of ``curve`` around the spectrum's own model of it.
 
@@ -183,6 +186,7 @@ def spectrum_bootstrap(curve: ZthCurve, spectrum: Spectrum, n: int = DEFAULT_N, 
     n, seed : resamples and seed.
     stages_per_decade : also band the cumulative structure function (ΣC against ΣR, on the
         ΣR grid of the spectrum's own) at this lumping; ``None``: spectrum only.
+    quiet : no progress bar on stderr.
 
     Returns
     -------
@@ -195,7 +199,7 @@ def spectrum_bootstrap(curve: ZthCurve, spectrum: Spectrum, n: int = DEFAULT_N, 
     dens, cums = [], []
     base_sf = (StructureFunction.from_spectrum(spectrum, stages_per_decade)
                if stages_per_decade is not None else None)
-    for z in resamples(model, curve.zth_k_per_w, n, seed):
+    for z in resamples(model, curve.zth_k_per_w, n, seed, quiet=quiet):
         s = time_constant_spectrum(replace(curve, zth_k_per_w=z), **options)
         dens.append(s.r_density_k_per_w)
         if base_sf is not None:

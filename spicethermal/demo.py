@@ -17,6 +17,7 @@ from typing import Any
 
 from .errors import SpiceThermalError
 from .files import write_json
+from .progress import enabled
 from .spice import DIALECTS, TOPOLOGIES
 
 #: The simulated devices. The actuator bench has the real bench's artefacts (electrical
@@ -31,7 +32,15 @@ SUBCKT = {"actuator": "ACTUATOR", "mur880e": "MUR880E"}
 
 @dataclass
 class Steps:
-    """Numbered progress lines on stderr: ``[3/9] fitting the ladder ... 0.21 s``."""
+    """Numbered progress lines on stderr: ``[3/9] fitting the ladder ... 0.21 s``.
+
+    Shown like every progress display (:func:`spicethermal.progress.enabled`): not with
+    ``quiet`` and not when stderr is not a terminal; the timings are kept either way.
+
+    >>> steps = Steps(total=1, quiet=True)
+    >>> steps.run("adding", lambda: 1 + 1), list(steps.timings)
+    (2, ['adding'])
+    """
 
     total: int
     quiet: bool = False
@@ -39,19 +48,20 @@ class Steps:
     timings: dict[str, float] = field(default_factory=dict)
 
     def run(self, title: str, work: Callable[[], Any]) -> Any:
+        shown = enabled(self.quiet)
         self.done += 1
-        if not self.quiet:
+        if shown:
             print(f"[{self.done}/{self.total}] {title} ...", end="", file=sys.stderr, flush=True)
         t0 = time.perf_counter()
         try:
             result = work()
         except BaseException:
-            if not self.quiet:
+            if shown:
                 print(" failed", file=sys.stderr, flush=True)
             raise
         dt = time.perf_counter() - t0
         self.timings[title] = dt
-        if not self.quiet:
+        if shown:
             print(f" {dt:.2f} s", file=sys.stderr, flush=True)
         return result
 
@@ -149,8 +159,6 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         for dialect in DIALECTS:
             export(better, out / "lib" / f"actuator_{effect}_{dialect}_cauer.lib", dialect,
                    "cauer", SUBCKT["actuator"] + "_TC")
-        plots.fig_before_after(before, after, figs / "effect_before_after.png",
-                               titles=("linear ladder", f"with {', '.join(diag.effects)}"))
         return better, before, after
 
     better, before, after = steps.run("add the effect and compare again", improve)

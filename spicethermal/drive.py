@@ -233,13 +233,79 @@ class DriveResult:
         return "\n".join(out)
 
     # -- SPICE ---------------------------------------------------------------------------
-    def spice_sources(self, pin: str = "TJ", ref: str = "0", prefix: str = "IDRV") -> list[str]:
+    def schedule_from(self, start_s: float) -> tuple[tuple[float, float], ...]:
+        """The schedule as seen from the period start ``start_s`` (times shifted by it).
+
+        Parameters
+        ----------
+        start_s : float
+            A period start (s); 0 gives :attr:`schedule` itself.
+
+        Returns
+        -------
+        tuple of (float, float)
+            ``(t_s, duty)`` pieces from ``t_s = 0``.
+
+        Examples
+        --------
+        >>> r = optimize_drive(ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])),
+        ...                    70.0, 55.0, p_max_w=1.0)
+        >>> r.schedule_from(0.0) == r.schedule
+        True
+        >>> r.schedule_from(r.schedule[-1][0] + 1.0) == ((0.0, r.hold_duty),)
+        True
+        """
+        half = 0.5 * self.period_s
+        ends = [t for t, _ in self.schedule[1:]] + [math.inf]
+        return tuple((max(t - start_s, 0.0), d)
+                     for (t, d), end in zip(self.schedule, ends, strict=True)
+                     if end > start_s + half)
+
+    def switched_state(self, t_s: float) -> NDArray:
+        """Exact node rises (K) of the switched drive at the period start ``t_s`` (linear model).
+
+        The state of the model's network (:func:`spicethermal.spice.internal_nodes` order),
+        carried period by period through the closed-form period map of each duty.
+
+        Parameters
+        ----------
+        t_s : float
+            A period start, s.
+
+        Returns
+        -------
+        NDArray
+            Node rises over the ambient, junction first.
+
+        Examples
+        --------
+        >>> r = optimize_drive(ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])),
+        ...                    70.0, 55.0, p_max_w=1.0)
+        >>> bool(r.switched_state(0.0)[0] == 0.0)
+        True
+        """
+        if not self.model.is_linear:
+            raise DataFormatError("switched_state: exact only for a model without device effects")
+        dyn = _Dynamics(self.model, self.ambient_c, self.p_max_w, self.f_pwm_hz)
+        _, v, _ = dyn.modes(np.zeros(dyn.n))
+        n_end = round(t_s / self.period_s)
+        firsts = [round(t / self.period_s) for t, _ in self.schedule] + [n_end]
+        z = np.zeros(dyn.n)
+        for (_, d), first, nxt in zip(self.schedule, firsts, firsts[1:], strict=False):
+            if first >= n_end:  # (the hold, last, runs until t_s)
+                break
+            z = _PeriodMap(dyn, d).start(z, min(nxt, n_end) - first)
+        return v @ z
+
+    def spice_sources(self, pin: str = "TJ", ref: str = "0", prefix: str = "IDRV",
+                      start_s: float = 0.0) -> list[str]:
         """Current sources that inject the switched power of the schedule into ``pin``.
 
         One ``PULSE`` per constant-duty interval with its number of pulses (ngspice ≥ 39 and
         LTspice read the 8th PULSE parameter as the pulse count), and an endless ``PULSE`` for
         the hold. Edges last 1e-4 period and the width is shortened by one edge, so the
-        energy of every period is exactly ``P_max · duty / f_pwm``.
+        energy of every period is exactly ``P_max · duty / f_pwm``. ``start_s`` (a period
+        start) gives the sources of the drive from that time on (:meth:`schedule_from`).
         """
         from .spice import Pulse, fmt
 
@@ -247,8 +313,9 @@ class DriveResult:
         edge = Pulse.of(self.f_pwm_hz, 0.5).edge_s
         p = fmt(self.p_max_w)
         lines = []
-        for k, (t, d) in enumerate(self.schedule):
-            last = k + 1 == len(self.schedule)
+        schedule = self.schedule_from(start_s)
+        for k, (t, d) in enumerate(schedule):
+            last = k + 1 == len(schedule)
             if d <= 0:
                 continue
             name = f"{prefix}{k + 1}"
@@ -256,7 +323,7 @@ class DriveResult:
                 if last:
                     lines.append(f"{name} {ref} {pin} PWL({fmt(t)} 0 {fmt(t + edge)} {p})")
                     continue
-                length = self.schedule[k + 1][0] - t
+                length = schedule[k + 1][0] - t
                 lines.append(f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
                              f"{fmt(length - edge)} {fmt(length + 2 * edge)} 1)")
                 continue
@@ -266,12 +333,13 @@ class DriveResult:
             if last:
                 lines.append(head + ")")
             else:
-                n = round((self.schedule[k + 1][0] - t) / period)
+                n = round((schedule[k + 1][0] - t) / period)
                 lines.append(f"{head} {n:d})")
         return lines
 
     def spice_bench(self, name: str = "HEATER", tstop_s: float | None = None,
-                    tmax_s: float | None = None, reltol: float = 1e-4) -> str:
+                    tmax_s: float | None = None, reltol: float = 1e-4,
+                    start_s: float = 0.0) -> str:
         """A self-contained ngspice deck: the model's subcircuit, the drive's sources, ``.tran``.
 
         ``TREF`` sits at the ambient temperature, so ``V(TJ)`` is the junction in °C and
@@ -280,21 +348,33 @@ class DriveResult:
         :attr:`bench_offset_c` to the voltages. ``tstop_s`` defaults to
         :meth:`verification_window_s`,
         ``tmax_s`` (the maximum step) to 1/100 period (1/20 leaves errors of ~0.01 K).
+        ``start_s`` > 0 (a period start, linear models) simulates the drive from that time to
+        ``tstop_s`` only: the deck's time 0 is ``start_s``, its nodes start (``.ic``) in the
+        exact switched state there (:meth:`switched_state`).
         """
         from . import __version__
-        from .spice import environment, reference_drive, render_lib, sanitize_comment
+        from .spice import (
+            environment,
+            initial_conditions,
+            reference_drive,
+            render_lib,
+            sanitize_comment,
+        )
 
         tstop = self.verification_window_s() if tstop_s is None else float(tstop_s)
         tmax = self.period_s / 100 if tmax_s is None else float(tmax_s)
+        tref = self.ambient_c - self.bench_offset_c
+        ic = initial_conditions(self.model, self.switched_state(start_s), tref) \
+            if start_s > 0 else []
         return environment().get_template("bench/drive.cir.j2").render(
             version=__version__, lib=render_lib(self.model, "ngspice", name=name),
-            name=name, tref_c=self.ambient_c - self.bench_offset_c,
+            name=name, tref_c=tref,
             toffset_c=reference_drive(self.model, self.ambient_c)[1],
-            sources=self.spice_sources(),
+            sources=self.spice_sources(start_s=start_s), ic=ic, start_s=float(start_s),
             description=sanitize_comment(
                 f"node {self.node} to {self.target_c:g} degC, Tj peak <= {self.t_max_c:g} "
                 f"degC, {self.f_pwm_hz:g} Hz, P_max {self.p_max_w:g} W"),
-            tstop_s=tstop, tstep_s=tmax, tmax_s=tmax, reltol=reltol)
+            tstop_s=tstop - start_s, tstep_s=tmax, tmax_s=tmax, reltol=reltol)
 
     @property
     def bench_offset_c(self) -> float:
@@ -656,11 +736,13 @@ def _two_phase(dyn: _Dynamics, node: int, lim_k: float, tgt_k: float, tol: float
             dn = sn - resp(node, t - tb) * (t > tb)
             dj = sj - resp(0, t - tb) * (t > tb)
             extra = (dbs - hold_duty)[:, None] * dyn.p
-            y = hold_duty * dyn.p * sn + extra * dn
             jm = hold_duty * dyn.p * sj + extra * dj
             jp = np.where(t <= tb, jm + rip_b[:, None], jm + rip_h)
             peak[i] = jp.max(axis=1)
-            best_t[i] = np.where(peak[i] <= lim_k, _settle_rows(t, y, tgt_k, band)[0], np.inf)
+            ok = peak[i] <= lim_k  # only the safe candidates need their settling time
+            if ok.any():
+                y = hold_duty * dyn.p * sn + extra[ok] * dn
+                best_t[i, ok] = _settle_rows(t, y, tgt_k, band)[0]
         return best_t, peak, t
 
     tbs = np.unique(np.maximum(1, np.round(np.geomspace(period, horizon / 4, 160) / period)))

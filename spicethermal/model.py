@@ -341,27 +341,56 @@ class ThermalModel:
     def pwm_initial_state(self, power_w: float, freq_hz: float, duty: float,
                           tref_c: float = 25.0, tol_k: float = 1e-6,
                           max_iter: int = 50) -> NDArray:
-        """Node rises at the start of an on-phase in the periodic steady state (shooting)."""
-        from scipy.linalg import expm
+        """Node rises at the start of an on-phase in the periodic steady state.
 
+        Closed form for a linear model. With device effects: shooting, a chord-Newton
+        iteration on the one-period map whose Jacobian is the period map of the network frozen
+        at the current state; it starts from the closed-form periodic state of the network
+        frozen at the self-consistent mean (exact to first order in the nonlinearity, so one
+        iteration is usually enough). The period is integrated at a tolerance matched to
+        ``tol_k`` (the largest accepted change of the state over one period, K).
+
+        Parameters
+        ----------
+        power_w, freq_hz, duty : float
+            Pulse power (W), PWM frequency (Hz) and duty cycle (0..1).
+        tref_c : float
+            Reference temperature, degC (matters for device effects).
+        tol_k : float
+            Accepted periodicity error, K.
+        max_iter : int
+            Shooting iterations before :class:`SimulationError`.
+
+        Returns
+        -------
+        NDArray
+            Node rises over the reference (K), junction first.
+
+        Examples
+        --------
+        >>> m = ThermalModel(Foster.from_tau([10.0], [1e-3]))
+        >>> x = m.pwm_initial_state(0.1, 1e3, 0.5)  # valley: P R (1 - e^-½) e^-½ / (1 - e^-1)
+        >>> bool(abs(x[0] - (1 - np.exp(-0.5)) * np.exp(-0.5) / -np.expm1(-1.0)) < 1e-12)
+        True
+        """
         check_drive(freq_hz, duty, power_w)
         net = self._network()
         period = 1 / freq_hz
-        segs = [(0.0, duty * period, power_w), (duty * period, period, 0.0)]
-        if self.is_linear:  # the period map is affine, x -> A x + c: solve it exactly
-            c = _linear_response(net, np.zeros(net.n), Schedule.pwm(power_w, freq_hz, duty, 1),
-                                 np.array([period]))[0]
-            a = expm(-np.linalg.solve(net.capacitance(), net.conductance()) * period)
-            return np.linalg.solve(np.eye(net.n) - a, c)
+        if self.is_linear:
+            return _FrozenPeriod(net.capacitance(), net.conductance(), period).start(
+                power_w, duty)
+        segs = [s for s in ((0.0, duty * period, power_w), (duty * period, period, 0.0))
+                if s[1] > s[0]]
         x = self.steady_nodes(power_w * duty, tref_c)
+        # the frozen network's periodic state: its period average is the mean state x itself
+        x = _FrozenPeriod(*self._matrices(x, tref_c, net), period).start(power_w, duty)
         for _ in range(max_iter):
-            end, _ = self._integrate(net, x, [s for s in segs if s[1] > s[0]], tref_c)
+            end, _ = self._integrate(net, x, segs, tref_c, rtol=max(1e-9, 1e-3 * tol_k),
+                                     atol=max(1e-10, 1e-4 * tol_k))
             r = end - x
             if np.max(np.abs(r)) < tol_k:
                 return end
-            cm, g = self._matrices(x, tref_c, net)
-            a = expm(-np.linalg.solve(cm, g) * period)  # frozen period map, dΦ/dθ
-            x = x + np.linalg.solve(np.eye(net.n) - a, r)
+            x = x + _FrozenPeriod(*self._matrices(x, tref_c, net), period).solve(r)
         raise SimulationError(f"PWM shooting did not converge at {freq_hz:g} Hz, duty {duty:g}")
 
     # -- files ---------------------------------------------------------------------------
@@ -462,6 +491,32 @@ def _linear_response(net: Network, x0: NDArray, schedule: Schedule, t: NDArray) 
     p = np.array([segs[i][2] for i in k])[:, None]
     zt = np.array(z_at)[k] * np.exp(-lam * dt) + p * bm / lam * -np.expm1(-lam * dt)
     return zt @ v.T
+
+
+class _FrozenPeriod:
+    """The one-period map of the linear network ``Cm dθ/dt = e0 P(t) − G θ`` in modal form.
+
+    ``G v = λ Cm v`` with ``vᵀ Cm v = I``: ``θ = V z``, ``dz/dt = −λ z + V[0] P``; over a period
+    ``z → a z + c`` with ``a = exp(−λ T)``.
+    """
+
+    def __init__(self, cm: NDArray, g: NDArray, period_s: float) -> None:
+        from scipy.linalg import eigh
+
+        self.lam, self.v = eigh(g, cm)
+        self.vinv = self.v.T @ cm
+        self.period = period_s
+
+    def start(self, power_w: float, duty: float) -> NDArray:
+        """State at the start of an on-phase in the periodic steady state."""
+        lam, t = self.lam, self.period
+        c = power_w * self.v[0] / lam * -np.expm1(-lam * duty * t)  # after the on-phase
+        c = c * np.exp(-lam * (1 - duty) * t)  # and the off-phase, from z = 0
+        return self.v @ (c / -np.expm1(-lam * t))
+
+    def solve(self, r: NDArray) -> NDArray:
+        """``(I − A)⁻¹ r`` with ``A`` the period map's Jacobian."""
+        return self.v @ ((self.vinv @ r) / -np.expm1(-self.lam * self.period))
 
 
 def _jsonable(obj):

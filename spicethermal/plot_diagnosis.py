@@ -81,6 +81,7 @@ def fig_before_after(before: Comparison, after: Comparison, path: str | os.PathL
     True
     """
     names = list(dict.fromkeys([*before.datasets, *after.datasets]))
+    names = [n for n in names if before.dataset(n) != after.dataset(n)] or names  # no twins
     fig = new_figure(9.0, 2.3 * max(len(names), 1) + 0.4)
     axes = fig.subplots(max(len(names), 1), 2, squeeze=False)
     for row, name in enumerate(names):

@@ -278,7 +278,7 @@ def fig_table1(table: Table1, path: str | os.PathLike) -> Path:
     ax.loglog(t, table.measured_r, "o-", color="C0", label="measured (this bench)")
     if table.reference_r is not None:
         ax.loglog(t, table.reference_r, "^--", color="C2", label="the paper's bench")
-    ax.set_ylabel("r(t) = Zth / Rth")
+    ax.set_ylabel("r(t) = Zth / Rth (1)")
     ax.set_title(f"{table.device}: thermal impedance vs datasheet (Table 1)", fontsize=10,
                  loc="left")
     ax.grid(True, which="both", alpha=0.3)

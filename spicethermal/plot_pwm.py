@@ -128,7 +128,8 @@ FIG8_DUTIES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 def plot_r_duty(ladder: Foster | Cauer, duties: Sequence[float] = FIG8_DUTIES,
                 t_s: Sequence[float] | None = None, ax: Axes | None = None,
                 eq3: bool = True, exact: bool = True) -> Axes:
-    """Fig. 8: duty-cycle impedance curves r_D(t) on log-log axes, one colour per duty.
+    """Fig. 8: duty-cycle impedance curves Zth,D(t) = Rth · r_D(t) in K/W on log-log axes, one
+    colour per duty.
 
     Dashed: the paper's eq. 3, ``D + (1 − D) r(t)``; solid: the exact periodic-steady-state
     peak per watt for pulses of width t at duty D (:func:`spicethermal.pwm.r_duty_exact`).
@@ -152,14 +153,15 @@ def plot_r_duty(ladder: Foster | Cauer, duties: Sequence[float] = FIG8_DUTIES,
     for k, d in enumerate(duties):
         label = f"D = {d:g}"
         if exact:
-            ax.plot(t, r_duty_exact(ladder, t, d), "-", color=cmap[k], lw=1.3, label=label)
+            ax.plot(t, ladder.rth * r_duty_exact(ladder, t, d), "-", color=cmap[k], lw=1.3,
+                    label=label)
         if eq3:
-            ax.plot(t, r_duty_eq3(ladder, t, d), "--", color=cmap[k], lw=1.0,
+            ax.plot(t, ladder.rth * r_duty_eq3(ladder, t, d), "--", color=cmap[k], lw=1.0,
                     label=None if exact else label)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("pulse width t (s)")
-    ax.set_ylabel("r_D(t) = Zth,D(t) / Rth")
+    ax.set_ylabel("Zth,D(t) = Rth · r_D(t) (K/W)")
     kinds = " and ".join(x for x, on in (("exact (solid)", exact), ("eq. 3 (dashed)", eq3)) if on)
     ax.set_title(f"Impedance curves for duty cycles D, {kinds}; Rth = "
                  f"{eng(ladder.rth, 'K/W')}", fontsize=9, loc="left")
@@ -257,7 +259,7 @@ def plot_table2_heatmap(comparison: Comparison, ax: Axes | None = None) -> Axes:
                         color="white" if abs(delta[i, k]) > 0.6 * limit else "black")
     ax.set_xticks(range(len(duties)), [f"{100 * d:g} %" for d in duties])
     ax.set_yticks(range(len(freqs)), [f"{f / 1e3:g}" for f in freqs])
-    ax.set_xlabel("duty")
+    ax.set_xlabel("duty (%)")
     ax.set_ylabel("frequency (kHz)")
     ax.figure.colorbar(image, ax=ax, label="Δ = T_exp − T_mod (K)")
     return ax

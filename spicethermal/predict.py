@@ -7,8 +7,9 @@ the reference temperature:
 
 * ``analytic`` (linear models): the exact response of the ladder to a piecewise-linear input,
   mode by mode (the ladder's generalized eigenvalues ``G v = λ C v``), no time step at all;
-* ``ngspice`` (any model, the default with device effects): the exported subcircuit driven by
-  the same ``PWL`` source in a transient run.
+* ``ngspice`` or ``pyspice`` (any model; ngspice is the default with device effects): the
+  exported subcircuit driven by the same ``PWL`` source in a transient run
+  (:meth:`spicethermal.engines.Spice.transient`).
 
 >>> from spicethermal.ladder import Foster
 >>> from spicethermal.model import ThermalModel
@@ -21,16 +22,16 @@ True
 
 from __future__ import annotations
 
-import math
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import DataFormatError, SimulationError
+from .engines import NAMES
+from .engines import engine as by_name
+from .errors import DataFormatError
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -38,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .model import ThermalModel
 
 #: Engines of :func:`predict` (``auto``: analytic for linear models, ngspice otherwise).
-ENGINES = ("auto", "analytic", "ngspice")
+ENGINES = NAMES
 #: Output points spread evenly over the profile, besides its own sample times.
 DEFAULT_POINTS = 1000
 
@@ -166,7 +167,7 @@ def output_times(profile: PowerProfile, t_end_s: float | None = None,
 
 
 def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = None, *,
-            tref_c: float = 25.0, engine: str = "auto") -> Prediction:
+            tref_c: float = 25.0, engine: str = "auto", quiet: bool = True) -> Prediction:
     """Junction temperature of ``model`` under ``profile`` at times ``t_s``.
 
     Parameters
@@ -175,7 +176,8 @@ def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = 
     profile : the power waveform.
     t_s : output times (default :func:`output_times`).
     tref_c : reference temperature, degC (the model starts there).
-    engine : ``"auto"``, ``"analytic"`` or ``"ngspice"`` (module docstring).
+    engine : ``"auto"``, ``"analytic"``, ``"ngspice"`` or ``"pyspice"`` (module docstring).
+    quiet : no progress on stderr while ngspice runs (:func:`spicethermal.progress.task`).
 
     Returns
     -------
@@ -186,16 +188,17 @@ def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = 
         raise DataFormatError("output times must be finite, >= 0 and ascending")
     if engine not in ENGINES:
         raise DataFormatError(f"--engine {engine!r}: expected one of {', '.join(ENGINES)}")
-    if engine == "auto":
-        engine = "ngspice" if model.device_effects else "analytic"
+    chosen = by_name(engine, model)  # analytic refuses device effects in one line
+    engine = chosen.name
     if engine == "analytic":
-        if model.device_effects:
-            raise DataFormatError(f"the model has device effects "
-                                  f"({', '.join(e.name for e in model.device_effects)}): the "
-                                  f"analytic engine is for linear models; use --engine ngspice")
         rise = pwl_response(model, profile, t)
     else:
-        rise = _ngspice_response(model, profile, t, tref_c)
+        from .progress import task
+
+        with task(f"{engine} transient", quiet=quiet):
+            rise = chosen.transient(model, list(zip(profile.t_s.tolist(),
+                                                    profile.power_w.tolist(), strict=True)),
+                                    t, tref_c)
     return Prediction(t, profile.at(t), tref_c + rise, float(tref_c), engine)
 
 
@@ -266,37 +269,6 @@ def _advance(z: NDArray, lam: NDArray, b: NDArray, p0: NDArray | float, slope: N
     series = dt * dt * (0.5 - xs / 6.0 + xs * xs / 24.0)
     ramp = np.where(small, series, (x - one * lam) / np.where(small, 1.0, lam) ** 2)
     return z * decay + b * (p0 * one + slope * ramp)
-
-
-def _ngspice_response(model: ThermalModel, profile: PowerProfile, t_s: NDArray,
-                      tref_c: float) -> NDArray:
-    """The junction rise from an ngspice transient run of the exported subcircuit."""
-    from .spice import reference_drive, render_bench, render_lib, simulator
-
-    end = float(t_s[-1])
-    corners = [(float(a), float(p)) for a, p in zip(profile.t_s, profile.power_w, strict=True)
-               if a <= end]
-    if corners[-1][0] < end:
-        corners.append((end, float(profile.at(end))))
-    tmax = end / 200.0  # ngspice breaks at every PWL corner; its error control does the rest
-    bench_tref, toffset = reference_drive(model, tref_c)
-    with tempfile.TemporaryDirectory(prefix="spicethermal-predict-") as tmp:
-        lib = Path(tmp) / "dut.lib"
-        lib.write_text(render_lib(model, "ngspice", name="DUT", filename="dut.lib"),
-                       encoding="utf-8")
-        text = render_bench(lib, "DUT", power_w=max(c[1] for c in corners), tstop_s=end,
-                            tmax_s=tmax, tref_c=bench_tref, toffset_c=toffset, pwl=corners,
-                            title="spicethermal predict",
-                            description=f"{len(corners)} PWL corners to {end:g} s")
-        waves = simulator("ngspice").run(text, ["V(TJ)"], "ngspice")
-    t = np.asarray(waves.t_s, dtype=float)
-    rise = np.asarray(waves["V(TJ)"], dtype=float) - bench_tref
-    keep = np.concatenate([[True], np.diff(t) > 0])
-    t, rise = t[keep], rise[keep]
-    if t.size < 2 or t[-1] < end * (1 - 1e-9) or not np.all(np.isfinite(rise)):
-        raise SimulationError(f"ngspice returned an incomplete waveform (ended at "
-                              f"{t[-1] if t.size else math.nan:g} s of {end:g} s)")
-    return np.interp(t_s, t, rise)
 
 
 def plot_prediction(result: Prediction, path: str | os.PathLike, title: str | None = None,

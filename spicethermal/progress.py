@@ -8,10 +8,12 @@ is not a terminal (pipes, logs, the tests), so no command's output ever depends 
 from __future__ import annotations
 
 import sys
+import threading
 from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from typing import TypeVar
 
-__all__ = ["bar", "enabled"]
+__all__ = ["bar", "enabled", "task"]
 
 T = TypeVar("T")
 
@@ -51,3 +53,45 @@ def bar(items: Iterable[T], *, total: int | None = None, desc: str = "",
     from tqdm import tqdm
 
     yield from tqdm(items, total=total, desc=desc, file=sys.stderr, leave=False)
+
+
+@contextmanager
+def task(desc: str, *, quiet: bool = False) -> Iterator[None]:
+    """One long step that cannot be counted (an ngspice run): its name and elapsed time on
+    stderr while it runs, when :func:`enabled`.
+
+    Parameters
+    ----------
+    desc : what is being done (a few words).
+    quiet : nothing shown (the commands' ``-q``).
+
+    Returns
+    -------
+    A context manager; the step runs inside it.
+
+    Examples
+    --------
+    >>> with task("waiting", quiet=True):
+    ...     pass
+    """
+    if not enabled(quiet):
+        yield
+        return
+    from tqdm import tqdm
+
+    with tqdm(total=1, desc=desc, file=sys.stderr, leave=False,
+              bar_format="{desc}: {elapsed}") as shown:
+        stop = threading.Event()
+
+        def tick() -> None:
+            while not stop.wait(0.5):
+                shown.refresh()
+
+        clock = threading.Thread(target=tick, daemon=True)
+        clock.start()
+        try:
+            yield
+        finally:
+            stop.set()
+            clock.join()
+            shown.update(1)

@@ -305,6 +305,11 @@ def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]], *,
         with ThreadPoolExecutor(n) as threads:  # the work is in ngspice: no process to fork
             return list(bar(threads.map(_run_job, jobs), total=len(jobs), desc=desc,
                             quiet=quiet))
+    # forked workers inherit the modules already imported: import the shooting's once, here
+    import scipy.integrate  # noqa: F401
+    import scipy.linalg  # noqa: F401
+    import scipy.optimize  # noqa: F401
+
     _FORKED_JOBS[:] = jobs
     try:
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:

@@ -83,7 +83,8 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
         f"K-factor {calibration.k_factor_mv_per_k:.3f} mV/K, residual RMS "
         f"{calibration.rms_mv:.3f} mV ({calibration.rms_k:.3f} K) over "
         f"{calibration.points} points. {calibration.linearity}")
-    s.figure(figs / "fig2_calibration.png", out, "Fig. 2 — V_tsp(T) with the fit and residuals")
+    s.figure(figs / "fig2_calibration.png", out, "Fig. 2 — TSP forward voltage (mV) against "
+             "the hot-plate temperature with the fit, and its residuals in K")
     secs.append(s)
 
     s = Section("fit", "2. Thermal impedance and the fitted ladder (paper Fig. 7)")
@@ -94,7 +95,7 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
         f"({fit.criterion}; orders tried: "
         + ", ".join(f"{k}: {v:.1f}" for k, v in sorted(fit.criterion_values.items()))
         + f"), with ΣR = Rth held; residual RMS {fit.rms_k_per_w * 1e3:.2f} mK/W.")
-    s.table(["stage", "R (K/W)", "± u", "τ (s)", "± u", "C (J/K)"],
+    s.table(["stage", "R (K/W)", "u(R) (K/W)", "τ (s)", "u(τ) (s)", "C (J/K)"],
             [[i + 1, _g(st["r_k_per_w"]), _g(st["u_r_k_per_w"], 2), _g(st["tau_s"]),
               _g(st["u_tau_s"], 2), _g(st["c_j_per_k"])] for i, st in enumerate(fit.stages)],
             "Foster ladder (fit)")
@@ -106,16 +107,18 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
         s.paragraphs.append("All cooling curves: " + "; ".join(
             f"{c.label} at {c.power_w:g} W: Rth = {c.rth_k_per_w:.2f} K/W" for c in curves)
             + ". Rth that changes with power is the sign of a temperature-dependent device.")
-    s.figure(figs / "fig7_fit.png", out, "Fig. 7 — (a) fit over the data, (b) residuals, "
-             "(c) the ladders")
+    s.figure(figs / "fig7_fit.png", out, "Fig. 7 — (a) Zth(t) in K/W: the fitted ladder over "
+             "the measured curve, (b) data − fit, (c) the Foster and Cauer ladders")
     secs.append(s)
 
     s = Section("impedance", "3. Duty-cycle impedance curves (paper Fig. 8)")
     s.paragraphs.append(
-        "r_D(t) for D = 0 … 0.9: the paper's eq. 3, D + (1 − D)·r(t) (dashed), against the "
-        "exact peak of a periodic pulse train (solid). Eq. 3 is conservative: it overstates "
-        "the peak for pulses shorter than the middle time constants.")
-    s.figure(figs / "fig8_impedance.png", out, "Fig. 8 — impedance curves by duty cycle")
+        "Zth,D(t) = Rth · r_D(t) in K/W for D = 0 … 0.9: the paper's eq. 3, "
+        "r_D = D + (1 − D)·r(t) (dashed), against the exact peak of a periodic pulse train "
+        "(solid). Eq. 3 is conservative: it overstates the peak for pulses shorter than the "
+        "middle time constants.")
+    s.figure(figs / "fig8_impedance.png", out, "Fig. 8 — peak thermal impedance (K/W) of a "
+             "periodic pulse train against the pulse width, one curve per duty cycle")
     secs.append(s)
 
     s = Section("table1", "4. Bench validation on the MUR880E (paper Table 1)")
@@ -131,11 +134,12 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
         if table1.reference_r is not None:
             row += [f"{table1.reference_r[i]:.3f}", f"{table1.reference_error_percent[i]:+.1f}"]
         rows.append(row)
-    head = ["time (ms)", "measured r(t)", "datasheet r(t)", "error (%)"]
+    head = ["time (ms)", "measured r(t) (1)", "datasheet r(t) (1)", "error (%)"]
     if table1.reference_r is not None:
-        head += ["paper's measured", "paper's error (%)"]
+        head += ["paper's measured r(t) (1)", "paper's error (%)"]
     s.table(head, rows, "Table 1 — * extrapolated by the √t law")
-    s.figure(figs / "table1_mur880e.png", out, "Measured vs datasheet r(t)")
+    s.figure(figs / "table1_mur880e.png", out, "MUR880E normalised impedance r(t) = Zth/Rth: "
+             "measured against the datasheet curve, and the error in %")
     secs.append(s)
 
     s = Section("table2", "5. PWM: measured vs model in ngspice (paper Table 2)")
@@ -157,9 +161,11 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
             row += ([f"{p.measured_c:.2f}", f"{p.model_c:.2f}", _signed(p.residual_k)]
                     if p else ["", "", ""])
         rows.append(row)
-    head = ["f (kHz)"] + [h for d in duties for h in (f"T_exp D={d:.0%}", "T_mod", "Δ")]
-    s.table(head, rows, "Table 2 — temperatures in °C, Δ = measured − model")
-    s.figure(figs / "table2_delta.png", out, "Δ by frequency and duty cycle")
+    head = ["f (kHz)"] + [h for d in duties
+                          for h in (f"T_exp at D = {d:.0%} (°C)", "T_mod (°C)", "Δ (K)")]
+    s.table(head, rows, "Table 2 — Δ = measured − model")
+    s.figure(figs / "table2_delta.png", out, "PWM readings minus the ngspice model, "
+             "Δ = T_exp − T_mod in K, by frequency and duty cycle (bars and heat map)")
     secs.append(s)
 
     s = Section("diagnosis", "6. Diagnosis: what the linear ladder misses")
@@ -186,11 +192,8 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
         s.table(["data set", "RMS before (K)", "RMS after (K)"],
                 [[name, f"{cb.rms_k:.3g}", f"{after.by_dataset()[name].rms_k:.3g}"]
                  for name, cb in before.by_dataset().items()])
-    s.figure(figs / "effect_before_after.png", out,
-             "Residuals of every data set: the linear ladder (left) and the model with the "
-             "effect added (right)")
     for path in diagnosis_figures or ():
-        s.figure(path, out, Path(path).stem.replace("_", " "))
+        s.figure(path, out, diagnosis_caption(path))
     secs.append(s)
 
     s = Section("netlists", "7. Exported SPICE models")
@@ -224,6 +227,46 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
                   f"Simulated bench run of {bundle.device or 'the actuator'}; "
                   "the paper's procedure end to end.", summary, secs, elapsed_s)
     return atomic_write_text(out / "index.html", html)
+
+
+#: What each figure of :func:`spicethermal.plots.diagnosis_figures` shows, by file stem.
+DIAGNOSIS_CAPTIONS = {
+    "diagnosis_steps": "RMS error over every data set (K) after each effect the diagnosis "
+                       "added: the staircase",
+    "diagnosis_before_after": "Residuals, measured − model in K, of every data set the effects "
+                              "change: the linear ladder (left), the model with the effects "
+                              "found (right)",
+    "diagnosis_step": "Residuals, measured − model in K, before and after diagnosis step {k}",
+    "diagnosis_candidates": "RMS error (K) of the linear ladder and of each candidate effect "
+                            "fitted to the bundle, the verdict highlighted",
+    "diagnosis_table2": "Table 2 residuals Δ(f, D) in K with the explanations the diagnosis "
+                        "tried",
+}
+
+
+def diagnosis_caption(path: str | os.PathLike) -> str:
+    """The caption of a diagnosis figure: what it shows (:data:`DIAGNOSIS_CAPTIONS`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file written by :func:`spicethermal.plots.diagnosis_figures`.
+
+    Returns
+    -------
+    str
+        The caption; a file the table does not know is named as a figure of the diagnosis.
+
+    Examples
+    --------
+    >>> diagnosis_caption("figures/diagnosis_step_2.png")
+    'Residuals, measured − model in K, before and after diagnosis step 2'
+    """
+    stem = Path(path).stem
+    head, _, k = stem.rpartition("_")
+    if k.isdigit() and head in DIAGNOSIS_CAPTIONS:
+        return DIAGNOSIS_CAPTIONS[head].format(k=k)
+    return DIAGNOSIS_CAPTIONS.get(stem, f"Diagnosis figure: {stem.replace('_', ' ')}")
 
 
 def _early_text(curve) -> str:

@@ -635,11 +635,12 @@ def _first_error(text: str) -> str:
 
 
 def _read_wrdata(path: Path, vectors: Sequence[str]) -> Waveforms:
-    lines = path.read_text().splitlines()
-    if not lines:
+    with path.open() as fh:
+        first = fh.readline()
+    if not first.strip():
         raise SimulationError("ngspice wrote no data")
-    data = np.loadtxt(lines[1:], ndmin=2) if lines[0].strip().startswith("time") else \
-        np.loadtxt(lines, ndmin=2)
+    # numpy's C reader on the file itself (a list of lines goes through Python)
+    data = np.loadtxt(path, skiprows=int(first.strip().startswith("time")), ndmin=2)
     if data.shape[1] != len(vectors) + 1:
         raise SimulationError(f"ngspice wrote {data.shape[1]} columns, expected "
                               f"{len(vectors) + 1}")

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -11,15 +13,78 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.figure import Figure
 
 from spicethermal.demo import run_demo
 from spicethermal.model import ThermalModel
 from spicethermal.report import SECTION_IDS, figure_is_nontrivial
 
+#: A unit at the end of an axis label or a table header: ``(K)``, ``(K/W)``, ``(°C)``, ``(%)``,
+#: ``(1)`` for a ratio, with an SI prefix where it applies.
+UNIT = re.compile(r"\((?:[mµunk]?(?:K/W|J/K|K|s|V|W|Hz|B)|°C|%|1)\)\s*$")
+
 
 @pytest.fixture(scope="module")
-def demo(tmp_path_factory):
-    return run_demo(tmp_path_factory.mktemp("demo") / "out", seed=3, quiet=True)
+def demo_run(tmp_path_factory):
+    """The demo, with what every saved figure drew (:func:`_drawn`), by file path."""
+    drawn: dict[str, dict] = {}
+    save = Figure.savefig
+
+    def spy(fig, fname, *args, **kwargs):
+        out = save(fig, fname, *args, **kwargs)  # drawn: the tick labels are laid out
+        name = getattr(fname, "name", fname)
+        if isinstance(name, int):  # an atomic write's temporary file: .NAME.XXXX.tmp
+            name = os.readlink(f"/proc/self/fd/{name}")
+        path = Path(name)
+        final = re.fullmatch(r"\.(.+)\.[^.]+\.tmp", path.name)
+        drawn[str(path.with_name(final[1]) if final else path)] = _drawn(fig)
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(Figure, "savefig", spy)
+        result = run_demo(tmp_path_factory.mktemp("demo") / "out", seed=3, quiet=True)
+    return result, drawn
+
+
+@pytest.fixture(scope="module")
+def demo(demo_run):
+    return demo_run[0]
+
+
+def _numeric(text: str) -> bool:
+    try:
+        float(text.replace("−", "-").rstrip("*").strip())
+    except ValueError:
+        return False
+    return True
+
+
+def _drawn(fig) -> dict:
+    """Axes of ``fig`` whose axis has no unit, and a fingerprint of each panel's data."""
+    no_unit, panels = [], []
+    for ax in fig.get_axes():
+        if not ax.axison:
+            continue
+        title = ax.get_title(loc="left") or ax.get_title()
+        for name in "xy":
+            axis = getattr(ax, f"{name}axis")
+            label = axis.get_label_text()
+            ticks = [t.get_text() for t in axis.get_ticklabels() if t.get_text()]
+            siblings = getattr(ax, f"get_shared_{name}_axes")().get_siblings(ax)
+            if not label and (not ticks or not any(_numeric(t) for t in ticks) or any(
+                    UNIT.search(getattr(o, f"get_{name}label")()) for o in siblings)):
+                continue  # no scale shown, categories, or labelled once on a shared axis
+            if not UNIT.search(label):
+                no_unit.append(f"{name} axis {label!r} of the panel {title!r}")
+        digest = hashlib.sha1()
+        data = [np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
+                for line in ax.get_lines()]
+        data += [np.asarray(c.get_offsets(), dtype=float) for c in ax.collections]
+        data = [d for d in data if d.size > 2]
+        for d in data:
+            digest.update(d.tobytes())
+        panels.append((title, digest.hexdigest() if data else ""))
+    return {"no_unit": no_unit, "panels": panels}
 
 
 class _Page(HTMLParser):
@@ -28,6 +93,9 @@ class _Page(HTMLParser):
         self.ids: list[str] = []
         self.images: list[str] = []
         self.text: list[str] = []
+        self.captions: list[str] = []
+        self.tables: list[list[list[tuple[str, str]]]] = []  # rows of (tag, text) cells
+        self._in: str | None = None
 
     def handle_starttag(self, tag, attrs):
         a = dict(attrs)
@@ -35,9 +103,28 @@ class _Page(HTMLParser):
             self.ids.append(a["id"])
         if tag == "img":
             self.images.append(a["src"])
+        if tag == "table":
+            self.tables.append([])
+        elif tag == "tr":
+            self.tables[-1].append([])
+        elif tag in ("th", "td"):
+            self.tables[-1][-1].append((tag, ""))
+            self._in = tag
+        elif tag == "figcaption":
+            self.captions.append("")
+            self._in = tag
+
+    def handle_endtag(self, tag):
+        if tag in ("th", "td", "figcaption"):
+            self._in = None
 
     def handle_data(self, data):
         self.text.append(data)
+        if self._in == "figcaption":
+            self.captions[-1] += data
+        elif self._in in ("th", "td"):
+            tag, text = self.tables[-1][-1][-1]
+            self.tables[-1][-1][-1] = (tag, text + data)
 
 
 @pytest.mark.slow
@@ -46,7 +133,7 @@ def test_report_has_every_section_and_real_figures(demo):
     page.feed(demo.report.read_text())
     assert set(SECTION_IDS) <= set(page.ids)
     for needed in ("fig2_calibration", "fig7_fit", "fig8_impedance", "table1_mur880e",
-                   "table2_delta", "effect_before_after", "diagnosis_candidates"):
+                   "table2_delta", "diagnosis_before_after", "diagnosis_candidates"):
         assert any(needed in src for src in page.images), needed
     for src in page.images:
         path = demo.report.parent / src
@@ -55,6 +142,45 @@ def test_report_has_every_section_and_real_figures(demo):
     text = " ".join(page.text)
     assert "Verdict: temperature-coefficient" in text
     assert ".SUBCKT ACTUATOR TJ TREF" in text  # the usage snippet and a netlist
+
+
+@pytest.mark.slow
+def test_report_figures_exist_say_what_they_show_and_have_units(demo_run):
+    demo, drawn = demo_run
+    page = _Page()
+    page.feed(demo.report.read_text())
+    assert len(page.captions) == len(page.images) > 0
+    for src, caption in zip(page.images, page.captions, strict=True):
+        path = (demo.report.parent / src).resolve()
+        assert path.is_file(), src
+        words = Path(src).stem.replace("_", " ").lower()
+        assert len(caption.split()) >= 6 and words not in caption.lower(), caption
+        assert ".png" not in caption, caption
+        assert str(path) in drawn, f"{src} was not drawn by this run"
+        assert drawn[str(path)]["no_unit"] == [], src
+    panels = [(src, t, fp) for src in page.images
+              for t, fp in drawn[str((demo.report.parent / src).resolve())]["panels"] if fp]
+    seen: dict[str, tuple[str, str]] = {}
+    for src, title, fp in panels:  # no panel drawn twice in the report
+        assert fp not in seen, f"{src} {title!r} repeats {seen.get(fp)}"
+        seen[fp] = (src, title)
+    fig8 = drawn[str((demo.report.parent / "figures/fig8_impedance.png").resolve())]
+    assert fig8["panels"] and "(K/W)" in demo.report.read_text()  # the family in K/W per duty
+
+
+@pytest.mark.slow
+def test_report_tables_have_units_in_their_headers(demo):
+    page = _Page()
+    page.feed(demo.report.read_text())
+    assert len(page.tables) >= 8
+    for table in page.tables:
+        header, *rows = table
+        assert all(tag == "th" for tag, _ in header) and rows
+        for k, (_, head) in enumerate(header):
+            cells = [row[k][1] for row in rows if row[k][1]]
+            measured = cells and all(_numeric(c) for c in cells) and \
+                not all(float(c.rstrip("*")).is_integer() for c in cells)
+            assert not measured or UNIT.search(head), f"column {head!r} has no unit: {cells[:3]}"
 
 
 @pytest.mark.slow

@@ -319,3 +319,41 @@ def test_smoothing_keeps_energy_and_leaves_the_boost():
     assert out[0] == steps[0] and out[1][2] != 0.9
     d = np.array([s[2] for s in out[1:]])
     assert np.ptp(d) < np.ptp([s[2] for s in steps[1:]]) / 2
+
+
+# ------------------------------------------------------------------------------ the check
+def _switched(r, t_end: float) -> Schedule:
+    """The drive as a rectangular train of whole periods up to ``t_end`` (ideal edges)."""
+    ts, ps = [], []
+    period = r.period_s
+    for k in range(round(t_end / period)):
+        d = r.duty_at((k + 0.5) * period)
+        ts += [k * period, (k + d) * period]
+        ps += [r.p_max_w, 0.0]
+    keep = np.concatenate([np.diff(ts) > 0, [True]])  # a duty of 1 has no off-phase
+    return Schedule(tuple(np.array(ts)[keep]), tuple(np.array(ps)[keep]))
+
+
+def test_switched_state_is_the_switched_trajectory(cavity_drive):
+    r = cavity_drive
+    for t in (r.schedule[2][0], r.schedule[-1][0] + 7 * r.period_s):
+        exact = r.model.simulate([t], _switched(r, t), AMBIENT).theta_k[0]
+        np.testing.assert_allclose(r.switched_state(t), exact, rtol=1e-9, atol=1e-9)
+    assert r.schedule_from(r.schedule[2][0])[0] == (0.0, r.schedule[2][1])
+
+
+@pytest.mark.ngspice
+@pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
+def test_check_in_parallel_pieces_is_the_one_long_run():
+    from spicethermal.drivecheck import verify
+    from spicethermal.spice import NgspiceBatch
+
+    r = optimize_drive(ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])), 70.0, 55.0,
+                       p_max_w=1.0)
+    whole = NgspiceBatch().run(r.spice_bench(), ["V(TJ)"])["V(TJ)"]  # from cold at 1/100 period
+    check = verify(r, n=3)
+    assert check["pieces"] == 4  # the boost at duty 1, then three switched pieces
+    assert 0 < check["join_k"] < 2e-3  # each piece ends where the exact state starts the next
+    assert check["ngspice_peak_junction_c"] == pytest.approx(float(whole.max()), abs=2e-3)
+    assert check["ngspice_peak_junction_c"] == pytest.approx(check["predicted_peak_junction_c"],
+                                                             abs=0.01)

@@ -252,10 +252,11 @@ def test_fig8_curves(actuator):
         solid, dashed = lines[2 * k], lines[2 * k + 1]
         t = solid.get_xdata()
         assert solid.get_linestyle() == "-" and dashed.get_linestyle() == "--"
-        assert np.array_equal(solid.get_ydata(), r_duty_exact(actuator, t, d))
-        assert np.array_equal(dashed.get_ydata(), r_duty_eq3(actuator, t, d))
+        assert np.array_equal(solid.get_ydata(), actuator.rth * r_duty_exact(actuator, t, d))
+        assert np.array_equal(dashed.get_ydata(), actuator.rth * r_duty_eq3(actuator, t, d))
         assert np.all(solid.get_ydata() <= dashed.get_ydata() + 1e-12)  # eq. 3 is conservative
     assert t[0] < min(actuator.tau) and t[-1] > max(actuator.tau)
+    assert ax.get_ylabel().endswith("(K/W)")  # the family in K/W per duty
 
 
 def test_curves_command(tmp_path, actuator, capsys):

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..engines import NAMES
 from ..files import dumps_json
-from ..pwmsim import ENGINES
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import nonnegative as _window
 
@@ -25,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("bundle", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("--json", action="store_true",
                         help="print the spicethermal-comparison/1 document")
-    parser.add_argument("--engine", choices=("auto", *ENGINES), default="auto",
+    parser.add_argument("--engine", choices=NAMES, default="auto",
                         help="PWM engine: auto (analytic for linear models, ngspice with device "
                              "effects), analytic, ngspice or pyspice")
     parser.add_argument("--window", type=_window, metavar="S",
@@ -38,9 +38,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..compare import compare
+    from ..engines import engine
     from ..model import ThermalModel
 
     model = ThermalModel.load(args.model)
+    engine(args.engine, model)  # --engine analytic refuses device effects in one line
     bundle = comparable_source(args, args.bundle)
     result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
     if args.json:

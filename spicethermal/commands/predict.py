@@ -35,7 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"{DEFAULT_POINTS})")
     parser.add_argument("--engine", choices=ENGINES, default="auto",
                         help="auto (analytic for linear models, ngspice with device effects), "
-                             "analytic or ngspice")
+                             "analytic, ngspice or pyspice")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bar on stderr (none either when it is not a terminal)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
     profile = PowerProfile.read(args.power)
     times = output_times(profile, args.until, args.points)
-    result = predict(model, profile, times, tref_c=args.tref, engine=args.engine)
+    result = predict(model, profile, times, tref_c=args.tref, engine=args.engine,
+                     quiet=args.quiet)
     atomic_write_text(args.output, format_columns(result.columns(), [
         f"spicethermal predict: {args.model} under {args.power}, Tref {args.tref:g} degC, "
         f"engine {result.engine}"]))

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..engines import NAMES
 from ..files import dumps_json
-from ..pwmsim import ENGINES
 from ._types import add_option, duty, frequency, nonnegative, number
 
 NAME = "pwm"
@@ -30,8 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--window", default=0.0, metavar="S", type=nonnegative,
                         help="power-off sample window before the reading, s (default 0: the "
                              "reading is the peak)")
-    parser.add_argument("--engine", choices=ENGINES, default="analytic",
-                        help="closed form/shooting (default) or ngspice (binary or PySpice)")
+    parser.add_argument("--engine", choices=NAMES, default="analytic",
+                        help="closed form/shooting (default), ngspice (binary or PySpice), or "
+                             "auto (closed form for a linear model, else ngspice)")
     add_option(parser, "--ambient", old=("--tref",), dest="tref", default=25.0, metavar="DEGC",
                type=number,
                         help="reference temperature, degC (matters for device effects; "

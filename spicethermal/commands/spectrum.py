@@ -55,6 +55,8 @@ def add_spectrum_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Bayesian iterations (default 2000)")
     parser.add_argument("--points-per-decade", type=_count, metavar="N",
                         help="log-time grid density (default 40)")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bar on stderr (none either when it is not a terminal)")
 
 
 def spectrum_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -106,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     if args.bootstrap:
         from ..bootstrap import spectrum_bootstrap
 
-        sb = spectrum_bootstrap(curve, spec, args.bootstrap, args.seed,
+        sb = spectrum_bootstrap(curve, spec, args.bootstrap, args.seed, quiet=args.quiet,
                                 **spectrum_options(args))
     if args.plot and sb is not None:
         from ..bootstrap import fig_spectrum_band

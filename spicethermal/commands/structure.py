@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
             from ..bootstrap import spectrum_bootstrap
 
             bands.append(spectrum_bootstrap(curve, spec, args.bootstrap, args.seed,
-                                            args.stages_per_decade,
+                                            args.stages_per_decade, quiet=args.quiet,
                                             **spectrum_options(args)).structure)
     sep = None
     if len(functions) == 2:
