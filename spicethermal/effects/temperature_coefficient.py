@@ -36,6 +36,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..errors import DataFormatError
 from .catalogue import DEVICE, EffectSpec, Param, register
 from .spice import number
@@ -79,22 +81,25 @@ def law(effect, t_c: float) -> float:
     ----------
     effect : Effect
         A ``temperature-coefficient`` effect.
-    t_c : float
+    t_c : float or array_like
         The controlling temperature (junction or layer), °C.
 
     Returns
     -------
-    float
-        The factor on R0.
+    float or ndarray
+        The factor on R0 (an array for an array of temperatures).
 
     >>> from spicethermal.effects import Effect
     >>> law(Effect.create("temperature-coefficient", alpha_per_k=0.01), 35.0)
     1.1
     """
     p = effect.params
+    t = np.asarray(t_c, dtype=float)
     if effect.form == "power-law":
-        return (max(t_c + KELVIN, 1.0) / (p["t0_c"] + KELVIN)) ** p["exponent"]
-    return max(FLOOR, 1.0 + p["alpha_per_k"] * (t_c - p["t0_c"]))
+        out = (np.maximum(t + KELVIN, 1.0) / (p["t0_c"] + KELVIN)) ** p["exponent"]
+    else:
+        out = np.maximum(FLOOR, 1.0 + p["alpha_per_k"] * (t - p["t0_c"]))
+    return out if out.ndim else float(out)
 
 
 def law_slope(effect, t_c: float) -> float:
@@ -104,12 +109,12 @@ def law_slope(effect, t_c: float) -> float:
     ----------
     effect : Effect
         A ``temperature-coefficient`` effect.
-    t_c : float
+    t_c : float or array_like
         Temperature, °C.
 
     Returns
     -------
-    float
+    float or ndarray
         The slope (0 where the linear law is clipped).
 
     >>> from spicethermal.effects import Effect
@@ -117,10 +122,13 @@ def law_slope(effect, t_c: float) -> float:
     0.0067...
     """
     p = effect.params
+    t = np.asarray(t_c, dtype=float)
     if effect.form == "power-law":
-        x = max(t_c + KELVIN, 1.0) / (p["t0_c"] + KELVIN)
-        return p["exponent"] * x ** (p["exponent"] - 1.0) / (p["t0_c"] + KELVIN)
-    return p["alpha_per_k"] if 1.0 + p["alpha_per_k"] * (t_c - p["t0_c"]) > FLOOR else 0.0
+        x = np.maximum(t + KELVIN, 1.0) / (p["t0_c"] + KELVIN)
+        out = p["exponent"] * x ** (p["exponent"] - 1.0) / (p["t0_c"] + KELVIN)
+    else:
+        out = np.where(1.0 + p["alpha_per_k"] * (t - p["t0_c"]) > FLOOR, p["alpha_per_k"], 0.0)
+    return out if out.ndim else float(out)
 
 
 def resistance_scale(effect, layer: int, t_layer_c: float, tj_c: float) -> float:
@@ -128,7 +136,7 @@ def resistance_scale(effect, layer: int, t_layer_c: float, tj_c: float) -> float
     ``junction``) or of the layer's mean temperature (local forms, layers of the subset)."""
     if not applies(effect, layer):
         return 1.0
-    return law(effect, tj_c if effect.form == "junction" else t_layer_c)
+    return float(law(effect, tj_c if effect.form == "junction" else t_layer_c))
 
 
 def extra_capacitance(effect, node: int, t_c: float, c_node: float = 0.0) -> float:
@@ -209,4 +217,5 @@ SPEC = register(EffectSpec(
     ("junction", *LOCAL_FORMS), resistance_scale=resistance_scale,
     extra_capacitance=extra_capacitance, latent_heat=latent_heat,
     spice_resistance_scale=spice_resistance_scale, spice_stored_heat=spice_stored_heat,
-    physical_nodes=physical_nodes, check=check))
+    physical_nodes=physical_nodes, check=check,
+    fit="spicethermal.tcfit:fit_temperature_coefficient"))
