@@ -121,16 +121,17 @@ def test_a_foster_ladder_is_simulated_on_its_cauer_equivalent():
                                     power(exponent=2.5, c_slope_per_k=3e-3)])
 def test_frozen_ladder_pwm_reading_is_close_to_the_shooting_solution(effect):
     """Quasi-static PWM: every layer frozen at its mean temperature, against the exact
-    periodic state (shooting); the error is the resistance ripple times the ripple, mK."""
+    periodic state (shooting). The error grows with the ripple (the resistance ripple times
+    the temperature ripple): a few mK at 1 kHz, a few % of the effect at 10 Hz (4 K ripple)."""
     from spicethermal.pwm import steady_state
 
     model = ThermalModel(Cauer(R4, C4), (effect,))
-    for f, d in ((10.0, 0.5), (1e3, 0.3)):
+    for f, d, share in ((10.0, 0.5, 0.05), (1e3, 0.3, 0.01)):
         exact = model.pwm(0.3, f, d, 1e-4).reading_k
         frozen = steady_state(local_frozen_ladder(Cauer(R4, C4), effect, 25.0, 0.3 * d), 0.3, f,
                               d, 1e-4).reading_k
         linear = steady_state(Cauer(R4, C4).to_foster(), 0.3, f, d, 1e-4).reading_k
-        assert abs(frozen - exact) < 0.02 * abs(linear - exact)
+        assert abs(frozen - exact) < share * abs(linear - exact)
 
 
 # -- SPICE against Python --------------------------------------------------------------------
