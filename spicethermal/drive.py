@@ -428,9 +428,13 @@ class _Dynamics:
         return self._eig(cm, g)
 
     def scale(self, junction_k: float) -> float:
-        """Resistance factor of the temperature coefficient at a junction rise (1 if none)."""
+        """Resistance factor of the temperature coefficient at a junction rise (1 if none):
+        the mean over the layers of each layer's factor with the layer at the junction
+        temperature (exact for the junction form, an upper bound on the change otherwise)."""
         tj = self.tref + junction_k
-        return float(np.prod([e.resistance_scale(tj) for e in self.model.device_effects]))
+        return float(np.mean([np.prod([e.resistance_scale(k, tj, tj)
+                                       for e in self.model.device_effects])
+                              for k in range(self.model.ladder.order)]))
 
     def ripple(self, duty: NDArray | float, junction_k: float = 0.0) -> NDArray:
         """Periodic-steady-state junction peak minus mean (K) at ``duty``."""

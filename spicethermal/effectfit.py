@@ -12,16 +12,11 @@ the bundle gives for each calibration voltage, against the thermocouple temperat
 Forward models (:func:`predict`), all exact for the catalogue's physics:
 
 * linear ladder: closed forms (``Foster.cooling``, :func:`spicethermal.pwm.steady_state`);
-* ``temperature-coefficient`` on a cooling curve: every resistance scales with the same
-  ``s(Tj) = 1 + α (Tj − T0)``, so with the power off the network is linear in the warped
-  time ``u`` with ``dt/du = s``; ``θ(u) = e^{−Au} θ(0)`` and
-  ``t(u) = (1 + α(Tref − T0)) u + α Σ vᵢ τᵢ (1 − e^{−u/τᵢ})`` in closed form, inverted by
-  Newton's method. The starting state is the self-consistent steady state. This is the
-  nonlinear solution itself, not a linearisation (checked against the Radau integration of
-  :class:`~spicethermal.model.ThermalModel` in the tests);
-* ``temperature-coefficient`` under PWM: the ladder frozen at the self-consistent mean
-  junction temperature of the periodic state (the resistance ripple is ``α`` times the
-  temperature ripple, a few 0.1 %; checked against the model's shooting solution to a few mK);
+* ``temperature-coefficient``: every form in :mod:`spicethermal.tcforward` (the junction form
+  in closed form on a cooling curve and frozen at the self-consistent mean junction
+  temperature under PWM; the local forms on the ladder's Cauer equivalent, exact steady state,
+  stiff integration after the cut, frozen at every node's mean temperature under PWM); its
+  fit is :mod:`spicethermal.tcfit`;
 * ``phase-change`` on a cooling curve: the nodal network with the band's heat capacity at its
   node, integrated by LSODA with an exact rank-one inverse of the capacity matrix until the
   node leaves the band, then exact modal steps (< 1 mK from the model's Radau integration);
@@ -38,7 +33,8 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
 
 Fits (:func:`fit_effect`): the effect's parameters by :func:`scipy.optimize.least_squares`
 on the data sets the effect acts on. The ladder is refitted where the effect changes what the
-ladder was fitted from: jointly for ``temperature-coefficient`` (the ladder at ``T0``), by
+ladder was fitted from: jointly for ``temperature-coefficient`` (the ladder at ``T0``,
+:mod:`spicethermal.tcfit`), by
 alternation for ``tsp-nonlinearity`` and ``electrical-transient`` (the reference cooling curve
 corrected by the inverse measurement model, then :func:`~spicethermal.fit.fit_foster` at the
 same order); it is held for ``phase-change`` (fitted from the curve that does not cross the
@@ -48,6 +44,7 @@ band) and ``sample-window`` (cooling curves are not affected).
 from __future__ import annotations
 
 import contextvars
+import importlib
 import math
 import time
 import warnings
@@ -59,9 +56,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .effects import CATALOGUE, Effect
+from .effects import CATALOGUE, Effect, spec
 from .errors import DataFormatError, FitError, SimulationError
 from .ladder import Cauer, Foster
+from .tcforward import as_foster as _foster
+from .tcforward import tc_cooling, tc_cooling_rise, tc_frozen, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -331,70 +330,6 @@ class BundleData:
 # --------------------------------------------------------------------------------------------
 # forward models
 # --------------------------------------------------------------------------------------------
-def _foster(ladder: Foster | Cauer) -> Foster:
-    return ladder if isinstance(ladder, Foster) else ladder.to_foster()
-
-
-def tc_steady_scale(rth0: float, alpha: float, t0_c: float, tref_c: float,
-                    power_w: float) -> float:
-    """Self-consistent resistance factor ``s`` of a ladder (Rth0 at T0) under constant power.
-
-    ``θ = P Rth0 s`` and ``s = 1 + α (Tref + θ − T0)`` give
-    ``s = (1 + α (Tref − T0)) / (1 − α P Rth0)``.
-
-    >>> round(tc_steady_scale(100.0, -2e-3, 25.0, 25.0, 0.5), 6)
-    0.909091
-    """
-    s = (1 + alpha * (tref_c - t0_c)) / (1 - alpha * power_w * rth0)
-    if not (math.isfinite(s) and s > 0.05):
-        raise SimulationError(f"temperature coefficient {alpha:g}/K at {power_w:g} W has no "
-                              f"steady state (thermal runaway or R below 5 % of R0)")
-    return s
-
-
-def tc_cooling_rise(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: float,
-                    power_w: float, t_s: ArrayLike) -> NDArray:
-    """Junction rise (K) after ``power_w`` is cut, with ``R(T) = R0 (1 + α (Tj − T0))``.
-
-    Exact (warped-time solution, module docstring). ``ladder`` holds R0.
-
-    >>> f = Foster.from_tau([10.0], [1.0])
-    >>> r = tc_cooling_rise(f, 0.0, 25.0, 25.0, 2.0, [0.0, 1.0])
-    >>> [round(float(x), 9) for x in r] == [20.0, round(20 * math.exp(-1), 9)]
-    True
-    """
-    f = _foster(ladder)
-    r0, tau0 = np.asarray(f.r), np.asarray(f.tau)
-    t = np.asarray(t_s, dtype=float)
-    s_ss = tc_steady_scale(f.rth, alpha, t0_c, tref_c, power_w)
-    v0 = power_w * r0 * s_ss
-    a = 1 + alpha * (tref_c - t0_c)
-    if alpha == 0:
-        return (v0 * np.exp(-t[:, None] / tau0)).sum(axis=1)
-    s_lo, s_hi = sorted((s_ss, a))
-    if s_lo <= 0.05:
-        raise SimulationError("temperature coefficient makes a resistance vanish")
-    u = t / (0.5 * (s_lo + s_hi))
-    for _ in range(60):
-        e = np.exp(-u[:, None] / tau0)
-        tu = a * u + alpha * (v0 * tau0 * (1 - e)).sum(axis=1)
-        su = a + alpha * (v0 * e).sum(axis=1)
-        step = (tu - t) / su
-        u = np.clip(u - step, t / s_hi, t / s_lo)
-        if np.all(np.abs(step) <= 1e-13 * (u + 1e-300)):
-            break
-    return (v0 * np.exp(-u[:, None] / tau0)).sum(axis=1)
-
-
-def tc_frozen_ladder(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: float,
-                     mean_power_w: float) -> Foster:
-    """The ladder at the self-consistent mean junction temperature under ``mean_power_w``
-    (every R and τ times ``s``; C unchanged)."""
-    f = _foster(ladder)
-    s = tc_steady_scale(f.rth, alpha, t0_c, tref_c, mean_power_w)
-    return Foster.from_tau(np.asarray(f.r) * s, np.asarray(f.tau) * s)
-
-
 def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     p = effect.params
     return p["latent_j"] > 0 and (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
@@ -417,6 +352,9 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
 
     from .model import Network
 
+    if tc is not None and tc.form != "junction":
+        raise SimulationError(f"phase-change together with temperature-coefficient form "
+                              f"{tc.form} has no fast forward model")
     f = _foster(ladder)
     t = np.asarray(t_s, dtype=float)
     alpha = 0.0 if tc is None else tc.params["alpha_per_k"]
@@ -616,8 +554,7 @@ def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
     if pc is not None:
         rise = pc_cooling_rise(ladder, pc, tref, curve.power_w, curve.t_s, tc)
     elif tc is not None:
-        rise = tc_cooling_rise(ladder, tc.params["alpha_per_k"], tc.params["t0_c"], tref,
-                               curve.power_w, curve.t_s)
+        rise = tc_cooling(ladder, tc, tref, curve.power_w, curve.t_s, check_time)
     else:
         rise = curve.power_w * ladder.cooling(curve.t_s)
     return curve.tref_c + rise
@@ -637,8 +574,7 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
                                             strict=True)):
         lad: Foster | Cauer = ladder
         if tc is not None:
-            lad = tc_frozen_ladder(ladder, tc.params["alpha_per_k"], tc.params["t0_c"], tref,
-                                   p * d)
+            lad = tc_frozen(ladder, tc, tref, p * d)
         if pc is not None and _band_reached(pc, tref, tref + p * _foster(lad).rth):
             lad = pc_frozen_ladder(lad, pc, tref, p * d)
         if average:
@@ -926,46 +862,6 @@ def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
     return out
 
 
-def fit_temperature_coefficient(data: BundleData, ladder: Foster | Cauer,
-                                effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """α (``t0_c`` = the reference temperature) jointly with the ladder at ``T0`` from every
-    cooling curve; two starts: α from ``1/Rth(P) = 1/Rth0 − α P`` across the curves, and the
-    given (linear) ladder with α = 0, so the result never fits worse than that ladder."""
-    if not data.cooling:
-        raise FitError("temperature-coefficient needs cooling curves")
-    f = _foster(ladder)
-    t0 = data.reference_c
-    names = [c.name for c in data.cooling]
-    base = _others(effects, "temperature-coefficient")
-    tsp = _effects_map(base).get("tsp-nonlinearity")
-    powers, rths = [], []
-    for c in data.cooling:
-        top = c.tj_steady_c if c.tj_steady_c is not None else float(c.tj_c[0])
-        powers.append(c.power_w)
-        rths.append((float(tsp_true(top, tsp)) - c.tref_steady_c) / c.power_w)
-    powers_a, rths_a = np.array(powers), np.array(rths)
-    alpha0 = 0.0
-    if np.unique(powers_a).size >= 2:
-        slope, _ = np.polyfit(powers_a, 1 / rths_a, 1)
-        alpha0 = float(np.clip(-slope, -0.015, 0.015))
-    # the given ladder describes the curves at their mean scale; start from it at T0
-    s_mean = float(np.mean([tc_steady_scale(f.rth, alpha0, t0, c.tref_steady_c, c.power_w)
-                            for c in data.cooling])) if abs(alpha0) > 0 else 1.0
-    start = Foster.from_tau(np.asarray(f.r) / s_mean, np.asarray(f.tau) / s_mean)
-
-    def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("temperature-coefficient", alpha_per_k=float(x[0]) * 1e-3,
-                                     t0_c=t0)]
-
-    exclude = transient_spans(data) if "electrical-transient" not in _effects_map(base) \
-        else None
-    fits = [joint_fit(data, names, lad0, True, [a0 * 1e3], [-15.0], [15.0], build,
-                      exclude=exclude)
-            for lad0, a0 in ([(start, alpha0)] if alpha0 else []) + [(f, 0.0)]]
-    lad, effs, _ = min(fits, key=lambda r: r[2].cost)
-    return [EffectFit(effs[-1], lad, 1, {"powers_w": powers, "rth_k_per_w": rths})]
-
-
 def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]) -> float:
     """Where a latent-heat band most likely sits: the model temperature of the hottest curve
     where its residual grows fastest in log time."""
@@ -1167,13 +1063,30 @@ def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
     return out
 
 
+#: The fits of this module by effect name; an effect's spec may name its own instead
+#: (``EffectSpec.fit``, ``"module:function"``, imported when first used).
 FITTERS: Mapping[str, Callable[..., list[EffectFit]]] = {
-    "temperature-coefficient": fit_temperature_coefficient,
     "phase-change": fit_phase_change,
     "sample-window": fit_sample_window,
     "electrical-transient": fit_electrical_transient,
     "tsp-nonlinearity": fit_tsp_nonlinearity,
 }
+
+
+def fitter(name: str) -> Callable[..., list[EffectFit]] | None:
+    """The function that fits effect ``name`` (``None`` when it has none): this module's, or
+    the one its catalogue entry names (``EffectSpec.fit``).
+
+    >>> fitter("temperature-coefficient").__module__
+    'spicethermal.tcfit'
+    """
+    if name in FITTERS:
+        return FITTERS[name]
+    ref = CATALOGUE[name].fit if name in CATALOGUE else ""
+    if not ref:
+        return None
+    module, _, function = ref.partition(":")
+    return getattr(importlib.import_module(module), function)
 
 
 def needs(name: str, data: BundleData) -> str:
@@ -1216,17 +1129,15 @@ def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
     switched off (:func:`switched_off`) on ``ladder`` (``facts["no_gain"]``). Raises
     :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
     """
-    if name not in FITTERS:
-        from .effects import spec
-
-        spec(name)  # the catalogue's error for an unknown name
+    fit_forms = fitter(spec(name).name)
+    if fit_forms is None:
         raise FitError(f"effect {name!r} has no fit")
     why = needs(name, data)
     if why:
         raise FitError(f"cannot fit {name}: {why}")
     others = _others(effects, name)
     out = []
-    fits = FITTERS[name](data, ladder, effects)
+    fits = fit_forms(data, ladder, effects)
     with unlimited():
         off = sse(data, ladder, others)
     for fit in fits:

@@ -71,12 +71,23 @@ class Network:
                 m[b, a] -= v
         return m
 
-    def conductance(self, scale_r: float = 1.0) -> NDArray:
-        """G with every resistance multiplied by ``scale_r``."""
-        return self._stamp(self.n, ((a, b, 1.0 / r) for a, b, r in self.branches_r), 1 / scale_r)
+    def conductance(self, scale_r: float | ArrayLike = 1.0) -> NDArray:
+        """G with every resistance multiplied by ``scale_r`` (one factor, or one per branch)."""
+        scales = np.broadcast_to(np.asarray(scale_r, dtype=float), (len(self.branches_r),))
+        return self._stamp(self.n, ((a, b, 1.0 / (r * s)) for (a, b, r), s
+                                    in zip(self.branches_r, scales, strict=True)))
 
     def capacitance(self) -> NDArray:
         return self._stamp(self.n, self.branches_c)
+
+    def node_capacitance(self) -> NDArray:
+        """Heat capacity (J/K) of every node to the reference (a Cauer ladder's layer
+        capacities; in a Foster network only its last stage's)."""
+        out = np.zeros(self.n)
+        for a, b, c in self.branches_c:
+            if b == self.n:
+                out[a] += c
+        return out
 
 
 @dataclass(frozen=True)
@@ -218,18 +229,31 @@ class ThermalModel:
 
     # -- nonlinear network ----------------------------------------------------------------
     def _network(self) -> Network:
+        """The nodal network simulated: the ladder's, or its exact Cauer equivalent when a
+        device effect needs physical node temperatures (a local temperature coefficient)."""
+        if isinstance(self.ladder, Foster) and any(e.physical_nodes for e in self.effects):
+            return Network.of(self.ladder.to_cauer())
         return Network.of(self.ladder)
 
     def _matrices(self, theta: NDArray, tref_c: float, net: Network) -> tuple[NDArray, NDArray]:
-        tj = tref_c + theta[0]
-        scale = float(np.prod([e.resistance_scale(tj) for e in self.device_effects]))
+        """``(Cm(θ), G(θ))``: each branch's resistance scaled by every device effect at the
+        branch's mean temperature (the reference node at ``tref_c``) and the junction's; each
+        node's capacity plus the effects' extra capacity at the node's temperature."""
+        temps = tref_c + np.append(theta, 0.0)
+        scales = np.ones(len(net.branches_r))
         cm = net.capacitance()
+        c_node = net.node_capacitance()
         for e in self.device_effects:
+            for k, (a, b, _) in enumerate(net.branches_r):
+                scales[k] *= e.resistance_scale(k, 0.5 * (temps[a] + temps[b]), temps[0])
             for node in range(net.n):
-                extra = e.extra_capacitance(node, tref_c + theta[node])
+                extra = e.extra_capacitance(node, temps[node], c_node[node])
                 if extra:
                     cm[node, node] += extra
-        return cm, net.conductance(scale)
+        if np.any(np.diag(cm) <= 0):
+            raise SimulationError("a heat capacity falls to zero or below (capacity slope "
+                                  "too steep for the temperatures reached)")
+        return cm, net.conductance(scales)
 
     def _rhs(self, net: Network, tref_c: float, power: float) -> Callable:
         b = np.zeros(net.n)

@@ -255,12 +255,15 @@ def _resistance_expression(effects: Sequence[Effect], layer: int, stage: Mapping
     return "*".join([fmt(stage["r"]), *factors]) if factors else None
 
 
-def _stored_heats(effects: Sequence[Effect], nodes: Sequence[str], offset: str) -> list[dict]:
-    """Per node, the SPICE expression of the heat stored beyond the linear capacity."""
+def _stored_heats(effects: Sequence[Effect], nodes: Sequence[str], offset: str,
+                  capacities: Sequence[float] = ()) -> list[dict]:
+    """Per node, the SPICE expression of the heat stored beyond the linear capacity (the
+    node's linear capacity to the thermal ground from ``capacities``: a Cauer ladder's)."""
     out = []
     for index, node in enumerate(nodes):
+        c_node = float(capacities[index]) if index < len(capacities) else 0.0
         terms = [q for e in effects
-                 if (q := e.spice_stored_heat(index, _temperature(node, offset)))
+                 if (q := e.spice_stored_heat(index, _temperature(node, offset), c_node))
                  is not None]
         if terms:
             out.append({"node": node, "expr": "+".join(terms)})
@@ -340,7 +343,9 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
     dialect : str
         ``ngspice``, ``pspice`` or ``ltspice``.
     topology : str, optional
-        ``foster`` or ``cauer`` (default the model's own; converted exactly). A Cauer
+        ``foster`` or ``cauer`` (default the model's own, or ``cauer`` when a device effect
+        needs physical node temperatures, such as a local temperature coefficient, which
+        refuses ``foster``; converted exactly). A Cauer
         ladder's capacitors connect to node 0, the thermal ground (or the ambient pin): it
         stays right when its reference pin is coupled to a heatsink model. A Foster ladder is
         valid only with an ideal reference.
@@ -381,7 +386,12 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
                               f"{', '.join(TEMPERATURES)}")
     pins = pins or Pins()
     name = check_name(default_name(model, filename) if name is None else name)
-    model = model.with_topology(topology or model.ladder.topology)
+    local = [e for e in model.device_effects if e.physical_nodes]
+    if local and topology == "foster":
+        raise DataFormatError(f"--topology foster: effect {local[0].name} (form "
+                              f"{local[0].form}) needs physical node temperatures; use "
+                              "--topology cauer")
+    model = model.with_topology(topology or ("cauer" if local else model.ladder.topology))
     if pins.ambient and model.ladder.topology == "foster":
         raise DataFormatError("--pins: an ambient pin (thermal ground) needs --topology cauer; "
                               "a Foster ladder has no node for it")
@@ -391,7 +401,7 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
     for layer, stage in enumerate(stages):
         stage["rexpr"] = _resistance_expression(model.device_effects, layer, stage, pins, offset)
     heats = _stored_heats(model.device_effects, [pins.junction, *internal_nodes(model)[1:]],
-                          offset)
+                          offset, ladder.c if ladder.topology == "cauer" else ())
     ctx = {
         "name": name, "dialect": dialect, "topology": ladder.topology,
         "order": ladder.order, "version": __version__, "rth": model.rth,

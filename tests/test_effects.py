@@ -24,9 +24,6 @@ from spicethermal.effectfit import (
     predict,
     robust_lsq,
     sse,
-    tc_cooling_rise,
-    tc_frozen_ladder,
-    tc_steady_scale,
     time_limit,
     transient_offset,
     tsp_reading,
@@ -47,6 +44,7 @@ from spicethermal.errors import DataFormatError, FitError
 from spicethermal.ladder import Foster
 from spicethermal.model import Schedule, ThermalModel
 from spicethermal.scenarios import HIDDEN, actuator, scenario_bundle
+from spicethermal.tcforward import tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
 
 CONTRACT = {"temperature-coefficient": DEVICE, "phase-change": DEVICE,
             "sample-window": MEASUREMENT, "electrical-transient": MEASUREMENT,

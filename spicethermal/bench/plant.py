@@ -142,16 +142,19 @@ class Plant:
         hit = self._cache.get(key)
         if hit is not None:
             return hit
-        scale = 1.0
-        for e in self.device_effects:
-            scale *= e.resistance_scale(float(temps[0]))
+        ends = np.append(temps, self.base_c)  # layer k joins node k to node k + 1
+        scales = np.ones(self.n)
         c = self.c0.copy()
         for e in self.device_effects:
-            for node in range(self.n):
-                c[node] += e.extra_capacitance(node, float(temps[node]))
+            for k in range(self.n):
+                scales[k] *= e.resistance_scale(k, 0.5 * float(ends[k] + ends[k + 1]),
+                                                float(temps[0]))
+                c[k] += e.extra_capacitance(k, float(temps[k]), float(self.c0[k]))
+        g = self.g0 if np.all(scales == 1.0) else \
+            Cauer(np.asarray(self.cauer.r) * scales, self.cauer.c).state_matrices()[1]
         if len(self._cache) > 20000:
             self._cache.clear()
-        hit = self._cache[key] = self._decompose(c, self.g0 / scale)
+        hit = self._cache[key] = self._decompose(c, g)
         return hit
 
     @staticmethod

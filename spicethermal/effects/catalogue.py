@@ -29,13 +29,15 @@ ENTRY_POINT_GROUP = "spicethermal.effects"
 
 @dataclass(frozen=True)
 class Param:
-    """A parameter of an effect: unit, default and allowed range."""
+    """A parameter of an effect: unit, default, allowed range, and the forms that use it
+    (empty: every form)."""
 
     unit: str
     default: float
     low: float = -math.inf
     high: float = math.inf
     doc: str = ""
+    forms: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -43,16 +45,26 @@ class EffectSpec:
     """What the catalogue knows about one effect.
 
     ``forms`` lists the forms the effect takes (the first is the default). Device physics
-    hooks take the :class:`Effect` first: ``resistance_scale(effect, tj_c)`` (factor on every
-    resistance), ``extra_capacitance(effect, node, t_c)`` (J/K) and
-    ``latent_heat(effect, node, t_c)`` (J absorbed on the way up to ``t_c``).
+    hooks take the :class:`Effect` first: ``resistance_scale(effect, layer, t_layer_c, tj_c)``
+    (factor on the resistance of ladder layer ``layer``, 0 = the one at the junction, given
+    that layer's mean temperature and the junction temperature, °C),
+    ``extra_capacitance(effect, node, t_c, c_node)`` (J/K at ``node``, whose linear heat
+    capacity is ``c_node``) and ``latent_heat(effect, node, t_c, c_node)`` (heat, J, stored
+    beyond the linear capacity on the way up to ``t_c``: the integral of
+    ``extra_capacitance``). ``physical_nodes(effect)`` is true when the physics needs
+    physical node temperatures: the model is then simulated (and exported) on its ladder's
+    Cauer equivalent. ``check(effect)`` may reject parameters that do not fit the form
+    (raise :class:`~spicethermal.errors.DataFormatError`). ``fit`` names the function that
+    fits the effect to a bundle, ``"module:function"`` (imported when first used, as an entry
+    point is; see :mod:`spicethermal.effectfit`).
 
     Their SPICE renderings are the same physics as dialect-neutral behavioural expressions
     (``+ - * /``, ``EXP``, ``MAX``, ``MIN``, ``PWR``; temperatures in °C):
     ``spice_resistance_scale(effect, layer, t_layer, t_junction)`` returns the factor on the
     resistance of ladder layer ``layer`` (0 = the one at the junction) given the expressions
     of that layer's temperature and the junction temperature, or ``None`` when the layer is
-    untouched; ``spice_stored_heat(effect, node, t_node)`` returns the heat (J) stored at
+    untouched; ``spice_stored_heat(effect, node, t_node, c_node)`` returns the heat (J)
+    stored at
     ``node`` beyond its linear capacity as a function of the node's temperature expression
     (the integral of ``extra_capacitance``), or ``None``. The SPICE writer asks every device
     effect for these and knows no effect by name.
@@ -68,6 +80,9 @@ class EffectSpec:
     latent_heat: Callable[..., float] | None = None
     spice_resistance_scale: Callable[..., str | None] | None = None
     spice_stored_heat: Callable[..., str | None] | None = None
+    physical_nodes: Callable[..., bool] | None = None
+    check: Callable[..., None] | None = None
+    fit: str = ""
 
     @classmethod
     def create(cls, name: str, kind: str, summary: str, forms: tuple[str, ...] = ("standard",),
@@ -198,6 +213,8 @@ class Effect:
                                   f"{', '.join(s.forms)}")
         object.__setattr__(self, "params", MappingProxyType(values))
         object.__setattr__(self, "form", form)
+        if s.check is not None:
+            s.check(self)
 
     @classmethod
     def create(cls, name: str, form: str = "", **params: float) -> Effect:
@@ -221,10 +238,26 @@ class Effect:
     def to_dict(self) -> dict:
         """The model-file form; ``form`` only when it is not the default (older readers and
         golden files keep working)."""
-        out: dict = {"name": self.name, "params": dict(self.params)}
-        if self.form != spec(self.name).forms[0]:
+        out: dict = {"name": self.name, "params": self.form_params}
+        if self.form != self.default_form:
             out["form"] = self.form
         return out
+
+    @property
+    def default_form(self) -> str:
+        """The first form of the effect's spec (files leave it out)."""
+        return spec(self.name).forms[0]
+
+    @property
+    def form_params(self) -> dict[str, float]:
+        """The parameters that the effect's form uses (what files and headers show).
+
+        >>> Effect.create("temperature-coefficient", alpha_per_k=1e-3).form_params
+        {'alpha_per_k': 0.001, 't0_c': 25.0}
+        """
+        specs = spec(self.name).params
+        return {k: v for k, v in self.params.items()
+                if not specs[k].forms or self.form in specs[k].forms}
 
     @property
     def kind(self) -> str:
@@ -232,18 +265,27 @@ class Effect:
         return spec(self.name).kind
 
     # -- device physics (the spec's hooks; neutral when the effect has none) -------------
-    def resistance_scale(self, tj_c: float) -> float:
-        """Factor on every resistance at junction temperature ``tj_c`` (1 if not applicable)."""
+    def resistance_scale(self, layer: int, t_layer_c: float, tj_c: float) -> float:
+        """Factor on layer ``layer``'s resistance when the layer's mean temperature is
+        ``t_layer_c`` and the junction's ``tj_c`` (1 if not applicable)."""
         hook = spec(self.name).resistance_scale
-        return 1.0 if hook is None else float(hook(self, tj_c))
+        return 1.0 if hook is None else float(hook(self, layer, t_layer_c, tj_c))
 
-    def latent_heat(self, node: int, t_c: float) -> float:
-        """Latent heat (J) absorbed at ``node`` on the way up to ``t_c`` (0 if not applicable)."""
+    @property
+    def physical_nodes(self) -> bool:
+        """True when the effect needs physical node temperatures (a Cauer ladder)."""
+        hook = spec(self.name).physical_nodes
+        return False if hook is None else bool(hook(self))
+
+    def latent_heat(self, node: int, t_c: float, c_node: float = 0.0) -> float:
+        """Heat (J) stored at ``node`` beyond its linear capacity ``c_node`` on the way up to
+        ``t_c`` (0 if not applicable)."""
         hook = spec(self.name).latent_heat
-        return 0.0 if hook is None else float(hook(self, node, t_c))
+        return 0.0 if hook is None else float(hook(self, node, t_c, c_node))
 
-    def extra_capacitance(self, node: int, t_c: float) -> float:
-        """Extra heat capacity (J/K) at ``node`` and temperature ``t_c`` (0 if not applicable).
+    def extra_capacitance(self, node: int, t_c: float, c_node: float = 0.0) -> float:
+        """Extra heat capacity (J/K) at ``node`` (linear capacity ``c_node``) and temperature
+        ``t_c`` (0 if not applicable).
 
         >>> e = Effect.create("phase-change", t_c=64.7, width_k=2.0, latent_j=1.0, node=0)
         >>> round(e.extra_capacitance(0, 64.7) * 4 * e.logistic_scale_k, 12)
@@ -252,7 +294,7 @@ class Effect:
         0.0
         """
         hook = spec(self.name).extra_capacitance
-        return 0.0 if hook is None else float(hook(self, node, t_c))
+        return 0.0 if hook is None else float(hook(self, node, t_c, c_node))
 
     # -- SPICE renderings of the same physics (``None`` where the effect does not apply) ------
     def spice_resistance_scale(self, layer: int, t_layer: str, t_junction: str) -> str | None:
@@ -267,15 +309,16 @@ class Effect:
         hook = spec(self.name).spice_resistance_scale
         return None if hook is None else hook(self, layer, t_layer, t_junction)
 
-    def spice_stored_heat(self, node: int, t_node: str) -> str | None:
-        """SPICE expression of the heat (J) stored at ``node`` beyond its linear capacity.
+    def spice_stored_heat(self, node: int, t_node: str, c_node: float = 0.0) -> str | None:
+        """SPICE expression of the heat (J) stored at ``node`` beyond its linear capacity
+        ``c_node``.
 
         >>> e = Effect.create("phase-change", t_c=60.0, width_k=1.0, latent_j=2.0, node=1)
         >>> e.spice_stored_heat(0, "V(TJ)") is None
         True
         """
         hook = spec(self.name).spice_stored_heat
-        return None if hook is None else hook(self, node, t_node)
+        return None if hook is None else hook(self, node, t_node, c_node)
 
     @property
     def logistic_scale_k(self) -> float:

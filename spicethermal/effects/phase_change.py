@@ -28,7 +28,7 @@ def _z(effect, node: int, t_c: float) -> float | None:
     return (t_c - effect.params["t_c"]) / effect.logistic_scale_k
 
 
-def latent_heat(effect, node: int, t_c: float) -> float:
+def latent_heat(effect, node: int, t_c: float, _c_node: float = 0.0) -> float:
     """Heat (J) absorbed up to ``t_c``: ``L / (1 + e^{−z})``."""
     z = _z(effect, node, t_c)
     if z is None:
@@ -36,7 +36,7 @@ def latent_heat(effect, node: int, t_c: float) -> float:
     return effect.params["latent_j"] * 0.5 * (1.0 + math.tanh(0.5 * max(-700.0, min(700.0, z))))
 
 
-def extra_capacitance(effect, node: int, t_c: float) -> float:
+def extra_capacitance(effect, node: int, t_c: float, _c_node: float = 0.0) -> float:
     """Its derivative, ``L e^{−|z|} / (s (1 + e^{−|z|})²)`` (J/K)."""
     z = _z(effect, node, t_c)
     if z is None:
@@ -45,7 +45,7 @@ def extra_capacitance(effect, node: int, t_c: float) -> float:
     return effect.params["latent_j"] * e / (effect.logistic_scale_k * (1.0 + e) ** 2)
 
 
-def spice_stored_heat(effect, node: int, t_node: str) -> str | None:
+def spice_stored_heat(effect, node: int, t_node: str, _c_node: float = 0.0) -> str | None:
     """The heat absorbed up to ``t_node`` as a SPICE expression (``None`` at other nodes)."""
     if node != int(effect.params["node"]):
         return None
