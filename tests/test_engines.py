@@ -128,3 +128,13 @@ def test_commands_run_every_engine(tmp_path, capsys):
     assert [c["engine"] for c in checks] == ["ngspice", "pyspice"]
     assert checks[0]["ngspice_peak_junction_c"] == pytest.approx(
         checks[1]["ngspice_peak_junction_c"], abs=1e-3)
+
+
+def test_drive_refuses_the_analytic_engine_before_writing(tmp_path, capsys):
+    from spicethermal.cli import main
+
+    model = str(ThermalModel(LADDER).save(tmp_path / "m.json"))
+    deck = tmp_path / "d.cir"
+    assert main(["drive", model, "--t-max", "70", "--target", "50", "--spice", str(deck),
+                 "--engine", "analytic"]) == 2
+    assert "--engine analytic" in capsys.readouterr().err and not deck.exists()

@@ -65,9 +65,12 @@ def test_bootstrap_progress(monkeypatch, command):
 
 
 def test_bench_procedure_progress(monkeypatch, tmp_path):
-    argv = ["bench", "calibrate", "--port", "sim://mur880e?seed=1", "-o", str(tmp_path / "b"),
-            "--setpoints", "25,35"]
-    _shown_unless_quiet(monkeypatch, argv, "% ")  # the bar's percentage
+    common = ["--port", "sim://actuator?seed=1", "-o", str(tmp_path / "b")]
+    for action, options in (("calibrate", ["--setpoints", "25,35"]), ("rth", []),
+                            ("cooling", ["--powers", "0.094", "--t-last", "1"]),
+                            ("pwm", ["--freqs", "25k", "--duties", "0.5"])):
+        _shown_unless_quiet(monkeypatch, ["bench", action, *common, *options],
+                            "% ")  # the bar's percentage
 
 
 @pytest.mark.ngspice

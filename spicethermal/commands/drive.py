@@ -83,6 +83,10 @@ def run(args: argparse.Namespace) -> int:
     from ..files import atomic_write_text
     from ..model import ThermalModel
 
+    if args.engine == "analytic":  # before anything is computed or written
+        raise DataFormatError("--engine analytic: the drive is already computed in closed form; "
+                              "--verify runs it in ngspice or pyspice")
+    spice = "ngspice" if args.engine == "auto" else args.engine
     model = ThermalModel.load(args.model)
     if args.node >= model.ladder.order:
         raise DataFormatError(f"--node {args.node}: the model has Cauer nodes 0.."
@@ -97,10 +101,6 @@ def run(args: argparse.Namespace) -> int:
         from ..plots import fig_drive
 
         written.append(str(fig_drive(result, args.plot)))
-    if args.engine == "analytic":
-        raise DataFormatError("--engine analytic: the drive is already computed in closed form; "
-                              "--verify runs it in ngspice or pyspice")
-    spice = "ngspice" if args.engine == "auto" else args.engine
     check = verify(result, quiet=args.quiet, engine=spice) if args.verify else None
     if args.json:
         doc = result.as_json()
@@ -112,8 +112,9 @@ def run(args: argparse.Namespace) -> int:
     print()
     print(result.table())
     if check is not None:
-        line = (f"ngspice (switched, first {check['window_s']:.4g} s in {check['pieces']} "
-                f"parallel pieces): junction peak "
+        runs = "one run" if check["pieces"] == 1 else f"{check['pieces']} parallel runs"
+        line = (f"{check['engine']} (switched, first {check['window_s']:.4g} s in {runs}): "
+                f"junction peak "
                 f"{check['ngspice_peak_junction_c']:.4f} °C at {check['ngspice_peak_at_s']:.4g} s")
         if "predicted_peak_junction_c" in check:
             line += (f"; predicted {check['predicted_peak_junction_c']:.4f} °C; pieces join "
