@@ -47,6 +47,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Tolerances of the cooling integration of the local forms (relative; absolute in K).
 RTOL, ATOL_K = 1e-6, 1e-5
+#: Right-hand-side evaluations allowed to one cooling integration (a few hundred are typical):
+#: past it the trial point fails instead of crawling.
+MAX_RHS = 5000
 
 
 def as_foster(ladder: Foster | Cauer) -> Foster:
@@ -351,7 +354,14 @@ def local_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, po
         return np.full(t.shape, float(theta0[0]))
     state, rhs = _local_system(cauer, effect, tref_c)
 
+    calls = 0
+
     def fun(_t: float, theta: NDArray) -> NDArray:
+        nonlocal calls
+        calls += 1
+        if calls > MAX_RHS:
+            raise SimulationError(f"temperature-coefficient cooling integration needs more "
+                                  f"than {MAX_RHS} evaluations (parameters too wild)")
         if check is not None:
             check()
         return rhs(theta)
@@ -442,7 +452,30 @@ def tc_cooling(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: f
     if effect.form == "junction":
         return tc_cooling_rise(ladder, effect.params["alpha_per_k"], effect.params["t0_c"],
                                tref_c, power_w, t_s)
+    if is_neutral(effect):  # switched off: the linear closed form, exactly
+        return power_w * as_foster(ladder).cooling(t_s)
     return local_cooling_rise(ladder, effect, tref_c, power_w, t_s, check)
+
+
+def is_neutral(effect: Effect) -> bool:
+    """True when ``effect`` changes nothing (no α, no exponent, no capacity slope).
+
+    Parameters
+    ----------
+    effect : Effect
+        A ``temperature-coefficient`` effect.
+
+    Returns
+    -------
+    bool
+        Whether every resistance and capacity is constant.
+
+    >>> is_neutral(Effect.create("temperature-coefficient", "power-law"))
+    True
+    """
+    p = effect.params
+    slope = p["exponent"] if effect.form == "power-law" else p["alpha_per_k"]
+    return slope == 0 and (effect.form == "junction" or p["c_slope_per_k"] == 0)
 
 
 def tc_frozen(ladder: Foster | Cauer, effect: Effect, tref_c: float,
@@ -470,6 +503,8 @@ def tc_frozen(ladder: Foster | Cauer, effect: Effect, tref_c: float,
     if effect.form == "junction":
         return tc_frozen_ladder(ladder, effect.params["alpha_per_k"], effect.params["t0_c"],
                                 tref_c, mean_power_w)
+    if is_neutral(effect):
+        return as_foster(ladder)
     return local_frozen_ladder(ladder, effect, tref_c, mean_power_w)
 
 
