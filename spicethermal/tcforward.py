@@ -47,6 +47,10 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Tolerances of the cooling integration of the local forms (relative; absolute in K).
 RTOL, ATOL_K = 1e-6, 1e-5
+#: Integrated cooling curves kept (a fit that holds the ladder and the coefficient, such as
+#: the fits of other effects after this one, asks for the same curves again and again).
+CACHE_SIZE = 64
+_CACHE: dict[tuple, NDArray] = {}
 #: Right-hand-side evaluations allowed to one cooling integration (a few hundred are typical):
 #: past it the trial point fails instead of crawling.
 MAX_RHS = 5000
@@ -454,7 +458,17 @@ def tc_cooling(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: f
                                tref_c, power_w, t_s)
     if is_neutral(effect):  # switched off: the linear closed form, exactly
         return power_w * as_foster(ladder).cooling(t_s)
-    return local_cooling_rise(ladder, effect, tref_c, power_w, t_s, check)
+    t = np.asarray(t_s, dtype=float)
+    f = as_foster(ladder)
+    key = (f.r, f.tau, effect.form, tuple(effect.params.values()), float(tref_c),
+           float(power_w), t.tobytes())
+    hit = _CACHE.get(key)
+    if hit is None:
+        hit = local_cooling_rise(ladder, effect, tref_c, power_w, t, check)
+        if len(_CACHE) >= CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = hit
+    return hit.copy()
 
 
 def is_neutral(effect: Effect) -> bool:
