@@ -56,7 +56,8 @@ from .effectfit import (
 from .effects import Effect
 from .errors import FitError, SimulationError
 from .ladder import Foster
-from .tcforward import as_cauer, as_foster, tc_steady_scale
+from .tcforward import as_cauer
+from .tcjunction import as_foster, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
