@@ -59,8 +59,9 @@ import numpy as np
 from .effects import CATALOGUE, Effect, spec
 from .errors import DataFormatError, FitError, SimulationError
 from .ladder import Cauer, Foster
-from .tcforward import as_foster as _foster
-from .tcforward import tc_cooling, tc_cooling_rise, tc_frozen, tc_steady_scale
+from .tcforward import tc_cooling, tc_frozen
+from .tcjunction import as_foster as _foster
+from .tcjunction import tc_cooling_rise, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray

@@ -22,9 +22,10 @@ worse than the linear model it extends.
    constant scales with its resistance), while an error of the heating power (a heater whose
    power sags as it warms, recorded at its nominal value) scales each curve without changing
    its shape. The linear ladder with one free amplitude per curve is fitted too
-   (:func:`amplitude_only_sse`); when it explains the cooling curves at least as well as the
-   junction form (by BIC, its extra amplitudes counted), the temperature coefficient is not
-   what the data show and every form is reported switched off (``facts["amplitude_only"]``).
+   (:func:`amplitude_only_sse`); when it explains the cooling curves to the noise
+   (:data:`NOISE_SIGMAS`) and better than every form (by BIC, its extra amplitudes counted),
+   the temperature coefficient is not what the data show and every form is reported switched
+   off (``facts["amplitude_only"]``).
 """
 
 from __future__ import annotations
@@ -55,7 +56,8 @@ from .effectfit import (
 from .effects import Effect
 from .errors import FitError, SimulationError
 from .ladder import Foster
-from .tcforward import as_cauer, as_foster, tc_steady_scale
+from .tcforward import as_cauer
+from .tcjunction import as_foster, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -68,6 +70,10 @@ GATE_BIC = 10.0
 JOINT_BUDGET_S = 1.0
 #: CPU time (s) allowed to the search of the layer subset (ladder held).
 SUBSET_BUDGET_S = 2.0
+#: The amplitude-only explanation is complete when its weighted χ² is within this many
+#: standard deviations (√(2N)) of the number of points N: only then can it stand for the
+#: temperature coefficient (a residual it leaves is a shape change it cannot make).
+NOISE_SIGMAS = 3.0
 #: Evaluations allowed to a fit with the ladder held.
 HELD_NFEV = 20
 #: The subsets of layers are searched only when the local form over every layer leaves a
@@ -278,7 +284,8 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster,
             best = min(_bic(n_c, kept_sse(data, fit.ladder, [*base, fit.effect], kept),
                             fit.n_params) for fit in out)
         facts["amplitude_only_bic_gain"] = best - _bic(n_c, amp, len(data.cooling) - 1)
-        if facts["amplitude_only_bic_gain"] > 0:
+        at_noise = amp <= n_c + NOISE_SIGMAS * math.sqrt(2 * n_c)
+        if at_noise and facts["amplitude_only_bic_gain"] > 0:
             return [EffectFit(switched_off(NAME, fit.effect.form, data), f, fit.n_params,
                               {**facts, "amplitude_only": True, "no_gain": True})
                     for fit in out]

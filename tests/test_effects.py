@@ -44,7 +44,7 @@ from spicethermal.errors import DataFormatError, FitError
 from spicethermal.ladder import Foster
 from spicethermal.model import Schedule, ThermalModel
 from spicethermal.scenarios import HIDDEN, actuator, scenario_bundle
-from spicethermal.tcforward import tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
+from spicethermal.tcjunction import tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
 
 CONTRACT = {"temperature-coefficient": DEVICE, "phase-change": DEVICE,
             "sample-window": MEASUREMENT, "electrical-transient": MEASUREMENT,
