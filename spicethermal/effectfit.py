@@ -25,7 +25,8 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
 * ``phase-change`` on a cooling curve: the nodal network with the band's heat capacity at its
   node, integrated by LSODA with an exact rank-one inverse of the capacity matrix until the
   node leaves the band, then exact modal steps (< 1 mK from the model's Radau integration);
-  curves that stay :data:`BAND_REACH` band widths away from the band use the closed form.
+  curves that stay outside the band (:func:`spicethermal.effects.phase_change.band`) use
+  the closed form.
   Under PWM the mean is exact (a heat capacity does not change it) and, when the band is
   within reach, the ripple is computed with the capacity frozen at the mean temperature
   (:func:`pc_frozen_ladder`, quasi-static), else in closed form. The band's shape is the
@@ -59,7 +60,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .effects import CATALOGUE, Effect
+from .effects import CATALOGUE, Effect, phase_change
 from .errors import DataFormatError, FitError, SimulationError
 from .ladder import Cauer, Foster
 
@@ -69,10 +70,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from .bundle import Bundle
     from .model import ThermalModel
 
-#: Phase-change bands further than this many widths from every temperature are ignored (the
-#: band's capacity, :meth:`~spicethermal.effects.Effect.extra_capacitance`, is below 1e-6 of
-#: its peak there).
-BAND_REACH = 8.0
 #: Evaluations allowed to one least-squares fit: a bound on hopeless fits only; fits stop on
 #: their tolerance or on the time budget of :func:`time_limit`.
 MAX_NFEV = 400
@@ -396,9 +393,8 @@ def tc_frozen_ladder(ladder: Foster | Cauer, alpha: float, t0_c: float, tref_c: 
 
 
 def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
-    p = effect.params
-    return p["latent_j"] > 0 and (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
-            and t_lo_c < p["t_c"] + BAND_REACH * p["width_k"])
+    low, high = phase_change.band(effect)
+    return effect.params["latent_j"] > 0 and t_hi_c > low and t_lo_c < high
 
 
 def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
@@ -411,7 +407,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     LSODA with an exact rank-one inverse of ``M`` (agrees with the model's Radau integration
     to < 1 mK, 10× faster); without ``tc`` the network is linear again once the node has left
     the band, and exact modal steps finish the curve; closed form when the curve stays more
-    than :data:`BAND_REACH` widths away from the band (and there is no ``tc``).
+    outside the band (:func:`~spicethermal.effects.phase_change.band`; and there is no ``tc``).
     """
     from scipy.integrate import solve_ivp
 
@@ -458,7 +454,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     if t_end <= 0:
         return np.full(t.shape, float(theta0[0]))
     order = np.argsort(t)
-    below = p["t_c"] - BAND_REACH * p["width_k"]
+    below = phase_change.band(effect)[0]
 
     def left_band(_t: float, theta: NDArray) -> float:
         return tref_c + theta[node] - below
