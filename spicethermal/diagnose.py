@@ -51,15 +51,13 @@ from .effectfit import (
     BundleData,
     EffectFit,
     baseline_ladder,
-    choose_form,
-    fit_effect_forms,
-    fit_with_effects,
     needs,
     predict,
     time_limit,
 )
 from .effects import CATALOGUE, Effect
 from .errors import DataFormatError, FitError, SimulationError
+from .fitters import choose_form, fit_effect_forms, fit_with_effects
 from .ladder import Foster
 
 if TYPE_CHECKING:  # pragma: no cover
