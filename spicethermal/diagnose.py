@@ -42,6 +42,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from .consistency import device_effect_contradicted
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .diagreport import write_report
 from .effectfit import NUMERICAL_ERRORS, BundleData, baseline_ladder, needs, time_limit
@@ -188,6 +189,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     first: list[Candidate] = []
     cur_ladder, cur_effects, cur, cur_bic = ladder, list(model.effects), base, bic0
     k_total = 0
+    contradicted = ""
     while len(steps) < MAX_STEPS and not at_noise(cur, noise):
         cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say, skipped,
                             CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S)
@@ -197,6 +199,9 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         if not winners:
             break
         chosen = winners[0]
+        contradicted = device_effect_contradicted(data, cur_ladder, chosen, chosen.comparison)
+        if contradicted:
+            break
         k_total += chosen.n_params
         steps.append(Step(chosen, tuple(cands)))
         cur_ladder, cur_effects, cur = chosen.ladder, [*cur_effects, chosen.effect], \
@@ -204,7 +209,13 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         cur_bic = criterion(cur, noise, k_total)
     where = tuple(localise(base, noise))
     total = explained_fraction(base, cur, noise)
-    if steps and total < MIN_TOTAL_EXPLAINED and structured(cur, noise):
+    if contradicted:
+        located = localise(cur, noise) or localise(cur)
+        done = "".join(f"{st.chosen.effect.name} explains part of the misfit; then "
+                       for st in steps)
+        reason = (f"{done}no catalogued effect explains the misfit: {contradicted}; not in the "
+                  f"catalogue: the error sits in {'; and in '.join(located[:2])}")
+    elif steps and total < MIN_TOTAL_EXPLAINED and structured(cur, noise):
         # the effects found explain part of the misfit and leave a structured residual: the
         # physics at work is not in the catalogue (a remounted contact, a heater that sags
         # or a convection that switches can each pass for a temperature coefficient)

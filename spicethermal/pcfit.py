@@ -225,12 +225,6 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
                               tol=PC_FIT_TOL, max_nfev=PC_NFEV) + (node,))
     lad, effs, res, node = min(fits, key=lambda r: r[2].cost)
-    held = 0.5 * sse(sub, ladder, base)
-    if res.cost >= held:  # no band does better than the given ladder without one
-        p = effs[-1].params
-        return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
-                                        width_k=p["width_k"], node=0), as_foster(ladder), 4,
-                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     # then the ladder with the band, jointly (the reference curve alone fixes it poorly)
     lo, hi = bounds(node)
     try:
@@ -242,6 +236,13 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                 lad, effs = lad2, effs2
     except (FitError, TimeLimitError):
         pass
+    with unlimited():
+        gain = sse(sub, lad, [*base, effs[-1]]) < sse(sub, ladder, base)
+    if not gain:  # no band does better than the given ladder without one
+        p = effs[-1].params
+        return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
+                                        width_k=p["width_k"], node=0), as_foster(ladder), 4,
+                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     facts = {"t_range_c": ranges[node]}
     out = [EffectFit(effs[-1], lad, 4, facts)]
     for form in ("gaussian", "plateau"):

@@ -118,14 +118,15 @@ def at_noise(comparison: Comparison, noise: Mapping[str, float]) -> bool:
 
 
 def decisive(cand: Any, bic_before: float, min_improvement: float = MIN_IMPROVEMENT,
-              min_explained: float = MIN_EXPLAINED) -> bool:
+             min_explained: float = MIN_EXPLAINED) -> bool:
+    """True when candidate ``cand`` is decisively better than a model of BIC ``bic_before``."""
     return (bic_before - cand.bic >= MIN_BIC_DROP and cand.improvement >= min_improvement
             and cand.explained >= min_explained)
 
 
 def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, float],
-            first: Sequence[Any], steps: Sequence[Any],
-            skipped: Mapping[str, str]) -> str:
+                   first: Sequence[Any], steps: Sequence[Any],
+                   skipped: Mapping[str, str]) -> str:
     """The verdict's reason: what was added and why, what is left, and where."""
     if not steps and at_noise(base, noise):
         return (f"the model fits every data set at its noise (RMS {base.rms_k:.3g} K, "
