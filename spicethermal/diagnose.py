@@ -50,6 +50,7 @@ from .effects import CATALOGUE, Effect
 from .errors import DataFormatError, FitError, SimulationError
 from .evidence import evidence
 from .fitters import choose_form, fit_effect_forms, fit_with_effects
+from .progress import bar
 from .residuals import comparison_of, localise, noise_estimates
 from .table2 import TableAnalysis, analyse_table, diagnose_table
 from .verdict import (
@@ -89,13 +90,13 @@ LATER_BUDGET_S = 5.0
 def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 names: Sequence[str], before: Comparison, noise: Mapping[str, float],
                 say: Callable[[str], None], skipped: dict[str, str],
-                budget_s: float = 6.0) -> list[Candidate]:
+                budget_s: float = 6.0, quiet: bool = True, step: int = 1) -> list[Candidate]:
     """Every effect of ``names`` fitted on top of ``ladder`` and ``effects`` (each form; the
     default form unless another is decisively better, :func:`choose_form`), each within
     ``budget_s`` of CPU time; failures go to ``skipped``."""
     present = {e.name for e in effects}
     cands = []
-    for name in names:
+    for name in bar(names, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
         if name in present:
             skipped.setdefault(name, "already in the model")
             continue
@@ -128,7 +129,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
 
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,
              effects: Sequence[str] | None = None,
-             progress: Callable[[str], None] | None = None) -> Diagnosis:
+             progress: Callable[[str], None] | None = None, quiet: bool = True) -> Diagnosis:
     """Compare, localise, fit every candidate effect, add the decisive one, and again.
 
     Each step fits every catalogued effect the model lacks (each of its forms) on top of the
@@ -144,6 +145,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         Its effects stay in every candidate; the candidates are the catalogued effects it lacks.
     effects : candidate names (default: every catalogued effect).
     progress : called with a short text before each step.
+    quiet : no progress bar on stderr (one bar per step over the candidate fits, shown only
+        when stderr is a terminal; :mod:`spicethermal.progress`).
 
     Returns
     -------
@@ -192,7 +195,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     contradicted = ""
     while len(steps) < MAX_STEPS and not at_noise(cur, noise):
         cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say, skipped,
-                            CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S)
+                           CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S, quiet,
+                           len(steps) + 1)
         if not steps:
             first = cands
         winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
