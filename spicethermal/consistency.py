@@ -9,25 +9,26 @@ the power actually dissipated before the cut.
 
 :func:`amplitude_only` fits that alternative: the linear ladder jointly to every cooling curve
 with one free power scale per curve (the reference curve's held at 1). When it fits the
-cooling curves decisively better than the device effect does (its BIC lower by
-:data:`~spicethermal.verdict.MIN_BIC_DROP`), the effect only mimics an amplitude change that
-its own dynamics contradict: the physics at work is not the catalogued one
-(:func:`device_effect_contradicted`). On a weak effect whose dynamics are within the noise both
-fit alike and the effect keeps its name.
+cooling curves at the noise and decisively better than every form of the device effect does
+(its BIC lower by :data:`~spicethermal.verdict.MIN_BIC_DROP`), the effect only mimics an
+amplitude change that its own dynamics contradict: the physics at work is not the catalogued
+one (:func:`device_effect_contradicted`). On a weak effect whose dynamics are within the noise
+both fit alike and the effect keeps its name; when the amplitudes alone leave a misfit, the
+test says nothing (an effect of another form may be at work).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .effectfit import BundleData, as_foster, robust_lsq, transient_spans
-from .effects import DEVICE
+from .effects import DEVICE, Effect
 from .ladder import Foster
-from .verdict import MIN_BIC_DROP
+from .verdict import AT_NOISE_CHI2, MIN_BIC_DROP
 
 if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
@@ -93,44 +94,54 @@ def amplitude_only(data: BundleData, ladder: Foster | Cauer) -> tuple[float, int
     return 2.0 * float(res.cost), len(rest)
 
 
-def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, cand: Any,
-                               comparison: Comparison) -> str:
-    """Why candidate ``cand`` (a :class:`~spicethermal.diagnosis.Candidate`) is contradicted
-    by the cooling dynamics ("" when it is not, or when the test does not apply: a
-    measurement effect, fewer than two cooling curves).
+def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect: Effect,
+                               n_params: int, comparisons: Sequence[Comparison],
+                               amplitude: tuple[float, int] | None = None) -> str:
+    """Why device effect ``effect`` is contradicted by the cooling dynamics ("" when it is
+    not, or when the test does not apply: a measurement effect, fewer than two cooling
+    curves): the cooling curves are the linear shape scaled per curve at the noise
+    (:func:`amplitude_only`, χ²/n within the white-noise bound of
+    :data:`~spicethermal.verdict.AT_NOISE_CHI2`), and that fits them decisively better than
+    every form of the effect.
 
     Parameters
     ----------
     data : BundleData
         The bundle's arrays, with the noise scales set.
     ladder : Foster or Cauer
-        The ladder of the model the candidate extends (start of the alternative's fit).
-    cand : Candidate
-        The candidate: its effect, parameter count and comparison.
-    comparison : Comparison
-        The candidate's comparison with the bundle.
+        The ladder of the model the effect extends (start of the alternative's fit).
+    effect : Effect
+        The effect (its best form), for the sentence.
+    n_params : int
+        Its number of fitted parameters.
+    comparisons : sequence of Comparison
+        The model with each form of the effect against the bundle.
+    amplitude : tuple, optional
+        :func:`amplitude_only` of ``data`` if already computed.
 
     Returns
     -------
     str
         The reason, or "".
     """
-    if cand.effect.kind != DEVICE or len(data.cooling) < 2:
+    if effect.kind != DEVICE or len(data.cooling) < 2 or not comparisons:
         return ""
     kept = _kept(data)
-    by_set: Mapping[str, Comparison] = comparison.by_dataset()
-    chi2_effect = 0.0
-    n = 0
-    for c in data.cooling:
-        r = by_set[c.name].residuals_k[kept[c.name]]
-        chi2_effect += float(np.sum(r ** 2)) / data.scale(c.name) ** 2
-        n += r.size
-    chi2_amp, k_amp = amplitude_only(data, ladder)
+    n = sum(int(np.sum(k)) for k in kept.values())
+
+    def cooling_chi2(comparison: Comparison) -> float:
+        by_set = comparison.by_dataset()
+        return sum(float(np.sum(by_set[c.name].residuals_k[kept[c.name]] ** 2))
+                   / data.scale(c.name) ** 2 for c in data.cooling)
+
+    chi2_effect = min(cooling_chi2(c) for c in comparisons)
+    chi2_amp, k_amp = amplitude if amplitude is not None else amplitude_only(data, ladder)
     log_n = math.log(max(n, 2))
-    gap = (chi2_effect + cand.n_params * log_n) - (chi2_amp + k_amp * log_n)
-    if gap < MIN_BIC_DROP:
+    gap = (chi2_effect + n_params * log_n) - (chi2_amp + k_amp * log_n)
+    at_noise = chi2_amp / max(n, 1) <= AT_NOISE_CHI2 + 3 * math.sqrt(2 / max(n, 1))
+    if gap < MIN_BIC_DROP or not at_noise:
         return ""
-    return (f"{cand.effect.name} ({cand.effect.form}) would change the cooling dynamics, but "
-            f"the cooling curves are the linear ladder's shape scaled per curve (a power "
-            f"that is not the recorded one: BIC {gap:.0f} lower than with the effect, "
-            f"χ² {chi2_amp:.0f} against {chi2_effect:.0f} on {n} points)")
+    return (f"{effect.name} would change the cooling dynamics, but the cooling curves are the "
+            f"linear ladder's shape scaled per curve, at the noise (a power that is not the "
+            f"recorded one; χ² {chi2_amp:.0f} on {n} points against {chi2_effect:.0f} with the "
+            f"effect: BIC {gap:.0f} lower)")

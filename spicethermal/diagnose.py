@@ -42,11 +42,19 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from .consistency import device_effect_contradicted
+from .compare import Comparison
+from .consistency import amplitude_only, device_effect_contradicted
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .diagreport import write_report
-from .effectfit import NUMERICAL_ERRORS, BundleData, baseline_ladder, needs, time_limit
-from .effects import CATALOGUE, Effect
+from .effectfit import (
+    NUMERICAL_ERRORS,
+    BundleData,
+    baseline_ladder,
+    needs,
+    time_limit,
+    transient_spans,
+)
+from .effects import CATALOGUE, DEVICE, Effect
 from .errors import DataFormatError, FitError, SimulationError
 from .evidence import evidence
 from .fitters import choose_form, fit_effect_forms, fit_with_effects
@@ -58,6 +66,7 @@ from .verdict import (
     MIN_IMPROVEMENT,
     MIN_TOTAL_EXPLAINED,
     at_noise,
+    can_be_decisive,
     criterion,
     decisive,
     explained_fraction,
@@ -68,7 +77,6 @@ from .verdict import (
 
 if TYPE_CHECKING:  # pragma: no cover
     from .bundle import Bundle
-    from .compare import Comparison
     from .ladder import Foster
     from .model import ThermalModel
 
@@ -77,6 +85,16 @@ __all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", 
            "diagnose_table", "evidence", "explained_fraction", "fit_with_effects", "localise",
            "noise_estimates", "runs_z", "structured", "write_report"]
 
+#: Effects whose only signature is in some data sets (those whose name starts so) and their
+#: least number of parameters: they are not fitted when those data sets leave no room for a
+#: decisive improvement (:func:`~spicethermal.verdict.can_be_decisive`).
+SIGNATURE = {"phase-change": ("cooling", 4), "electrical-transient": ("cooling", 2),
+             "sample-window": ("pwm", 1)}
+#: ... of which these act on the cooling curves beyond their electrical transient.
+AFTER_TRANSIENT = ("phase-change",)
+#: Costly fits (an integration per evaluation) come last and are skipped when a cheaper
+#: candidate already brings every data set to its noise without structure.
+FITTED_LAST = ("phase-change",)
 #: Effects added at most, one per step.
 MAX_STEPS = 3
 #: Time budget (s of CPU time, see :func:`~spicethermal.effectfit.time_limit`) of one
@@ -95,15 +113,33 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
     default form unless another is decisively better, :func:`choose_form`), each within
     ``budget_s`` of CPU time; failures go to ``skipped``."""
     present = {e.name for e in effects}
-    cands = []
-    for name in bar(names, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
+    amplitude = None  # the power-per-curve alternative of the device effects, fitted once
+    cands: list[Candidate] = []
+    settled = ""
+    bic_before = criterion(before, noise, 0)
+    order = sorted(names, key=lambda n: n in FITTED_LAST)
+    for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
         if name in present:
             skipped.setdefault(name, "already in the model")
+            continue
+        if settled and name in FITTED_LAST:
+            skipped[name] = f"not needed: {settled} brings every data set to its noise"
             continue
         why = needs(name, data)
         if why:
             skipped[name] = why
             continue
+        if name in SIGNATURE:
+            sets = [d for d in before.datasets if d.startswith(SIGNATURE[name][0])]
+            seen = before
+            if name in AFTER_TRANSIENT and "electrical-transient" not in present:
+                spans = transient_spans(data)
+                seen = Comparison(tuple(p for p in before.points if p.dataset not in spans
+                                        or p.at["t_s"] >= spans[p.dataset]), before.engine)
+            if not can_be_decisive(seen, noise, sets, SIGNATURE[name][1]):
+                skipped[name] = (f"cannot be decisive: {', '.join(sets)} (where it acts) are "
+                                 f"within their noise")
+                continue
         say(f"fitting {name}")
         t0 = time.perf_counter()
         try:
@@ -118,11 +154,23 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             skipped[name] = f"fit failed: {exc}"
             continue
         fit, cmp, bic = best
+        contradicted = ""
+        if fit.effect.kind == DEVICE and len(data.cooling) > 1:
+            try:
+                if amplitude is None:
+                    amplitude = amplitude_only(data, ladder)
+                contradicted = device_effect_contradicted(data, ladder, fit.effect,
+                                                          fit.n_params, [x[1] for x in scored],
+                                                          amplitude)
+            except (FitError, *NUMERICAL_ERRORS):  # no alternative: nothing contradicts
+                contradicted = ""
         improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
         cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
                                evidence(fit, data, before, cmp, noise),
                                explained_fraction(before, cmp, noise),
-                               time.perf_counter() - t0))
+                               time.perf_counter() - t0, contradicted))
+        if not contradicted and decisive(cands[-1], bic_before) and at_noise(cmp, noise):
+            settled = settled or name
     cands.sort(key=lambda c: c.bic)
     return cands
 
@@ -203,7 +251,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         if not winners:
             break
         chosen = winners[0]
-        contradicted = device_effect_contradicted(data, cur_ladder, chosen, chosen.comparison)
+        contradicted = chosen.contradicted
         if contradicted:
             break
         k_total += chosen.n_params

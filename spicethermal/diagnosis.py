@@ -30,7 +30,9 @@ WORST_POINTS = 5
 class Candidate:
     """One candidate effect fitted to the bundle (its best form). ``improvement`` is the
     previous model's pooled RMS over this one's; ``explained`` the fraction of the previous
-    model's misfit beyond the noise that the effect removes (see :func:`explained_fraction`)."""
+    model's misfit beyond the noise that the effect removes (see :func:`explained_fraction`);
+    ``contradicted`` why the data contradict its physics ("" when they do not, see
+    :mod:`spicethermal.consistency`)."""
 
     effect: Effect
     ladder: Foster
@@ -41,6 +43,7 @@ class Candidate:
     evidence: str
     explained: float
     fit_s: float
+    contradicted: str = ""
 
     @property
     def rms_k(self) -> float:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -35,6 +36,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from .ladder import Cauer, Foster
 
 __all__ = ["fit_electrical_transient", "fit_sample_window", "fit_tsp_nonlinearity"]
+
+#: Evaluations allowed to each start of the transient's fit on the early points (ladder held;
+#: 2-3 parameters): the starts are many, a start that has not converged by then is a poor one.
+HELD_NFEV = 60
 
 
 def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
@@ -85,21 +90,29 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
         "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
                   lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
         "ringing": ([[amp0, ls, lf] for ls in (lspan, lspan + 0.5)
-                     for lf in (-0.3, 0.0, 0.3, 0.6, 0.9)],
+                     for lf in (-0.3, 0.3, 0.9)],
                     [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
                     lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
                                "ring_hz": 10 ** (x[2] - x[1])}),
     }
     early = {n: 10 * span0 for n in names}
     n_early = sum(int(np.sum(c.t_s < early[c.name])) for c in data.cooling)
+    # the held fits see the early points only: the curves cut there (the forward models of
+    # the device effects then integrate only that far)
+    head = replace(data, cooling=tuple(
+        replace(c, t_s=c.t_s[k], tj_c=c.tj_c[k], tref_c=c.tref_c[k])
+        for c in data.cooling for k in [c.t_s < early[c.name]] if np.any(k)))
+    if not head.cooling:
+        raise FitError("electrical-transient: no reading within the early span")
+    early_names = [c.name for c in head.cooling]
     held = {}
     for form, (starts, lo, hi, params) in forms.items():
         def build(x: NDArray, form: str = form, params=params) -> list[Effect]:
             return [*base, Effect.create("electrical-transient", form,
                                          **{k: float(v) for k, v in params(x).items()})]
 
-        res = min((joint_fit(data, names, ladder, False, x0, lo, hi, build,
-                             keep_before=early)[2] for x0 in starts), key=lambda r: r.cost)
+        res = min((joint_fit(head, early_names, ladder, False, x0, lo, hi, build,
+                             max_nfev=HELD_NFEV)[2] for x0 in starts), key=lambda r: r.cost)
         held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
     # the ladder is refitted with the default form and with the best other form when the
     # early points prefer it decisively

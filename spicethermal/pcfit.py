@@ -61,6 +61,10 @@ PC_NFEV = 40
 PC_JOINT_BUDGET_S = 1.5
 #: CPU time (s) allowed to the fit of each other band shape (started from the logistic fit).
 PC_FORM_BUDGET_S = 1.5
+#: The other shapes are fitted only when the logistic band lowers the noise-weighted squared
+#: error this much (twice the decision's BIC drop: a band that is not clearly there has no
+#: shape to tell).
+SHAPE_GAIN = 20.0
 
 
 def node_fractions(ladder: Foster | Cauer) -> NDArray:
@@ -237,14 +241,16 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     except (FitError, TimeLimitError):
         pass
     with unlimited():
-        gain = sse(sub, lad, [*base, effs[-1]]) < sse(sub, ladder, base)
-    if not gain:  # no band does better than the given ladder without one
+        gain = sse(sub, ladder, base) - sse(sub, lad, [*base, effs[-1]])
+    if gain <= 0:  # no band does better than the given ladder without one
         p = effs[-1].params
         return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
                                         width_k=p["width_k"], node=0), as_foster(ladder), 4,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     facts = {"t_range_c": ranges[node]}
     out = [EffectFit(effs[-1], lad, 4, facts)]
+    if gain < SHAPE_GAIN:  # a band this weak does not show its shape
+        return out
     for form in ("gaussian", "plateau"):
         fit = _other_shape(data, names, lad, base, effs[-1], form, (lo, hi), c_scale)
         if fit is not None:

@@ -23,7 +23,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 __all__ = ["AT_NOISE_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
-           "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "bic_drop", "chi2", "criterion",
+           "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "bic_drop", "can_be_decisive", "chi2",
+           "criterion",
            "decisive", "explained_fraction", "runs_z", "structured", "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
@@ -115,6 +116,29 @@ def at_noise(comparison: Comparison, noise: Mapping[str, float]) -> bool:
         if ratio > AT_NOISE_CHI2 + 3 * math.sqrt(2 / n):
             return False
     return not structured(comparison, noise)
+
+
+def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
+                    datasets: Sequence[str], n_params: int) -> bool:
+    """Whether an effect that acts only on ``datasets`` could lower the BIC of ``comparison``
+    by :data:`MIN_BIC_DROP` with ``n_params`` parameters: their χ² must exceed what white noise
+    can leave (``n − 3 √(2n)`` for their ``n`` points) by at least that drop plus
+    ``n_params ln N`` (a cheap test that prunes candidates before any fit).
+
+    >>> from spicethermal.compare import Comparison, ComparisonPoint
+    >>> c = Comparison(tuple(ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.5}, x, 0.0)
+    ...                      for x in (1.0, -1.0) * 20))
+    >>> can_be_decisive(c, {"pwm": 2.0}, ["pwm"], 1), can_be_decisive(c, {"pwm": 0.5}, ["pwm"], 1)
+    (False, True)
+    """
+    sets = comparison.by_dataset()
+    subs = [sets[d] for d in datasets if d in sets]
+    n = sum(len(sub.points) for sub in subs)
+    if not n:
+        return False
+    excess = sum(float(np.sum(sub.residuals_k ** 2)) / noise[sub.points[0].dataset] ** 2
+                 for sub in subs) - (n - 3 * math.sqrt(2 * n))
+    return excess >= MIN_BIC_DROP + n_params * math.log(max(len(comparison.points), 2))
 
 
 def decisive(cand: Any, bic_before: float, min_improvement: float = MIN_IMPROVEMENT,
