@@ -86,8 +86,14 @@ def evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Compariso
         node = int(p["node"])
         cross = f"{', '.join(hot)} cross" if len(hot) > 1 else f"{hot[0]} crosses" if hot \
             else "no curve crosses"
-        return (f"{cross} {fmt_number(p['t_c'], 4)} ± {fmt_number(p['width_k'], 2)} °C; "
-                f"a latent heat of {fmt_number(p['latent_j'] * 1e3)} mJ at ladder node {node}"
+        if e.form == "plateau":
+            band = (f"{fmt_number(p['t_c'] - p['width_k'] / 2, 4)} to "
+                    f"{fmt_number(p['t_c'] + p['width_k'] / 2, 4)} °C (a flat band, edges of "
+                    f"{fmt_number(p['edge_k'], 2)} K)")
+        else:
+            band = (f"{fmt_number(p['t_c'], 4)} ± {fmt_number(p['width_k'], 2)} °C (a {e.form} "
+                    f"band)")
+        return (f"{cross} {band}; a latent heat of {fmt_number(p['latent_j'] * 1e3)} mJ at ladder node {node}"
                 f"{' (the junction)' if node == 0 else ''} {verdict} ({gain})")
     if e.name == "sample-window":
         mean = float(np.mean(base.dataset("pwm").residuals_k)) if data.pwm is not None else 0.0
