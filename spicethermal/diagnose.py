@@ -242,7 +242,9 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     k_total = 0
     contradicted = ""
     while len(steps) < MAX_STEPS and not at_noise(cur, noise):
-        cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say, skipped,
+        # the first step's candidates and skips are the report's; later ones are its steps'
+        cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
+                           skipped if not steps else {},
                            CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S, quiet,
                            len(steps) + 1)
         if not steps:
