@@ -101,8 +101,9 @@ MAX_STEPS = 3
 #: candidate's fit at the first step; a fit past it keeps its
 #: best point so far (a fit that cannot start fails).
 CANDIDATE_BUDGET_S = 8.0
-#: ... and at later steps (their forward models carry the effects added so far).
-LATER_BUDGET_S = 5.0
+#: ... and at later steps (their forward models carry the effects added so far; a second
+#: effect is often the one that needs an integration).
+LATER_BUDGET_S = 8.0
 
 
 def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],

@@ -93,8 +93,8 @@ def evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Compariso
         else:
             band = (f"{fmt_number(p['t_c'], 4)} ± {fmt_number(p['width_k'], 2)} °C (a {e.form} "
                     f"band)")
-        return (f"{cross} {band}; a latent heat of {fmt_number(p['latent_j'] * 1e3)} mJ at ladder node {node}"
-                f"{' (the junction)' if node == 0 else ''} {verdict} ({gain})")
+        return (f"{cross} {band}; a latent heat of {fmt_number(p['latent_j'] * 1e3)} mJ at "
+                f"ladder node {node}{' (the junction)' if node == 0 else ''} {verdict} ({gain})")
     if e.name == "sample-window":
         mean = float(np.mean(base.dataset("pwm").residuals_k)) if data.pwm is not None else 0.0
         declared = fit.facts.get("declared_s", 0.0)

@@ -54,13 +54,14 @@ PC_FIT_TOL = 1e-5
 PC_EVAL_S = 0.3
 #: CPU time (s) allowed to the whole grid (one point per node comes first).
 PC_GRID_S = 2.0
-#: Evaluations allowed to the band's own fit (3 parameters, the ladder held).
-PC_NFEV = 40
+#: Iterations allowed to the band's own fit (3 parameters, the ladder held; each also evaluates
+#: the forward model 3 times for its Jacobian).
+PC_NFEV = 15
 #: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
 #: evaluation integrates the curves that cross the band); past it the best point so far is kept.
 PC_JOINT_BUDGET_S = 1.5
 #: CPU time (s) allowed to the fit of each other band shape (started from the logistic fit).
-PC_FORM_BUDGET_S = 1.5
+PC_FORM_BUDGET_S = 1.0
 #: The other shapes are fitted only when the logistic band lowers the noise-weighted squared
 #: error this much (twice the decision's BIC drop: a band that is not clearly there has no
 #: shape to tell).
@@ -223,8 +224,11 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     junction = min((g for g in grid if g[1] == 0), key=lambda g: g[0])
     outer = min(grid, key=lambda g: g[0])
+    # the junction's best point is refined too unless it gains less than half the best's
+    starts = [outer] + ([junction] if outer[1] != 0
+                        and no_band - junction[0] >= 0.5 * (no_band - outer[0]) else [])
     fits = []
-    for _, node, x0 in [junction] + ([outer] if outer[1] != 0 else []):  # noqa: B007 (build)
+    for _, node, x0 in starts:  # noqa: B007 (build reads node)
         lo, hi = bounds(node)
         fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
                               tol=PC_FIT_TOL, max_nfev=PC_NFEV) + (node,))
@@ -249,7 +253,10 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     facts = {"t_range_c": ranges[node]}
     out = [EffectFit(effs[-1], lad, 4, facts)]
-    if gain < SHAPE_GAIN:  # a band this weak does not show its shape
+    with unlimited():
+        left = sse(sub, lad, [*base, effs[-1]]) - sum(c.t_s.size for c in sub.cooling)
+    # a band this weak does not show its shape, nor can another shape gain on a fit at the noise
+    if gain < SHAPE_GAIN or left < SHAPE_GAIN:
         return out
     for form in ("gaussian", "plateau"):
         fit = _other_shape(data, names, lad, base, effs[-1], form, (lo, hi), c_scale)
