@@ -2,7 +2,8 @@
 
 The diagnosis (:mod:`spicethermal.diagnose`) and ``spicethermal fit --effect`` need, for every
 candidate effect, its parameters fitted to the data sets that show it, and the model's
-predictions of every data point with the effect in place. This module holds both.
+predictions of every data point with the effect in place. This module holds the data, the
+forward models and the fitting machinery (below).
 
 Data (:class:`BundleData`): each cooling curve (dataset ``cooling_k``, the junction reading at
 every ``t_s``), the PWM grid (``pwm``: the reading at the end of the sample window) and the
@@ -14,13 +15,14 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
 * linear ladder: closed forms (``Foster.cooling``, :func:`spicethermal.pwm.steady_state`);
 * ``temperature-coefficient``: every form in :mod:`spicethermal.tcforward` (the junction form
   in closed form on a cooling curve and frozen at the self-consistent mean junction
-  temperature under PWM; the local forms on the ladder's Cauer equivalent, exact steady state,
-  stiff integration after the cut, frozen at every node's mean temperature under PWM); its
-  fit is :mod:`spicethermal.tcfit`;
+  temperature under PWM, :mod:`spicethermal.tcjunction`; the local forms on the ladder's Cauer
+  equivalent, exact steady state, stiff integration after the cut, frozen at every node's mean
+  temperature under PWM); its fit is :mod:`spicethermal.tcfit`;
 * ``phase-change`` on a cooling curve: the nodal network with the band's heat capacity at its
   node, integrated by LSODA with an exact rank-one inverse of the capacity matrix until the
   node leaves the band, then exact modal steps (< 1 mK from the model's Radau integration);
-  curves that stay :data:`BAND_REACH` band widths away from the band use the closed form.
+  curves that stay outside the band (:func:`spicethermal.effects.phase_change.band`) use
+  the closed form.
   Under PWM the mean is exact (a heat capacity does not change it) and, when the band is
   within reach, the ripple is computed with the capacity frozen at the mean temperature
   (:func:`pc_frozen_ladder`, quasi-static), else in closed form. The band's shape is the
@@ -31,20 +33,17 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
   linear fit absorbs the straight part, leaving ``q (u − P u)/(1 + q b_u)`` with
   ``u = (T − T_cal)²``, ``P`` the projection on straight lines and ``b_u`` the slope of ``u``).
 
-Fits (:func:`fit_effect`): the effect's parameters by :func:`scipy.optimize.least_squares`
-on the data sets the effect acts on. The ladder is refitted where the effect changes what the
-ladder was fitted from: jointly for ``temperature-coefficient`` (the ladder at ``T0``,
-:mod:`spicethermal.tcfit`), by
-alternation for ``tsp-nonlinearity`` and ``electrical-transient`` (the reference cooling curve
-corrected by the inverse measurement model, then :func:`~spicethermal.fit.fit_foster` at the
-same order); it is held for ``phase-change`` (fitted from the curve that does not cross the
-band) and ``sample-window`` (cooling curves are not affected).
+Fits: the ladder (:func:`baseline_ladder`), the robust least squares every fit goes through
+(:func:`joint_fit`, :func:`robust_lsq`, within a :func:`time_limit`) and the
+``temperature-coefficient`` fit (α jointly with the ladder). The other effects' fits are
+in :mod:`spicethermal.pcfit` (``phase-change``) and :mod:`spicethermal.measfit` (the
+measurement effects); :mod:`spicethermal.fitters` fits any effect by name and chooses among
+its forms.
 """
 
 from __future__ import annotations
 
 import contextvars
-import importlib
 import math
 import time
 import warnings
@@ -56,45 +55,25 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .effects import CATALOGUE, Effect, spec
+from .effects import CATALOGUE, Effect, phase_change
 from .errors import DataFormatError, FitError, SimulationError
 from .ladder import Cauer, Foster
 from .tcforward import tc_cooling, tc_frozen
-from .tcjunction import as_foster as _foster
-from .tcjunction import tc_cooling_rise, tc_steady_scale
+from .tcjunction import as_foster, tc_cooling_rise, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
     from .bundle import Bundle
-    from .model import ThermalModel
 
-#: Phase-change bands further than this many widths from every temperature are ignored (the
-#: band's capacity, :meth:`~spicethermal.effects.Effect.extra_capacitance`, is below 1e-6 of
-#: its peak there).
-BAND_REACH = 8.0
 #: Evaluations allowed to one least-squares fit: a bound on hopeless fits only; fits stop on
 #: their tolerance or on the time budget of :func:`time_limit`.
 MAX_NFEV = 400
 #: Relative tolerance on the cost, the step and the gradient at which a fit stops.
 FIT_TOL = 1e-6
-#: The phase-change fit (an integration per evaluation) stops at this looser tolerance.
-PC_FIT_TOL = 1e-5
-#: A form other than an effect's default is kept only when it lowers the BIC by more than this.
-FORM_BIC_MARGIN = 10.0
 #: Tolerances of the phase-change integration (relative, and absolute in K): 0.1 mK on rises
 #: of tens of kelvins, below any bench's noise.
 PC_RTOL, PC_ATOL_K = 1e-7, 1e-6
-#: CPU time (s) allowed to one evaluation of the phase-change grid (a band that makes the
-#: integration crawl is not the start point).
-PC_EVAL_S = 0.3
-#: CPU time (s) allowed to the whole grid (the junction node's points come first).
-PC_GRID_S = 2.0
-#: Evaluations allowed to the band's own fit (3 parameters, the ladder held).
-PC_NFEV = 40
-#: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
-#: evaluation integrates the curves that cross the band); past it the best point so far is kept.
-PC_JOINT_BUDGET_S = 1.5
 #: The baseline ladder's order is searched up to this many stages ...
 MAX_BASELINE_ORDER = 6
 #: ... and a stage is added only when it lowers the RMS of the joint fit this many times
@@ -162,10 +141,23 @@ def bounded(fn: Callable[[], Any], seconds: float, default: Any) -> Any:
         return default
 
 
+#: The CPU clock is read at most this often (s of wall time) by :func:`check_time`: between
+#: reads the CPU time is bounded by the last reading plus the wall time since (one thread), and
+#: the inner loops of the integrations call it tens of thousands of times per fit.
+CLOCK_EVERY_S = 2e-3
+_CLOCK = [-math.inf, 0.0]  # wall time and CPU time of the last reading
+
+
 def check_time() -> None:
     """Raise :class:`TimeLimitError` when the current :func:`time_limit` has run out."""
     deadline = _DEADLINE.get()
-    if time.process_time() > deadline:
+    if deadline == math.inf:
+        return
+    wall = time.perf_counter()
+    if _CLOCK[1] + (wall - _CLOCK[0]) <= deadline and wall - _CLOCK[0] < CLOCK_EVERY_S:
+        return
+    _CLOCK[0], _CLOCK[1] = wall, time.process_time()
+    if _CLOCK[1] > deadline:
         raise TimeLimitError("time budget exhausted")
 
 
@@ -332,9 +324,8 @@ class BundleData:
 # forward models
 # --------------------------------------------------------------------------------------------
 def _band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
-    p = effect.params
-    return p["latent_j"] > 0 and (t_hi_c > p["t_c"] - BAND_REACH * p["width_k"]
-            and t_lo_c < p["t_c"] + BAND_REACH * p["width_k"])
+    low, high = phase_change.band(effect)
+    return effect.params["latent_j"] > 0 and t_hi_c > low and t_lo_c < high
 
 
 def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
@@ -347,7 +338,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     LSODA with an exact rank-one inverse of ``M`` (agrees with the model's Radau integration
     to < 1 mK, 10× faster); without ``tc`` the network is linear again once the node has left
     the band, and exact modal steps finish the curve; closed form when the curve stays more
-    than :data:`BAND_REACH` widths away from the band (and there is no ``tc``).
+    outside the band (:func:`~spicethermal.effects.phase_change.band`; and there is no ``tc``).
     """
     from scipy.integrate import solve_ivp
 
@@ -356,7 +347,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     if tc is not None and tc.form != "junction":
         raise SimulationError(f"phase-change together with temperature-coefficient form "
                               f"{tc.form} has no fast forward model")
-    f = _foster(ladder)
+    f = as_foster(ladder)
     t = np.asarray(t_s, dtype=float)
     alpha = 0.0 if tc is None else tc.params["alpha_per_k"]
     t0 = 0.0 if tc is None else tc.params["t0_c"]
@@ -397,7 +388,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     if t_end <= 0:
         return np.full(t.shape, float(theta0[0]))
     order = np.argsort(t)
-    below = p["t_c"] - BAND_REACH * p["width_k"]
+    below = phase_change.band(effect)[0]
 
     def left_band(_t: float, theta: NDArray) -> float:
         return tref_c + theta[node] - below
@@ -448,8 +439,11 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float,
     return Foster.from_tau(v[0, :] ** 2 / lam, 1 / lam)
 
 
-def _effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
+def effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
+    """``effects`` by name."""
     return {e.name: e for e in effects}
+
+
 
 
 def tsp_reading(temp_c: ArrayLike, effect: Effect | None) -> NDArray:
@@ -549,7 +543,7 @@ def calibration_reading(temp_c: NDArray, effect: Effect | None) -> NDArray:
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
                    effects: Sequence[Effect]) -> NDArray:
     """True junction temperature (°C) along a cooling curve under the device effects."""
-    fx = _effects_map(effects)
+    fx = effects_map(effects)
     tc, pc = fx.get("temperature-coefficient"), fx.get("phase-change")
     tref = curve.tref_steady_c
     if pc is not None:
@@ -565,7 +559,7 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
     """True junction temperature (°C) at the end of the sample window of every PWM row."""
     from .pwm import steady_state
 
-    fx = _effects_map(effects)
+    fx = effects_map(effects)
     tc, pc, sw = (fx.get(n) for n in ("temperature-coefficient", "phase-change",
                                       "sample-window"))
     window = float(sw.params["window_s"]) if sw is not None else data.window_s
@@ -576,7 +570,7 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
         lad: Foster | Cauer = ladder
         if tc is not None:
             lad = tc_frozen(ladder, tc, tref, p * d)
-        if pc is not None and _band_reached(pc, tref, tref + p * _foster(lad).rth):
+        if pc is not None and _band_reached(pc, tref, tref + p * as_foster(lad).rth):
             lad = pc_frozen_ladder(lad, pc, tref, p * d)
         if average:
             out[i] = tref + window_average_k(lad, p, f, d, window)
@@ -597,7 +591,7 @@ def window_average_k(ladder: Foster | Cauer, power_w: float, freq_hz: float, dut
     """
     from .pwm import steady_state
 
-    f = _foster(ladder)
+    f = as_foster(ladder)
     total = 0.0
     for r, tau in zip(f.r, f.tau, strict=True):
         peak = steady_state(Foster.from_tau([r], [tau]), power_w, freq_hz, duty).peak_k
@@ -615,7 +609,7 @@ def predict(data: BundleData, ladder: Foster | Cauer,
     >>> round(float(predict(d, Foster.from_tau([100.0], [10.0]))["pwm"][0]), 3)
     30.0
     """
-    fx = _effects_map(effects)
+    fx = effects_map(effects)
     tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
     out: dict[str, NDArray] = {}
     line = data.line_temps_c
@@ -691,7 +685,7 @@ def baseline_ladder(data: BundleData, order: int | str = "auto") -> Foster:
             continue
         n = max(res.fun.size, 2)
         bic = n * math.log(max(2 * res.cost, 1e-300) / n) + 2 * m * math.log(n)
-        pred = predict(_subset(data, names), lad)
+        pred = predict(subset(data, names), lad)
         per_curve = [float(np.sum(((pred[c.name] - c.tj_c)[c.t_s >= spans.get(c.name, 0.0)])
                                   ** 2)) for c in data.cooling]
         # more stages only for a ladder that is plainly too short: every curve fits better
@@ -719,11 +713,14 @@ class EffectFit:
     facts: Mapping[str, Any] = field(default_factory=dict)
 
 
-def _subset(data: BundleData, names: Sequence[str]) -> BundleData:
+def subset(data: BundleData, names: Sequence[str]) -> BundleData:
+    """The data sets ``names`` of ``data`` only."""
     return BundleData(tuple(c for c in data.cooling if c.name in names),
                       data.pwm if "pwm" in names else None,
                       data.calibration if "calibration" in names else None,
                       data.ambient_c, data.source, data.scales, data.line_temps_c)
+
+
 
 
 def robust_lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Sequence[float],
@@ -796,9 +793,9 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     point too (it pins Rth). ``diff_step`` is the relative finite-difference step (larger than
     the default for forward models solved by an adaptive integrator). Returns the ladder, the
     effects and scipy's result."""
-    f = _foster(ladder)
+    f = as_foster(ladder)
     m = f.order if fit_ladder else 0
-    sub = _subset(data, names)
+    sub = subset(data, names)
     keep = {n: ((sub.curve(n).t_s >= (exclude or {}).get(n, 0.0))
                 & (sub.curve(n).t_s < (keep_before or {}).get(n, math.inf)))
             if n.startswith("cooling") else slice(None) for n in names}
@@ -816,7 +813,7 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         effects = build(xe)
         pred = predict(sub, lad, effects)
         parts = [(pred[n][keep[n]] - meas[n]) / data.scale(n) for n in names]
-        tsp = _effects_map(effects).get("tsp-nonlinearity")
+        tsp = effects_map(effects).get("tsp-nonlinearity")
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
             parts.append((calibrated_reading(cooling_true_c(top, lad, effects), tsp,
@@ -835,259 +832,11 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     return lad, build(xe), res
 
 
-def _others(effects: Sequence[Effect], name: str) -> list[Effect]:
+def others(effects: Sequence[Effect], name: str) -> list[Effect]:
+    """``effects`` without effect ``name``."""
     return [e for e in effects if e.name != name]
 
 
-def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
-                      effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected), for
-    each form (reading at the end of the window, averaged over it); three starts each."""
-    if data.pwm is None:
-        raise FitError("sample-window needs a PWM data set")
-    base = _others(effects, "sample-window")
-    hi_us = 1e6 * min(1.0, 20.0 / float(np.min(data.pwm.freq_hz)))
-    out = []
-    for form in CATALOGUE["sample-window"].forms:
-        def build(x: NDArray, form: str = form) -> list[Effect]:
-            return [*base, Effect.create("sample-window", form, window_s=float(x[0]) * 1e-6)]
-
-        best = None
-        for s in (10.0, 100.0, 1000.0):
-            if s < hi_us:
-                r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
-                if best is None or r[2].cost < best[2].cost:
-                    best = r
-        lad, effs, _ = best
-        out.append(EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s}))
-    return out
-
-
-def _band_start(data: BundleData, ladder: Foster | Cauer, base: Sequence[Effect]) -> float:
-    """Where a latent-heat band most likely sits: the model temperature of the hottest curve
-    where its residual grows fastest in log time."""
-    c = max(data.cooling, key=lambda c: c.power_w)
-    model = cooling_true_c(c, ladder, base)
-    resid = c.tj_c - model
-    smooth = np.convolve(resid, np.ones(3) / 3, mode="same")
-    grow = np.gradient(smooth, np.log(c.t_s))
-    return float(model[int(np.argmax(grow[1:-1])) + 1])
-
-
-def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
-                     effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """Latent heat, band centre, width and node (the best node of the grid) from the cooling
-    curves,
-    with the ladder of the lowest-power curve held: the band is sought above that curve's
-    temperatures (a band it crossed would be in its ladder), up to the hottest reading.
-    Start: the best point of a grid of latent heats × centres (where the hottest curve's
-    residual grows fastest in log time, the catalogue's 64.7 °C for methanol when it lies in
-    that range, and three across it). When no band fits better than ``ladder`` without one,
-    the result has no latent heat and keeps ``ladder``."""
-    if not data.cooling:
-        raise FitError("phase-change needs cooling curves")
-    names = [c.name for c in data.cooling]
-    base = _others(effects, "phase-change")
-    try:
-        ref = reference_ladder(data, _foster(ladder).order)
-    except (FitError, DataFormatError):
-        ref = _foster(ladder)
-    hot = max(data.cooling, key=lambda c: float(np.max(c.tj_c)))
-    t_hi = float(np.max(hot.tj_c))
-    t_lo = float(np.max(data.reference_curve.tj_c)) if len(data.cooling) > 1 else \
-        float(np.min(hot.tj_c))
-    if t_hi - t_lo < 1.0:
-        raise FitError("phase-change: no curve reaches temperatures the lowest-power curve "
-                       "does not")
-    span = t_hi - t_lo
-    c_scale = float(max(ref.c))
-
-    node = 0
-
-    def build(x: NDArray) -> list[Effect]:
-        return [*base, Effect.create("phase-change", latent_j=math.exp(x[0]) * c_scale,
-                                     t_c=float(x[1]), width_k=float(x[2]), node=node)]
-
-    centres = [float(np.clip(_band_start(data, ref, base), t_lo + 0.02 * span,
-                             t_hi - 0.02 * span))]
-    default = CATALOGUE["phase-change"].params["t_c"].default
-    if t_lo < default < t_hi:
-        centres.append(default)
-    centres += list(np.linspace(t_lo + 0.15 * span, t_hi - 0.15 * span, 3))
-    lo = [math.log(1e-6), t_lo, 0.2]
-    hi = [math.log(100.0), t_hi, max(0.3, span / 4)]
-    width0 = float(np.clip(1.5, lo[2] * 1.01, hi[2] * 0.99))
-    sub = _subset(data, names)
-
-    def cost(x: Sequence[float]) -> float:
-        try:
-            return bounded(lambda: sse(sub, ref, build(np.asarray(x, dtype=float))),
-                           PC_EVAL_S, math.inf)
-        except TimeLimitError:
-            raise
-        except (SimulationError, *NUMERICAL_ERRORS):
-            return math.inf
-
-    # coarse grid over (node, centre, latent heat), then least squares from the best point
-    grid = []
-    stop = time.process_time() + PC_GRID_S
-    points = [(node, fr, tc) for node in range(ref.order)
-              for tc in (centres if node == 0 else centres[:1])
-              for fr in ((1e-3, 1e-2, 1e-1, 1.0) if node == 0 else (0.1, 1.0, 10.0))]
-    for node, fr, tc in points:  # noqa: B007 (build reads node)
-        if grid and time.process_time() > stop:
-            break
-        grid.append((cost([math.log(fr), tc, width0]), node, [math.log(fr), tc, width0]))
-    no_band = sse(sub, ref, base)
-    if min(g[0] for g in grid) >= no_band:  # no band anywhere helps: nothing to refine
-        return [EffectFit(switched_off("phase-change", "logistic", data), _foster(ladder), 4,
-                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
-    junction = min((g for g in grid if g[1] == 0), key=lambda g: g[0])
-    outer = min(grid, key=lambda g: g[0])
-    fits = []
-    for _, node, x0 in [junction] + ([outer] if outer[1] != 0 else []):  # noqa: B007 (build)
-        fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
-                              tol=PC_FIT_TOL, max_nfev=PC_NFEV))
-    lad, effs, res = min(fits, key=lambda r: r[2].cost)
-    held = 0.5 * sse(sub, ladder, base)
-    if res.cost >= held:  # no band does better than the given ladder without one
-        p = effs[-1].params
-        return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
-                                        width_k=p["width_k"], node=0), _foster(ladder), 4,
-                          {"t_range_c": (t_lo, t_hi), "no_gain": True})]
-    # then the ladder with the band, jointly (the reference curve alone fixes it poorly)
-    node = int(effs[-1].params["node"])
-    try:
-        with time_limit(PC_JOINT_BUDGET_S):
-            lad2, effs2, _ = joint_fit(data, names, lad, True, res.x, lo, hi, build,
-                                       diff_step=1e-3, tol=PC_FIT_TOL)
-        with unlimited():
-            if sse(data, lad2, effs2) < sse(data, lad, effs):
-                lad, effs = lad2, effs2
-    except (FitError, TimeLimitError):
-        pass
-    return [EffectFit(effs[-1], lad, 4, {"t_range_c": (t_lo, t_hi)})]
-
-
-def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
-                             effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """Each form of the transient: its parameters first on the early points of every cooling
-    curve with the ladder held (a multi-start), then jointly with the ladder from every point
-    of every cooling curve (the early ones included)."""
-    if not data.cooling:
-        raise FitError("electrical-transient needs cooling curves")
-    names = [c.name for c in data.cooling]
-    base = _others(effects, "electrical-transient")
-    first = min(float(c.t_s[0]) for c in data.cooling)
-    pred = predict(_subset(data, names), ladder, base)
-    amp0 = float(np.mean([data.measured(n)[0] - pred[n][0] for n in names]))
-    per_w0 = float(np.mean([(data.measured(c.name)[0] - pred[c.name][0]) / c.power_w
-                            for c in data.cooling]))
-    spans = [s for s in transient_spans(data).values() if s > 0]
-    span0 = max(float(np.median(spans)) if spans else 1e-4, 10 * first)
-    lspan = math.log10(span0)
-    lo_s, hi_s = math.log10(first) - 1, 0.0
-    forms = {  # form: (starts, lower, upper, parameters from x)
-        "fixed": ([[amp0, lspan]], [-1e3, lo_s], [1e3, hi_s],
-                  lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1]}),
-        "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
-                  lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
-        "ringing": ([[amp0, ls, lf] for ls in (lspan, lspan + 0.5)
-                     for lf in (-0.3, 0.0, 0.3, 0.6, 0.9)],
-                    [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
-                    lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
-                               "ring_hz": 10 ** (x[2] - x[1])}),
-    }
-    early = {n: 10 * span0 for n in names}
-    n_early = sum(int(np.sum(c.t_s < early[c.name])) for c in data.cooling)
-    held = {}
-    for form, (starts, lo, hi, params) in forms.items():
-        def build(x: NDArray, form: str = form, params=params) -> list[Effect]:
-            return [*base, Effect.create("electrical-transient", form,
-                                         **{k: float(v) for k, v in params(x).items()})]
-
-        res = min((joint_fit(data, names, ladder, False, x0, lo, hi, build,
-                             keep_before=early)[2] for x0 in starts), key=lambda r: r.cost)
-        held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
-    # the ladder is refitted with the default form and with the best other form when the
-    # early points prefer it decisively
-    best = min(held, key=lambda k: held[k][0])
-    refine = ["fixed"] + ([best] if best != "fixed" and held[best][0] < held["fixed"][0] - 10
-                          else [])
-    out = []
-    for form in refine:
-        _, x0, build = held[form]
-        lo, hi = forms[form][1], forms[form][2]
-        lad, effs, _ = joint_fit(data, names, ladder, True, list(x0), lo, hi, build)
-        out.append(EffectFit(effs[-1], lad, len(lo), {}))
-    return out
-
-
-def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
-                         effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """``q`` and ``t_cal_c`` (and, in the cubic form, ``c``) jointly with the ladder from every
-    data set: the calibration residuals fix the curvature, the readings of the curves and the
-    PWM grid ``t_cal_c``. The cubic form starts from the quadratic fit."""
-    names = list(data.datasets)
-    if not names:
-        raise FitError("tsp-nonlinearity needs data")
-    base = _others(effects, "tsp-nonlinearity")
-    tcal0 = data.reference_c
-    q0 = 0.0
-    if data.calibration is not None:
-        basis, _ = data.calibration.curvature_basis(tcal0)
-        resid = data.calibration.read_c - data.calibration.temp_c
-        q0 = float(basis @ resid / max(float(basis @ basis), 1e-300))
-    temps = np.concatenate([data.measured(n) for n in names])
-    lo_t, hi_t = float(np.min(temps)) - 50, float(np.max(temps)) + 50
-    qmax = 1e4 * 0.2 / max(hi_t - lo_t, 1.0)
-    cmax = 1e6 * 0.2 / max(hi_t - lo_t, 1.0) ** 2
-    exclude = transient_spans(data) if "electrical-transient" not in _effects_map(base) \
-        else None
-
-    def build(x: NDArray) -> list[Effect]:
-        cubic = {"cub_k_per_k3": float(x[2]) * 1e-6} if len(x) > 2 else {}
-        return [*base, Effect.create("tsp-nonlinearity", "cubic" if cubic else "quadratic",
-                                     quad_k_per_k2=float(x[0]) * 1e-4, t_cal_c=float(x[1]),
-                                     **cubic)]
-
-    x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]
-    fit_ladder = bool(data.cooling)
-    lad, effs, res = joint_fit(data, names, ladder, fit_ladder, x0, [-qmax, lo_t], [qmax, hi_t],
-                               build, exclude=exclude)
-    out = [EffectFit(effs[-1], lad, 2, {})]
-    q = effs[-1].params
-    x1 = [q["quad_k_per_k2"] * 1e4, q["t_cal_c"], 0.0]
-    lad3, effs3, _ = joint_fit(data, names, lad, fit_ladder, x1, [-qmax, lo_t, -cmax],
-                               [qmax, hi_t, cmax], build, exclude=exclude)
-    out.append(EffectFit(effs3[-1], lad3, 3, {}))
-    return out
-
-
-#: The fits of this module by effect name; an effect's spec may name its own instead
-#: (``EffectSpec.fit``, ``"module:function"``, imported when first used).
-FITTERS: Mapping[str, Callable[..., list[EffectFit]]] = {
-    "phase-change": fit_phase_change,
-    "sample-window": fit_sample_window,
-    "electrical-transient": fit_electrical_transient,
-    "tsp-nonlinearity": fit_tsp_nonlinearity,
-}
-
-
-def fitter(name: str) -> Callable[..., list[EffectFit]] | None:
-    """The function that fits effect ``name`` (``None`` when it has none): this module's, or
-    the one its catalogue entry names (``EffectSpec.fit``).
-
-    >>> fitter("temperature-coefficient").__module__
-    'spicethermal.tcfit'
-    """
-    if name in FITTERS:
-        return FITTERS[name]
-    ref = CATALOGUE[name].fit if name in CATALOGUE else ""
-    if not ref:
-        return None
-    module, _, function = ref.partition(":")
-    return getattr(importlib.import_module(module), function)
 
 
 def needs(name: str, data: BundleData) -> str:
@@ -1119,113 +868,3 @@ def sse(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Effect]) -> 
     with np.errstate(over="ignore", invalid="ignore"):  # a wild trial point: inf, not a warning
         return float(sum(np.sum((pred[n] - data.measured(n)) ** 2) / data.scale(n) ** 2
                          for n in data.datasets))
-
-
-def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
-                     effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """Every form of effect ``name`` fitted on top of ``ladder`` and ``effects``.
-
-    A nested model never fits worse than the model it extends: a form whose fit leaves a
-    larger squared error than ``ladder`` and ``effects`` alone is replaced by the effect
-    switched off (:func:`switched_off`) on ``ladder`` (``facts["no_gain"]``). Raises
-    :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
-    """
-    fit_forms = fitter(spec(name).name)
-    if fit_forms is None:
-        raise FitError(f"effect {name!r} has no fit")
-    why = needs(name, data)
-    if why:
-        raise FitError(f"cannot fit {name}: {why}")
-    others = _others(effects, name)
-    out = []
-    fits = fit_forms(data, ladder, effects)
-    with unlimited():
-        off = sse(data, ladder, others)
-    for fit in fits:
-        try:
-            with unlimited():
-                worse = sse(data, fit.ladder, [*others, fit.effect]) > off
-        except (SimulationError, *NUMERICAL_ERRORS):
-            worse = True
-        if worse:
-            fit = EffectFit(switched_off(name, fit.effect.form, data), _foster(ladder),
-                            fit.n_params, {**fit.facts, "no_gain": True})
-        out.append(fit)
-    return out
-
-
-def fit_effect(data: BundleData, ladder: Foster | Cauer, name: str,
-               effects: Sequence[Effect] = ()) -> EffectFit:
-    """Fit effect ``name`` (catalogue name) on top of ``ladder`` and ``effects``: the form
-    with the lowest ``N ln(SSE/N) + k ln N`` over every point (see :func:`fit_effect_forms`).
-
-    Raises :class:`~spicethermal.errors.FitError` when the data cannot show the effect.
-
-    Examples
-    --------
-    >>> from spicethermal.scenarios import scenario_bundle
-    >>> data = BundleData.from_bundle(scenario_bundle("temperature-coefficient", seed=0))
-    >>> fit = fit_effect(data, baseline_ladder(data), "temperature-coefficient")
-    >>> round(fit.effect.params["alpha_per_k"], 4), fit.n_params, fit.effect.form
-    (-0.003, 1, 'junction')
-    """
-    fits = fit_effect_forms(data, ladder, name, effects)
-    n = max(sum(data.measured(d).size for d in data.datasets), 2)
-    others = _others(effects, name)
-
-    def bic(fit: EffectFit) -> float:
-        err = max(sse(data, fit.ladder, [*others, fit.effect]), 1e-300)
-        return n * math.log(err / n) + fit.n_params * math.log(n)
-
-    return fits[choose_form([bic(f) for f in fits])]
-
-
-def choose_form(bics: Sequence[float]) -> int:
-    """Index of the form to keep among forms with criteria ``bics`` (first = the default
-    form): the default unless another lowers the criterion by more than
-    :data:`FORM_BIC_MARGIN`.
-
-    >>> choose_form([100.0, 95.0]), choose_form([100.0, 80.0, 85.0])
-    (0, 1)
-    """
-    low = min(range(len(bics)), key=lambda i: bics[i])
-    return low if bics[low] < bics[0] - FORM_BIC_MARGIN else 0
-
-
-def fit_with_effects(bundle: Bundle, names: Sequence[str], order: int | str = "auto",
-                     provenance: Mapping[str, Any] | None = None,
-                     base: ThermalModel | None = None) -> ThermalModel:
-    """A model of ``bundle`` with the named effects fitted.
-
-    Starts from ``base`` (its ladder and effects) or else from :func:`baseline_ladder` (the
-    lowest-power cooling curve's ladder refitted to every cooling curve), then fits each
-    named effect in turn (the ladder refitted where the effect needs it, see
-    :func:`fit_effect`).
-
-    Examples
-    --------
-    >>> from spicethermal.scenarios import scenario_bundle
-    >>> m = fit_with_effects(scenario_bundle("sample-window", seed=0), ["sample-window"])
-    >>> round(m.effect("sample-window").params["window_s"] * 1e6)
-    99
-    """
-    from .model import ThermalModel
-
-    data = BundleData.from_bundle(bundle)
-    if base is not None:
-        ladder: Foster = _foster(base.ladder)
-        effects: list[Effect] = list(base.effects)
-        reference = base.reference
-        prov = {**dict(base.provenance), **dict(provenance or {})}
-    else:
-        ladder = baseline_ladder(data, order)
-        effects = []
-        reference = bundle.reference
-        prov = dict(provenance or {})
-    for name in names:
-        fitted = fit_effect(data, ladder, name, effects)
-        ladder = fitted.ladder
-        effects = [*_others(effects, name), fitted.effect]
-    prov["effects_fit"] = {"method": "spicethermal.effectfit", "effects": list(names),
-                           "params": {e.name: dict(e.params) for e in effects}}
-    return ThermalModel(ladder, tuple(effects), reference, prov)

@@ -17,8 +17,6 @@ from spicethermal.effectfit import (
     baseline_ladder,
     calibration_reading,
     check_time,
-    fit_effect,
-    fit_effect_forms,
     pc_cooling_rise,
     pc_frozen_ladder,
     predict,
@@ -41,6 +39,7 @@ from spicethermal.effects import (
     known_names,
 )
 from spicethermal.errors import DataFormatError, FitError
+from spicethermal.fitters import fit_effect, fit_effect_forms
 from spicethermal.ladder import Foster
 from spicethermal.model import Schedule, ThermalModel
 from spicethermal.scenarios import HIDDEN, actuator, scenario_bundle

@@ -16,7 +16,6 @@ paper's Table 2): the two columns are then compared and the explanations the pap
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..errors import DataFormatError
@@ -60,18 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="reference added to a table's rises (default 25, as in the "
                             "paper); for a raw record, the temperature at its end (anchors the "
                             "calibration) or the reference of a cooling CSV")
-    parser.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bar on stderr (none either when it is not a terminal)")
     add_source_arguments(parser, curve=False, power=False, rth=False, tref=False, early=False)
-
-
-def _progress(quiet: bool):
-    if quiet or not sys.stderr.isatty():
-        return None
-
-    def say(text: str) -> None:
-        print(f"diagnose: {text} ...", file=sys.stderr, flush=True)
-
-    return say
 
 
 def run(args: argparse.Namespace) -> int:
@@ -97,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
 
             model = ThermalModel.load(args.model)
         bundle = comparable_source(args, args.source, rth=False)
-        result = diagnose(bundle, model, args.effect, progress=_progress(args.quiet))
+        result = diagnose(bundle, model, args.effect, quiet=args.quiet)
     if args.report:
         page = write_report(result, args.report)
         if not args.json and not args.quiet:

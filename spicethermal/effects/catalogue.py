@@ -59,7 +59,7 @@ class EffectSpec:
     point is; see :mod:`spicethermal.effectfit`).
 
     Their SPICE renderings are the same physics as dialect-neutral behavioural expressions
-    (``+ - * /``, ``EXP``, ``MAX``, ``MIN``, ``PWR``; temperatures in °C):
+    (``+ - * /``, ``EXP``, ``LOG``, ``MAX``, ``MIN``, ``PWR``; temperatures in °C):
     ``spice_resistance_scale(effect, layer, t_layer, t_junction)`` returns the factor on the
     resistance of ladder layer ``layer`` (0 = the one at the junction) given the expressions
     of that layer's temperature and the junction temperature, or ``None`` when the layer is

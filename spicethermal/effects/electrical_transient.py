@@ -24,4 +24,4 @@ SPEC = register(EffectSpec(
                           " the masked span (forms fixed, ringing)"),
      "k_per_w": Param("K/W", 0.0, -1e4, 1e4, "error at the cut per watt cut off (form power)"),
      "ring_hz": Param("Hz", 0.0, 0.0, 1e9, "ringing frequency (form ringing)")},
-    ("fixed", "power", "ringing")))
+    ("fixed", "power", "ringing"), fit="spicethermal.measfit:fit_electrical_transient"))

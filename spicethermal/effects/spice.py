@@ -1,7 +1,8 @@
 """What effect modules need to write their SPICE renderings: numbers in SPICE syntax.
 
-A rendering is a dialect-neutral behavioural expression (``+ - * /``, ``EXP``, ``MAX``,
-``MIN``, ``PWR``) that :mod:`spicethermal.spice` places in the dialect's behavioural element.
+A rendering is a dialect-neutral behavioural expression (``+ - * /``, ``EXP``, ``LOG`` (the
+natural logarithm in ngspice and its PSPICE and LTspice modes), ``MAX``, ``MIN``, ``PWR``) that
+:mod:`spicethermal.spice` places in the dialect's behavioural element.
 """
 
 from __future__ import annotations
