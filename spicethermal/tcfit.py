@@ -2,7 +2,7 @@
 :mod:`spicethermal.tcforward`).
 
 :func:`fit_temperature_coefficient` returns one :class:`~spicethermal.effectfit.EffectFit`
-per form tried; :func:`~spicethermal.effectfit.fit_effect` keeps the default form
+per form tried; :func:`~spicethermal.fitters.fit_effect` keeps the default form
 (``junction``) unless another lowers the BIC by more than
 :data:`~spicethermal.effectfit.FORM_BIC_MARGIN`. Every fit is bounded and scaled (α in 1/mK,
 the capacity slope in 1/mK, the exponent as it is) and starts from two points, the guess
@@ -18,14 +18,10 @@ worse than the linear model it extends.
    :data:`JOINT_BUDGET_S` of CPU time: ``local`` (α), ``power-law`` (exponent and capacity
    slope), and the best inner or outer subset of layers (α; the subset is chosen among all of
    them with the ladder held, within :data:`SUBSET_BUDGET_S`).
-3. Signature: a temperature coefficient changes the *shape* of the cooling curves (every time
-   constant scales with its resistance), while an error of the heating power (a heater whose
-   power sags as it warms, recorded at its nominal value) scales each curve without changing
-   its shape. The linear ladder with one free amplitude per curve is fitted too
-   (:func:`amplitude_only_sse`); when it explains the cooling curves to the noise
-   (:data:`NOISE_SIGMAS`) and better than every form (by BIC, its extra amplitudes counted),
-   the temperature coefficient is not what the data show and every form is reported switched
-   off (``facts["amplitude_only"]``).
+3. The signature against an error of the heating power (a heater whose power sags as it
+   warms, recorded at its nominal value: each cooling curve scaled, its shape unchanged) is
+   not tested here: the diagnosis's consistency rule (:mod:`spicethermal.consistency`) tests
+   it for every device effect.
 """
 
 from __future__ import annotations
@@ -42,16 +38,10 @@ from .effectfit import (
     EffectFit,
     TimeLimitError,
     bounded,
-    calibrated_reading,
     joint_fit,
-    predict,
-    robust_lsq,
     sse,
-    switched_off,
-    transient_offset,
     transient_spans,
     tsp_true,
-    unlimited,
 )
 from .effects import Effect
 from .errors import FitError, SimulationError
@@ -70,10 +60,6 @@ GATE_BIC = 10.0
 JOINT_BUDGET_S = 1.0
 #: CPU time (s) allowed to the search of the layer subset (ladder held).
 SUBSET_BUDGET_S = 2.0
-#: The amplitude-only explanation is complete when its weighted χ² is within this many
-#: standard deviations (√(2N)) of the number of points N: only then can it stand for the
-#: temperature coefficient (a residual it leaves is a shape change it cannot make).
-NOISE_SIGMAS = 3.0
 #: Evaluations allowed to a fit with the ladder held.
 HELD_NFEV = 20
 #: The subsets of layers are searched only when the local form over every layer leaves a
@@ -139,80 +125,6 @@ def local_ratio(ladder: Foster) -> float:
     return float(theta[0] / (r @ mean / r.sum()))
 
 
-def amplitude_only_sse(data: BundleData, ladder: Foster, base: Sequence[Effect],
-                       exclude: dict[str, float] | None) -> tuple[float, int, NDArray]:
-    """Weighted squared error of the cooling curves under the linear ladder (refitted) with a
-    free amplitude on every curve but the lowest-power one (the signature test of the module
-    docstring).
-
-    Parameters
-    ----------
-    data : BundleData
-        The bundle's data sets.
-    ladder : Foster
-        The starting ladder.
-    base : sequence of Effect
-        The other effects (measurement effects are applied).
-    exclude : dict, optional
-        Per curve, the span (s) left out at the start.
-
-    Returns
-    -------
-    tuple
-        ``(sse, n_points, kept)``: ``kept`` concatenates the curves' masks of kept points.
-    """
-    fx = {e.name: e for e in base}
-    tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
-    m = ladder.order
-    keep = [c.t_s >= (exclude or {}).get(c.name, 0.0) for c in data.cooling]
-    ref = data.reference_curve.name
-
-    def fun(x: NDArray) -> NDArray:
-        lad = Foster.from_tau(np.exp(x[:m]), np.exp(x[m:2 * m]))
-        gains = iter(x[2 * m:])
-        parts = []
-        for c, k in zip(data.cooling, keep, strict=True):
-            g = 1.0 if c.name == ref else next(gains)
-            true = c.tref_c + g * c.power_w * lad.cooling(c.t_s)
-            pred = calibrated_reading(true, tsp, data.line_temps_c) + \
-                transient_offset(c.t_s, tr, c.power_w)
-            parts.append((pred - c.tj_c)[k] / data.scale(c.name))
-        return np.concatenate(parts)
-
-    k_gain = len(data.cooling) - 1
-    x0 = np.concatenate([np.log(ladder.r), np.log(ladder.tau), np.ones(k_gain)])
-    big = np.full(2 * m, np.inf)
-    res = robust_lsq(fun, x0, np.concatenate([-big, np.full(k_gain, 0.2)]),
-                     np.concatenate([big, np.full(k_gain, 5.0)]))
-    kept = np.concatenate(keep)
-    return 2 * float(res.cost), int(kept.sum()), kept
-
-
-def kept_sse(data: BundleData, ladder: Foster, effects: Sequence[Effect], kept: NDArray) -> float:
-    """Weighted squared error of the cooling curves' points ``kept`` (as returned by
-    :func:`amplitude_only_sse`) under ``ladder`` and ``effects``.
-
-    Parameters
-    ----------
-    data : BundleData
-        The bundle's data sets.
-    ladder : Foster
-        The ladder.
-    effects : sequence of Effect
-        The effects.
-    kept : ndarray of bool
-        Mask over the concatenated cooling points.
-
-    Returns
-    -------
-    float
-        The weighted sum of squares.
-    """
-    pred = predict(_cooling_only(data), ladder, effects)
-    r = np.concatenate([(pred[c.name] - c.tj_c) / data.scale(c.name) for c in data.cooling])
-    return float(np.sum(r[kept] ** 2))
-
-
 def _effect(form: str, t0: float, **params: float) -> Effect:
     return Effect.create(NAME, form, t0_c=t0, **params)
 
@@ -269,32 +181,10 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster,
     alpha_l = float(np.clip(effs_j[-1].params["alpha_per_k"] * local_ratio(lad_j), -0.015,
                             0.015))
     try:
-        amplitude = amplitude_only_sse(data, f, base, exclude) if len(data.cooling) >= 2 \
-            else None
-    except (FitError, SimulationError, *NUMERICAL_ERRORS):
-        amplitude = None
-    try:
         out += _local_fits(data, names, f, lad_j, base, t0, alpha_l, exclude, facts, err_lin)
     except TimeLimitError:  # the candidate's budget ran out: keep the forms fitted so far
         pass
-    # 3. signature: a shape change, not only an amplitude per curve
-    if amplitude is not None:
-        amp, n_c, kept = amplitude
-        with unlimited():
-            best = min(_bic(n_c, kept_sse(data, fit.ladder, [*base, fit.effect], kept),
-                            fit.n_params) for fit in out)
-        facts["amplitude_only_bic_gain"] = best - _bic(n_c, amp, len(data.cooling) - 1)
-        at_noise = amp <= n_c + NOISE_SIGMAS * math.sqrt(2 * n_c)
-        if at_noise and facts["amplitude_only_bic_gain"] > 0:
-            return [EffectFit(switched_off(NAME, fit.effect.form, data), f, fit.n_params,
-                              {**facts, "amplitude_only": True, "no_gain": True})
-                    for fit in out]
     return out
-
-
-def _cooling_only(data: BundleData) -> BundleData:
-    return BundleData(data.cooling, None, None, data.ambient_c, data.source, data.scales,
-                      data.line_temps_c)
 
 
 def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foster,

@@ -12,9 +12,10 @@ from scipy.optimize import brentq
 
 from spicethermal import spice, tcfit
 from spicethermal.bundle import Bundle
-from spicethermal.effectfit import BundleData, baseline_ladder, fit_effect_forms, sse
+from spicethermal.effectfit import BundleData, baseline_ladder, sse
 from spicethermal.effects import Effect
 from spicethermal.errors import DataFormatError
+from spicethermal.fitters import fit_effect_forms
 from spicethermal.ladder import Cauer, Foster
 from spicethermal.model import Schedule, ThermalModel
 from spicethermal.tcforward import (
@@ -246,11 +247,15 @@ def test_power_law_exponent_is_recovered_from_an_independent_bundle(tmp_path, co
 
 
 def test_heater_sag_is_an_amplitude_not_a_temperature_coefficient(tmp_path):
-    """A heater whose power falls as it warms scales each cooling curve without changing its
-    shape: the linear ladder with one amplitude per curve explains it, so no form is kept."""
-    data, ladder, _ = _data("uncatalogued/heater-sag", tmp_path)
-    fits = fit_effect_forms(data, ladder, TC)
-    assert all(f.facts.get("amplitude_only") and f.facts.get("no_gain") for f in fits)
+    """A heater whose power falls as it warms (the independent generator's uncatalogued case)
+    scales each cooling curve without changing its shape: the diagnosis, with every form of
+    the temperature coefficient available, names nothing and says why."""
+    from spicethermal.diagnose import diagnose
+
+    bundle = case("uncatalogued/heater-sag").record().bundle
+    d = diagnose(bundle)
+    assert d.effects == [] and d.verdict_effect is None
+    assert "scaled per curve" in d.verdict_reason
 
 
 def test_local_fits_never_end_worse_than_the_linear_ladder(tmp_path, monkeypatch):
