@@ -23,7 +23,7 @@ import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from .drive import DriveResult
-    from .spice import Waveforms
+    from .ngspice import Waveforms
 
 
 def pieces(result: DriveResult, n: int) -> list[tuple[float, float, float]]:
@@ -111,9 +111,9 @@ def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True,
         ``ngspice_peak_at_s``, and for a linear model ``predicted_peak_junction_c`` and
         ``join_k`` (0 with one piece).
     """
+    from .ngspice import simulator
     from .progress import bar
     from .pwmsim import workers
-    from .spice import simulator
 
     runs = pieces(result, workers() if n is None else n)
     decks = [result.spice_bench(tstop_s=b, tmax_s=tmax, start_s=a) for a, b, tmax in runs]

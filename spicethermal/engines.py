@@ -10,7 +10,7 @@ Every engine answers the same two questions about a :class:`~spicethermal.model.
 
 :class:`Analytic` is the exact solution of a linear ladder (modal, no time step); it refuses
 a model with device effects. :class:`Spice` runs the exported subcircuit in ngspice through a
-:class:`~spicethermal.spice.Simulator` backend: ``ngspice`` (the ``ngspice -b`` binary) or
+:class:`~spicethermal.ngspice.Simulator` backend: ``ngspice`` (the ``ngspice -b`` binary) or
 ``pyspice`` (libngspice in process); it takes any model. :func:`engine` picks one by name,
 ``auto`` choosing the closed form for a linear model and ngspice with device effects.
 
@@ -36,8 +36,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
     from .model import Schedule, ThermalModel
+    from .ngspice import Simulator
     from .pwm import PwmState
-    from .spice import Simulator
 
 #: Engine names every simulating command accepts (``--engine``).
 NAMES = ("auto", *ENGINES)
@@ -97,13 +97,13 @@ class Spice:
     Parameters
     ----------
     simulator : Simulator
-        :class:`~spicethermal.spice.NgspiceBatch` or :class:`~spicethermal.spice.NgspiceShared`.
+        :class:`~spicethermal.ngspice.NgspiceBatch` or :class:`~spicethermal.ngspice.NgspiceShared`.
     dialect : str
         The ``.lib`` dialect exported and run.
 
     Examples
     --------
-    >>> from spicethermal.spice import NgspiceBatch
+    >>> from spicethermal.ngspice import NgspiceBatch
     >>> Spice(NgspiceBatch()).name
     'ngspice'
     """
@@ -242,7 +242,7 @@ def engine(name: str, model: ThermalModel | None = None, dialect: str = "ngspice
     >>> engine("pyspice").name
     'pyspice'
     """
-    from .spice import simulator
+    from .ngspice import simulator
 
     if name not in NAMES:
         raise DataFormatError(f"--engine {name!r}: expected one of {', '.join(NAMES)}")

@@ -138,7 +138,7 @@ class SpicePwm:
     model : ThermalModel
         Linear or with device effects (exported as behavioural elements).
     engine : ``"ngspice"`` (the ``ngspice -b`` binary) or ``"pyspice"`` (libngspice in
-        process); see :func:`spicethermal.spice.simulator`.
+        process); see :func:`spicethermal.ngspice.simulator`.
     dialect : the ``.lib`` dialect exported and run (PSPICE/LTspice under ngspice's
         compatibility modes).
     topology : ``"foster"`` or ``"cauer"`` (default: the model's own).
@@ -229,7 +229,8 @@ class SpicePwm:
     def run(self, power_w: float, freq_hz: float, duty: float,
             window_s: float = 0.0) -> PwmRun:
         """Simulate one operating point; raise :class:`SimulationError` if it is not periodic."""
-        from .spice import reference_drive, simulator
+        from .ngspice import simulator
+        from .spice import reference_drive
 
         check_drive(freq_hz, duty, power_w, window_s)
         with tempfile.TemporaryDirectory(prefix="spicethermal-pwm-") as tmp:

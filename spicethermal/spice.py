@@ -1,35 +1,36 @@
 """SPICE: render subcircuits and test benches from templates, and run them in ngspice.
 
 Templates live in ``templates/`` (shipped in the wheel as ``spicethermal/_templates``) and are
-rendered with ``StrictUndefined``. Simulators sit behind one small interface,
-:class:`Simulator`: ``run(netlist, vectors, dialect) -> Waveforms``. Two backends run ngspice:
-:class:`NgspiceBatch` (the ``ngspice -b`` binary, which proves a written ``.lib`` works on its
-own) and :class:`NgspiceShared` (PySpice over ``libngspice.so.0``, in process). PSPICE and
-LTspice dialects run under ngspice's compatibility modes (``set ngbehavior=ps`` / ``lt``).
+rendered with ``StrictUndefined``. The decks run in ngspice through :mod:`spicethermal.ngspice`
+(its simulators are re-exported here: :class:`Simulator`, :class:`NgspiceBatch`,
+:class:`NgspiceShared`, :func:`simulator`, :class:`Waveforms`).
 """
 
 from __future__ import annotations
 
 import os
 import re
-import shutil
-import subprocess
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .effects.spice import number
-from .errors import DataFormatError, SimulationError
+from .errors import DataFormatError
 from .files import atomic_write_text
+from .ngspice import (  # the simulators, re-exported: decks rendered here run through them
+    NgspiceBatch,  # noqa: F401
+    NgspiceShared,  # noqa: F401
+    Simulator,  # noqa: F401
+    Waveforms,  # noqa: F401
+    sanitize_comment,
+    simulator,  # noqa: F401
+)
 from .templates import environment, template_dir
 
 if TYPE_CHECKING:  # pragma: no cover
-    from numpy.typing import NDArray
 
     from .effects import Effect
     from .ladder import Cauer, Foster
@@ -39,7 +40,6 @@ DIALECTS = ("ngspice", "pspice", "ltspice")
 TOPOLOGIES = ("foster", "cauer")
 #: Temperature conventions of an exported subcircuit (see :func:`render_lib`).
 TEMPERATURES = ("absolute", "rise")
-COMPAT_MODE = {"ngspice": None, "pspice": "ps", "ltspice": "lt"}
 #: Stages whose resistance is below this fraction of Rth are merged before export.
 NEGLIGIBLE = 1e-9
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
@@ -202,17 +202,6 @@ def simulator_ready(ladder: Foster | Cauer) -> tuple[Foster | Cauer, list[str]]:
     notes = [f"{count} stage{'s' if count > 1 else ''} with R < {NEGLIGIBLE:g} Rth merged into "
              f"a neighbour (Zth changes by < {merged:.3g} K/W)"] if count else []
     return out, notes
-
-
-def sanitize_comment(text: object, limit: int = 200) -> str:
-    """One printable line safe inside a ``*`` comment (no line breaks or control characters).
-
-    >>> sanitize_comment("ok\\n.control\\nshell rm -rf /")
-    'ok .control shell rm -rf /'
-    """
-    line = re.sub(r"[\x00-\x1f\x7f\u2028\u2029\x85]+", " ", str(text))
-    line = re.sub(r"\s+", " ", line).strip()
-    return line[:limit]
 
 
 def _provenance_lines(provenance: Mapping) -> list[str]:
@@ -492,166 +481,3 @@ def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tsto
         power_w=power_w, pulse=pulse, rise_s=rise_s, ic=list(ic), pwl=list(pwl),
         toffset_c=toffset_c, tstop_s=tstop_s,
         tstep_s=tmax_s, tmax_s=tmax_s, reltol=reltol, trtol=trtol)
-
-
-# ------------------------------------------------------------------------------ simulators
-@dataclass(frozen=True)
-class Waveforms:
-    """Simulated vectors against time."""
-
-    t_s: NDArray
-    values: Mapping[str, NDArray]
-
-    def __getitem__(self, key: str) -> NDArray:
-        return self.values[key.lower()]
-
-
-class Simulator(Protocol):
-    """What every simulator backend offers."""
-
-    name: str
-
-    def run(self, netlist: str, vectors: Sequence[str], dialect: str = "ngspice",
-            cwd: str | os.PathLike | None = None) -> Waveforms:
-        """Run the transient in ``netlist`` and return ``vectors`` (e.g. ``["V(TJ)"]``)."""
-
-
-def _spiceinit(dialect: str) -> str:
-    mode = COMPAT_MODE[dialect]
-    return f"set ngbehavior={mode}\n" if mode else ""
-
-
-class NgspiceBatch:
-    """The ``ngspice`` binary in batch mode, in a scratch directory with its own ``.spiceinit``."""
-
-    name = "ngspice"
-
-    def __init__(self, executable: str = "ngspice", timeout_s: float = 600) -> None:
-        self.executable = executable
-        self.timeout_s = timeout_s
-
-    def run(self, netlist: str, vectors: Sequence[str], dialect: str = "ngspice",
-            cwd: str | os.PathLike | None = None) -> Waveforms:
-        exe = shutil.which(self.executable)
-        if exe is None:
-            raise SimulationError(f"{self.executable}: not found; install ngspice (make setup)")
-        with tempfile.TemporaryDirectory(prefix="spicethermal-") as tmp:
-            work = Path(tmp)
-            (work / ".spiceinit").write_text(_spiceinit(dialect))
-            out = work / "out.txt"
-            body = netlist.rstrip()
-            if body.lower().endswith(".end"):
-                body = body[: -len(".end")]
-            deck = (f"{body}\n.control\nset wr_singlescale\nset wr_vecnames\noption numdgt=17\n"
-                    f"run\nwrdata {out} {' '.join(vectors)}\nquit 0\n.endc\n.end\n")
-            (work / "deck.cir").write_text(deck)
-            env = dict(os.environ, HOME=str(work))  # no user ~/.spiceinit interferes
-            try:
-                proc = subprocess.run([exe, "-b", "deck.cir"], cwd=work, env=env, text=True,
-                                      capture_output=True, timeout=self.timeout_s)
-            except subprocess.TimeoutExpired:
-                raise SimulationError(
-                    f"ngspice did not finish within {self.timeout_s:g} s") from None
-            log = proc.stdout + proc.stderr
-            if proc.returncode != 0 or not out.exists() or _ABORTED.search(log):
-                msg = _first_error(log)
-                raise SimulationError(f"ngspice failed (exit {proc.returncode}): {msg}")
-            return _read_wrdata(out, vectors)
-
-
-class NgspiceShared:
-    """ngspice in process through PySpice and ``libngspice.so.0``."""
-
-    name = "pyspice"
-
-    def run(self, netlist: str, vectors: Sequence[str], dialect: str = "ngspice",
-            cwd: str | os.PathLike | None = None) -> Waveforms:
-        ng = _shared_ngspice()
-        ng.destroy()
-        mode = COMPAT_MODE[dialect]
-        ng.exec_command(f"set ngbehavior={mode}" if mode else "unset ngbehavior")
-        body = netlist.rstrip()
-        if not body.lower().endswith(".end"):
-            body += "\n.end"
-        try:
-            ng.load_circuit(body)
-            ng.run()
-        except Exception as exc:  # PySpice raises bare exceptions for ngspice errors
-            raise SimulationError(f"ngspice (shared) failed: {exc}") from None
-        plot = ng.plot(None, ng.last_plot)
-        try:
-            t = np.asarray(plot["time"]._data, dtype=float).real
-            vals = {v.lower(): np.asarray(_vector(plot, v), dtype=float).real for v in vectors}
-        except KeyError as exc:
-            raise SimulationError(f"ngspice (shared): no vector {exc}") from None
-        return Waveforms(t, vals)
-
-
-def _vector(plot, name: str):
-    m = re.fullmatch(r"v\((.+)\)", name.strip(), re.I)
-    key = m.group(1) if m else name
-    for k in (key, key.lower(), name, name.lower()):
-        if k in plot:
-            return plot[k]._data
-    raise KeyError(name)
-
-
-@lru_cache(maxsize=1)
-def _shared_ngspice():
-    import logging
-    import warnings
-
-    logging.getLogger("PySpice").setLevel(logging.ERROR)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        from PySpice.Spice.NgSpice.Shared import NgSpiceShared
-
-        NgSpiceShared.LIBRARY_PATH = "libngspice.so.0"
-        try:
-            return NgSpiceShared.new_instance()
-        except OSError as exc:
-            raise SimulationError(f"libngspice.so.0 cannot be loaded ({exc}); "
-                                  "install libngspice0 (make setup)") from None
-
-
-def simulator(engine: str) -> Simulator:
-    """The backend named ``engine``: ``ngspice`` (binary) or ``pyspice`` (in process).
-
-    Parameters
-    ----------
-    engine : str
-        ``"ngspice"`` (the ``ngspice -b`` binary) or ``"pyspice"`` (libngspice in process).
-
-    Returns
-    -------
-    Simulator
-        An object with ``run(netlist, vectors, dialect)``.
-    """
-    if engine in ("ngspice", "batch"):
-        return NgspiceBatch()
-    if engine in ("pyspice", "shared"):
-        return NgspiceShared()
-    raise DataFormatError(f"engine {engine!r}: expected ngspice or pyspice")
-
-
-_ABORTED = re.compile(r"simulation\(s\) aborted|timestep too small|singular matrix", re.I)
-
-
-def _first_error(text: str) -> str:
-    for line in text.splitlines():
-        if re.search(r"error|fatal|unknown|can't|cannot|too small|singular", line, re.I):
-            return sanitize_comment(line)
-    return sanitize_comment(text.strip().splitlines()[-1] if text.strip() else "no output")
-
-
-def _read_wrdata(path: Path, vectors: Sequence[str]) -> Waveforms:
-    with path.open() as fh:
-        first = fh.readline()
-    if not first.strip():
-        raise SimulationError("ngspice wrote no data")
-    # numpy's C reader on the file itself (a list of lines goes through Python)
-    data = np.loadtxt(path, skiprows=int(first.strip().startswith("time")), ndmin=2)
-    if data.shape[1] != len(vectors) + 1:
-        raise SimulationError(f"ngspice wrote {data.shape[1]} columns, expected "
-                              f"{len(vectors) + 1}")
-    return Waveforms(data[:, 0], {v.lower(): data[:, k + 1] for k, v in enumerate(vectors)})

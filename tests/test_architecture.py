@@ -18,7 +18,6 @@ TOO_LONG = {
     "spicethermal.bench.session",
     "spicethermal.drive",
     "spicethermal.effectfit",
-    "spicethermal.spice",
 }
 
 #: Private names still imported across modules (importer, name), in files being reworked on

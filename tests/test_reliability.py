@@ -330,8 +330,8 @@ def test_a_settle_time_above_the_devices_limit_is_refused_before_heating(tmp_pat
 # ------------------------------------------------------------------------ every writer
 #: Places that write files without spicethermal.files, each with its reason.
 DIRECT_WRITES = {
-    ("spice.py", '(work / ".spiceinit").write_text('): "private temporary directory",
-    ("spice.py", '(work / "deck.cir").write_text('): "private temporary directory",
+    ("ngspice.py", '(work / ".spiceinit").write_text('): "private temporary directory",
+    ("ngspice.py", '(work / "deck.cir").write_text('): "private temporary directory",
     ("pwmsim.py", "lib.write_text("): "private temporary directory",
     ("bundle.py", 'with open(tmp / name, "w"'): "inside Bundle.write's temporary directory",
     ("bench/client.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
