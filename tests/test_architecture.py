@@ -17,7 +17,6 @@ MAX_LINES = 500
 TOO_LONG = {
     "spicethermal.bench.session",
     "spicethermal.drive",
-    "spicethermal.effectfit",
 }
 
 #: Private names still imported across modules (importer, name), in files being reworked on
