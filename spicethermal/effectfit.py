@@ -17,7 +17,8 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
   temperature under PWM); its fit is :mod:`spicethermal.tcfit`;
 * ``phase-change`` (:mod:`spicethermal.pcforward`) on a cooling curve: the nodal network
   with the band's heat capacity at its node, integrated by LSODA with an exact rank-one
-  inverse of the capacity matrix until the node leaves the band, then exact modal steps (< 1 mK from the model's Radau integration);
+  inverse of the capacity matrix until the node leaves the band, then exact modal steps
+  (< 1 mK from the model's Radau integration);
   curves that stay outside the band (:func:`spicethermal.effects.phase_change.band`) use
   the closed form.
   Under PWM the mean is exact (a heat capacity does not change it) and, when the band is
