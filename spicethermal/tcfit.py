@@ -13,8 +13,13 @@ worse than the linear model it extends.
    cooling curve (closed-form forward model, cheap).
 2. The local forms cost a stiff integration per cooling curve and evaluation; they are tried
    only when the junction form is decisively better than the linear ladder
-   (:data:`GATE_BIC`): otherwise the data cannot tell the forms apart. Each is fitted with the
-   junction form's ladder held (one or two parameters), then jointly with the ladder within
+   (:data:`GATE_BIC`), removes a substantial part of its squared error
+   (:data:`GATE_SSE_RATIO`) and does not already reach the noise (when the data sets are
+   weighed by their noise, as in the diagnosis): the local forms refine a temperature
+   coefficient that the junction form already shows to first order; otherwise the data cannot
+   tell the forms apart (and the stiff integrations would cost every bundle seconds). Each is
+   fitted with the junction form's ladder held (one or two parameters), then jointly with the
+   ladder within
    :data:`JOINT_BUDGET_S` of CPU time: ``local`` (α), ``power-law`` (exponent and capacity
    slope), and the best inner or outer subset of layers (α; the subset is chosen among all of
    them with the ladder held, within :data:`SUBSET_BUDGET_S`).
@@ -56,6 +61,9 @@ NAME = "temperature-coefficient"
 #: The local forms are fitted only when the junction form lowers the BIC of the linear ladder
 #: by more than this (otherwise the data cannot tell the forms apart).
 GATE_BIC = 10.0
+#: ... and only when it divides the linear ladder's squared error by at least this (an RMS
+#: ratio of 1.14, the diagnosis's own bar for an improvement).
+GATE_SSE_RATIO = 1.3
 #: CPU time (s) allowed to each local form's joint refit with the ladder.
 JOINT_BUDGET_S = 1.0
 #: CPU time (s) allowed to the search of the layer subset (ladder held).
@@ -176,7 +184,9 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster,
     # 2. the local forms, when the junction form shows an effect at all
     n = max(sum(data.measured(d).size for d in data.datasets), 2)
     err_lin, err_j = sse(data, f, base), sse(data, lad_j, effs_j)
-    if _bic(n, err_lin, 0) - _bic(n, err_j, 1) < GATE_BIC:
+    if _bic(n, err_lin, 0) - _bic(n, err_j, 1) < GATE_BIC or err_lin < GATE_SSE_RATIO * err_j:
+        return out
+    if data.scales and err_j <= n + 3.0 * math.sqrt(2.0 * n):  # χ² at the noise already
         return out
     alpha_l = float(np.clip(effs_j[-1].params["alpha_per_k"] * local_ratio(lad_j), -0.015,
                             0.015))

@@ -262,6 +262,7 @@ def test_local_fits_never_end_worse_than_the_linear_ladder(tmp_path, monkeypatch
     """Forced onto a clean bundle (the gate lifted), every form still fits at least as well
     as the linear ladder it extends (its nested start)."""
     monkeypatch.setattr(tcfit, "GATE_BIC", -math.inf)
+    monkeypatch.setattr(tcfit, "GATE_SSE_RATIO", 0.0)
     data, ladder, _ = _data("clean/mosfet-2", tmp_path)
     fits = tcfit.fit_temperature_coefficient(data, ladder)
     assert {f.effect.form for f in fits} >= {"junction", "local", "power-law"}
