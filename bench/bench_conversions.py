@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from spicethermal.ladder import Cauer, Foster, round_trip_error
+from spicethermal.core.ladder import Cauer, Foster, round_trip_error
 
 ORDERS = (20, 50, 100, 200, 1000)
 

@@ -4,7 +4,7 @@ Plain script (not a test): ``.venv/bin/python bench/bench_diagnose.py [SEEDS] [N
 Times are wall-clock and CPU (the process's own: what a busy shared machine does not inflate).
 The independent validation set (other forms, devices, pairs, uncatalogued effects) is scored by
 ``bench/bench_validation.py``.
-Bundles come from :mod:`spicethermal.scenarios` with ``exact=True``: the device effects are
+Bundles come from :mod:`spicethermal.analysis.scenarios` with ``exact=True``: the device effects are
 simulated by the :class:`~spicethermal.model.ThermalModel` integration (Radau, shooting), not
 by the fast solutions the fits use, so the study is not an inverse crime.
 """
@@ -16,8 +16,8 @@ import sys
 import time
 from pathlib import Path
 
-from spicethermal.diagnose import diagnose, diagnose_table
-from spicethermal.scenarios import SCENARIOS, expected_effect, scenario_bundle
+from spicethermal.analysis.diagnose import diagnose, diagnose_table
+from spicethermal.analysis.scenarios import SCENARIOS, expected_effect, scenario_bundle
 
 ROOT = Path(__file__).resolve().parent.parent
 TABLE2 = ROOT / "spicethermal" / "data" / "actuator_table2.csv"

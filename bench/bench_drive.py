@@ -12,9 +12,9 @@ from __future__ import annotations
 import shutil
 import time
 
-from spicethermal.drive import optimize_drive
-from spicethermal.drivecheck import verify
-from spicethermal.ladder import Foster
+from spicethermal.core.ladder import Foster
+from spicethermal.drive.check import verify
+from spicethermal.drive.optimize import optimize_drive
 from spicethermal.model import ThermalModel
 
 R = (6.0, 20.0, 50.0, 70.0)

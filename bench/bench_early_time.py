@@ -1,14 +1,15 @@
-"""Accuracy study of the early-time correction (:meth:`spicethermal.curves.ZthCurve.from_cooling`).
+"""Accuracy study of the early-time correction
+(:meth:`spicethermal.identify.curves.ZthCurve.from_cooling`).
 
 Run either way (prints the numbers)::
 
     .venv/bin/python bench/bench_early_time.py
     .venv/bin/python -m pytest -q -s -m benchmark bench/bench_early_time.py
 
-Cases: the MUR880E-like ladder (:func:`spicethermal.synthetic.mur880e_foster`, 10 W), sampled
+Cases: the MUR880E-like ladder (:func:`spicethermal.core.synthetic.mur880e_foster`, 10 W), sampled
 every 1 us to 1 ms then 400 log-spaced samples to 30 s, the junction temperature at the cut
 *not* given (extrapolated T0), an electrical transient of length 0, 30, 100, 300 us
-(:func:`~spicethermal.synthetic.synthetic_cooling`), white noise 0, 5, 20 mK, 10 seeds each.
+(:func:`~spicethermal.core.synthetic.synthetic_cooling`), white noise 0, 5, 20 mK, 10 seeds each.
 
 Reported per setting (worst over seeds): whether the transient was detected, the masked span,
 the Rth error, the error of r(t) at 10 us and 100 us (the paper's worst rows of Table 1:
@@ -35,8 +36,8 @@ try:  # the same file serves as a pytest benchmark module and as a plain script
 except ImportError:  # pragma: no cover
     pytest = None
 
-from spicethermal.curves import ZthCurve
-from spicethermal.synthetic import mur880e_foster, synthetic_cooling
+from spicethermal.core.synthetic import mur880e_foster, synthetic_cooling
+from spicethermal.identify.curves import ZthCurve
 
 T = np.unique(np.concatenate([np.arange(1, 1000) * 1e-6, np.geomspace(1e-3, 30, 400)]))
 

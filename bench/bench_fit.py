@@ -1,4 +1,5 @@
-"""Accuracy and speed study of the automatic ladder fit (:func:`spicethermal.fit.fit_foster`).
+"""Accuracy and speed study of the automatic ladder fit
+(:func:`spicethermal.fit.ladder.fit_foster`).
 
 Run either way (prints the numbers)::
 
@@ -38,8 +39,8 @@ try:  # the same file serves as a pytest benchmark module and as a plain script
 except ImportError:  # pragma: no cover
     pytest = None
 
-from spicethermal.fit import fit_foster
-from spicethermal.ladder import Foster
+from spicethermal.core.ladder import Foster
+from spicethermal.fit.ladder import fit_foster
 
 NOISE_OF_RTH = 1e-3
 MIN_STAGE_OF_RTH = 0.03

@@ -16,9 +16,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from conftest import ACTUATOR_R, ACTUATOR_TAU, ramp_response  # noqa: E402
 from test_pwm import brute_force  # noqa: E402
 
-from spicethermal import pwm, spice  # noqa: E402
-from spicethermal.ladder import Foster  # noqa: E402
+from spicethermal.core.ladder import Foster  # noqa: E402
+from spicethermal.engines import pwm
 from spicethermal.model import ThermalModel  # noqa: E402
+from spicethermal.spice import lib as spice  # noqa: E402
 
 
 def round_trip(cases_per_order: int = 5) -> None:

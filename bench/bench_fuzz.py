@@ -24,10 +24,10 @@ from pathlib import Path
 
 import pytest
 
-from spicethermal.bundle import Bundle
+from spicethermal.io.bundle import Bundle
 
 ROOT = Path(__file__).resolve().parent.parent
-CLI = [sys.executable, "-m", "spicethermal.cli"]
+CLI = [sys.executable, "-m", "spicethermal.cli.main"]
 QUICK = ["--powers", "0.094", "--t-last", "5", "--settle-s", "20", "-q"]
 
 

@@ -7,7 +7,7 @@ Run (prints the numbers)::
 Model: the 4-stage actuator ladder of the tests (Rth = 146 K/W, τ from 100 µs to 30 s);
 grid: 0.5, 1, 3, 5, 10, 25 kHz × duty 0.2, 0.5, 0.8 at 0.094 W, sample window 100 µs.
 
-*Our way* (:class:`spicethermal.pwmsim.SpicePwm`): each point starts at the periodic steady
+*Our way* (:class:`spicethermal.engines.pwmsim.SpicePwm`): each point starts at the periodic steady
 state (``.ic`` from the closed form), runs 3 periods plus the sample window, and checks that
 the last period repeats the first. Timed for both backends (``ngspice -b`` and PySpice), with
 the worst difference from the closed form.
@@ -15,8 +15,8 @@ the worst difference from the closed form.
 *Naive way*: the same subcircuit under the same PWM source from a cold start (all nodes at the
 reference) until the peak is within ``TOL_K`` of the periodic steady state — the same accuracy
 bar the fast runs are tested to; it needs ``k`` periods, k from the exact envelope
-(:func:`spicethermal.pwm.envelope`), ~ τmax · ln(A/tol) ≈ 5-6 τmax. Running that (150-170 s of
-simulated time, up to four million periods) is far too long, so it is extrapolated:
+(:func:`spicethermal.engines.pwm.envelope`), ~ τmax · ln(A/tol) ≈ 5-6 τmax. Running that (150-170 s
+of simulated time, up to four million periods) is far too long, so it is extrapolated:
 time(k) = time(n1) + (k − n1) · cost per period, the cost per period from the difference of
 cold starts of n1 = 50 and 250 periods at every point (start-up excluded). A lower bound
 charges every period the cheapest cost measured (a long PULSE run at 1 kHz, linear regime).
@@ -34,11 +34,11 @@ try:  # the same file serves as a plain script and as a pytest benchmark module
 except ImportError:  # pragma: no cover
     pytest = None
 
-from spicethermal.ladder import Foster
+from spicethermal.core.ladder import Foster
+from spicethermal.engines.pwm import envelope
+from spicethermal.engines.pwmsim import SUBCKT, SpicePwm, pwm_waveform
 from spicethermal.model import ThermalModel
-from spicethermal.pwm import envelope
-from spicethermal.pwmsim import SUBCKT, SpicePwm, pwm_waveform
-from spicethermal.spice import NgspiceBatch, Pulse, render_bench
+from spicethermal.spice.lib import NgspiceBatch, Pulse, render_bench
 
 R_K_PER_W = (6.0, 20.0, 50.0, 70.0)
 TAU_S = (1e-4, 5e-3, 0.4, 30.0)

@@ -32,7 +32,7 @@ except ImportError:  # pragma: no cover
     pytest = None
 
 from spicethermal.data import path
-from spicethermal.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
 
 PYRTH_RTH = {"dry": 13.667, "tim": 5.977}
 PYRTH_WINDOW = "4.6e-4,1.35e-3"
@@ -46,7 +46,7 @@ def _bundles(root: Path) -> list[str]:
 def _structure(bundles: list[str], *extra: str) -> tuple[list[dict], float, float]:
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "spicethermal.cli", "structure", *bundles,
+    proc = subprocess.run([sys.executable, "-m", "spicethermal.cli.main", "structure", *bundles,
                            "--json", *extra], capture_output=True, text=True, check=True)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -33,11 +33,11 @@ try:  # the same file serves as a pytest benchmark module and as a plain script
 except ImportError:  # pragma: no cover
     pytest = None
 
-from spicethermal.curves import ZthCurve
-from spicethermal.ladder import Cauer
-from spicethermal.spectrum import time_constant_spectrum
-from spicethermal.structure import StructureFunction, separation, structure_function
-from spicethermal.synthetic import synthetic_cooling
+from spicethermal.core.ladder import Cauer
+from spicethermal.core.synthetic import synthetic_cooling
+from spicethermal.identify.curves import ZthCurve
+from spicethermal.identify.spectrum import time_constant_spectrum
+from spicethermal.identify.structure import StructureFunction, separation, structure_function
 
 DATA = Path(__file__).resolve().parents[1] / "spicethermal" / "data" / "pyrth_mosfet"
 LAYERS = Cauer([0.1, 0.3, 0.5, 1.0], [0.001, 0.1, 1.0, 30.0])
@@ -139,7 +139,7 @@ def differential(n_seeds: int = 5) -> float:
 
 
 def real_data() -> dict[str, float]:
-    from spicethermal.sources import read_source
+    from spicethermal.io.sources import read_source
 
     if not DATA.is_dir():  # pragma: no cover
         print("real data: not found")

@@ -20,16 +20,16 @@ from unittest import mock
 import numpy as np
 from bench_conversions import best_of  # same folder: run as a script or by bench/table.py
 
-from spicethermal import pwmsim
+from spicethermal.core.ladder import Foster
 from spicethermal.data import path as data_path
-from spicethermal.ladder import Foster
+from spicethermal.engines import pwmsim
+from spicethermal.engines.pwmsim import SpicePwm
 from spicethermal.model import ThermalModel
-from spicethermal.pwmsim import SpicePwm
 
 REPEAT = 2
 ACTUATOR = Foster.from_tau((6.0, 20.0, 50.0, 70.0), (1e-4, 5e-3, 0.4, 30.0))
 GRID = [(f, d) for f in (500.0, 1e3, 3e3, 5e3, 10e3, 25e3) for d in (0.2, 0.5, 0.8)]
-CLI = [sys.executable, "-m", "spicethermal.cli"]
+CLI = [sys.executable, "-m", "spicethermal.cli.main"]
 
 
 def best(fn) -> float:

@@ -2,7 +2,7 @@
 
 One cooling curve (200 points, 1 µs to the bench's last time) of each validation device with
 a strong ``local`` and ``power-law`` form: the CPU time of
-:func:`spicethermal.tcforward.local_cooling_rise` (BDF, analytic Jacobian) and its largest
+:func:`spicethermal.fit.tcforward.local_cooling_rise` (BDF, analytic Jacobian) and its largest
 difference from the independent validation network (:mod:`spicethermal.validation.network`,
 integrated at tight tolerance).
 
@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
+from spicethermal.core.ladder import Cauer
 from spicethermal.effects import Effect
-from spicethermal.ladder import Cauer
-from spicethermal.tcforward import local_cooling_rise
+from spicethermal.fit.tcforward import local_cooling_rise
 from spicethermal.validation.cases import DEVICES
 from spicethermal.validation.network import ResistanceLaw
 

@@ -9,7 +9,7 @@ Plain script (not a test)::
 Phase 1 simulates every case of :func:`spicethermal.validation.cases.catalogue` (independent
 generator, fixed seeds) into ``OUT/bundles/<case>/`` with its detectability mark (cached: a
 bundle is regenerated only when its case changes, or with ``--fresh``). Phase 2 runs
-:func:`spicethermal.diagnose.diagnose` (the Python API, default baseline, every catalogued
+:func:`spicethermal.analysis.diagnose.diagnose` (the Python API, default baseline, every catalogued
 effect) on every bundle, each in its own process, at most ``--workers`` at a time, killed
 after ``--timeout`` seconds of CPU time (a hang) — a crash and a hang both count as
 failures. The summary
@@ -79,8 +79,8 @@ def _generate(args: tuple[Case, str, bool]) -> tuple[str, dict]:
 
 def _diagnose(folder: str, conn) -> None:
     try:
-        from spicethermal.bundle import Bundle
-        from spicethermal.diagnose import diagnose
+        from spicethermal.analysis.diagnose import diagnose
+        from spicethermal.io.bundle import Bundle
 
         bundle = Bundle.read(folder)
         t0, c0 = time.perf_counter(), time.process_time()

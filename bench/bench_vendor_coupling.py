@@ -20,9 +20,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from test_spice import coupled_error, ladder_branches  # noqa: E402
 from test_vendor import NETWORKS, VENDOR, branches, vendor_zth  # noqa: E402
 
-from spicethermal import spice  # noqa: E402
-from spicethermal.fit import fit_model  # noqa: E402
-from spicethermal.vendor import import_model  # noqa: E402
+from spicethermal.fit.ladder import fit_model  # noqa: E402
+from spicethermal.io.vendor import import_model  # noqa: E402
+from spicethermal.spice import lib as spice  # noqa: E402
 
 
 def main() -> None:

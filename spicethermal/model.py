@@ -19,12 +19,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .core.errors import DataFormatError, SimulationError
+from .core.ladder import Cauer, Foster
+from .core.network import Network, Schedule, Trajectory, linear_response
 from .effects import DEVICE, Effect
-from .errors import DataFormatError, SimulationError
-from .files import atomic_write_text, dumps_json, read_json
-from .ladder import Cauer, Foster
-from .network import Network, Schedule, Trajectory, linear_response
-from .pwm import PwmState, check_drive, steady_state
+from .engines.pwm import PwmState, check_drive, steady_state
+from .io.files import atomic_write_text, dumps_json, read_json
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray

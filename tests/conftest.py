@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal.ladder import Foster
+from spicethermal.core.ladder import Foster
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Data shipped in the repository (paper tables, real MOSFET transients, with their sources).

@@ -16,8 +16,8 @@ import pytest
 from spicethermal.batch.device import COLUMNS, Options, Source, characterize
 from spicethermal.batch.population import device_bundle, simulate_population, write_population
 from spicethermal.batch.runner import cluster_client, find_sources, load_results, run_batch
-from spicethermal.cli import main
-from spicethermal.errors import DataFormatError
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
 from spicethermal.model import ThermalModel
 
 pytest.importorskip("distributed")
@@ -196,7 +196,7 @@ def test_command_end_to_end_on_a_simulated_population(tmp_path, capsys):
     assert [(p["freq_hz"], p["duty"]) for p in peaks] == [("1000.0", "0.2"), ("1000.0", "0.8")]
     assert all(float(p["peak_p50_k"]) <= float(p["peak_p90_k"]) <= float(p["peak_max_k"])
                for p in peaks)
-    from spicethermal.report import figure_is_nontrivial
+    from spicethermal.report.html import figure_is_nontrivial
 
     page = (out / "index.html").read_text()
     assert planted[0] in page and "larger outer resistance" in page

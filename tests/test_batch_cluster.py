@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from spicethermal.batch.population import write_population
-from spicethermal.cli import main
+from spicethermal.cli.main import main
 
 pytest.importorskip("distributed")
 DASK = Path(sys.executable).with_name("dask")
@@ -90,7 +90,7 @@ def test_unreachable_scheduler_is_one_line(tmp_path, capsys):
 def test_an_interrupted_batch_resumes_where_it_stopped(tmp_path):
     write_population(tmp_path / "pop", 8, seed=6, defects=1)
     out = tmp_path / "out"
-    argv = [sys.executable, "-m", "spicethermal.cli", "batch", str(tmp_path / "pop"), "-o",
+    argv = [sys.executable, "-m", "spicethermal.cli.main", "batch", str(tmp_path / "pop"), "-o",
             str(out), "--workers", "1", "--effect", "electrical-transient", "-q"]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

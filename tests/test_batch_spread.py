@@ -24,8 +24,8 @@ from spicethermal.batch.spread import (
     pwm_peaks,
     robust_z,
 )
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
 
 
 def test_robust_z_is_the_median_and_mad_score():

@@ -14,10 +14,10 @@ from spicethermal.bench import client as bc
 from spicethermal.bench import protocol as p
 from spicethermal.bench.devices import preset
 from spicethermal.bench.session import run_bench
-from spicethermal.bundle import Bundle
-from spicethermal.cli import main
-from spicethermal.errors import DataFormatError, InstrumentError
-from spicethermal.pwm import steady_state
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError, InstrumentError
+from spicethermal.engines.pwm import steady_state
+from spicethermal.io.bundle import Bundle
 
 SMALL = dict(calibration_c=(25.0, 45.0, 65.0), calibration_settle_s=100.0,
              cooling_powers_w=(0.094, 0.3), cooling_t_last_s=30.0, settle_s=90.0,
@@ -293,8 +293,8 @@ def test_cli_bench_calibrate_and_errors(tmp_path, capsys):
 
 
 def test_the_fitter_turns_the_bundle_back_into_the_plants_ladder(full_run):
-    from spicethermal.curves import ZthCurve
-    from spicethermal.fit import fit_model
+    from spicethermal.fit.ladder import fit_model
+    from spicethermal.identify.curves import ZthCurve
 
     truth = preset("actuator").foster
     for curve in ZthCurve.from_bundle(Bundle.read(full_run)):
@@ -370,8 +370,8 @@ def test_a_clipped_tsp_reading_stops_the_run(tmp_path):
 
 
 def test_mur880e_bench_gives_back_the_datasheet_impedance(tmp_path):
-    from spicethermal.curves import ZthCurve
-    from spicethermal.fit import fit_model
+    from spicethermal.fit.ladder import fit_model
+    from spicethermal.identify.curves import ZthCurve
 
     out = run_bench("sim://mur880e?seed=2", tmp_path / "m", actions=("calibrate", "cooling"),
                        calibration_c=(25.0, 50.0, 75.0), cooling_powers_w=(10.0,))

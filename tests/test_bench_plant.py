@@ -10,10 +10,10 @@ from spicethermal.bench import protocol as p
 from spicethermal.bench.devices import preset
 from spicethermal.bench.plant import Frontend, Plant
 from spicethermal.bench.simulator import SimulatedDevice, parse_effects
+from spicethermal.core.errors import InstrumentError
 from spicethermal.effects import Effect
-from spicethermal.errors import InstrumentError
+from spicethermal.engines.pwm import steady_state
 from spicethermal.model import Schedule, ThermalModel
-from spicethermal.pwm import steady_state
 
 
 def test_actuator_preset_is_the_papers_device():

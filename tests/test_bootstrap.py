@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from spicethermal.bootstrap import Band, fit_bootstrap, resamples
-from spicethermal.bundle import format_columns
-from spicethermal.cli import main
-from spicethermal.errors import DataFormatError
-from spicethermal.fit import fit_foster
-from spicethermal.ladder import Foster
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Foster
+from spicethermal.fit.bootstrap import Band, fit_bootstrap, resamples
+from spicethermal.fit.ladder import fit_foster
+from spicethermal.io.bundle import format_columns
 
 TRUE = Foster.from_tau([0.3, 1.0, 2.0], [1e-3, 3e-2, 1.0])
 T = np.logspace(-4, 1.3, 80)

@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal import bundle as bmod
-from spicethermal.bundle import (
+from spicethermal.core.errors import DataFormatError
+from spicethermal.io import bundle as bmod
+from spicethermal.io.bundle import (
     Bundle,
     CalibrationTable,
     CoolingTable,
@@ -18,7 +19,6 @@ from spicethermal.bundle import (
     ZthTable,
     read_columns,
 )
-from spicethermal.errors import DataFormatError
 
 
 def full_bundle() -> Bundle:
@@ -280,7 +280,7 @@ def _kind_bundle(tmp_path: Path, calibration: dict, fmt: str = V2) -> Path:
 
 
 def test_k_factor_bundle_converts_and_round_trips(tmp_path: Path) -> None:
-    from spicethermal.calibration import KFactor
+    from spicethermal.identify.calibration import KFactor
 
     d = _kind_bundle(tmp_path, {"kind": "k-factor", "k_mv_per_k": -2.0, "v_ref_v": 0.6,
                                 "t_ref_c": 25.0})

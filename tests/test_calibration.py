@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spicethermal.calibration import Calibration
-from spicethermal.errors import DataFormatError
+from spicethermal.core.errors import DataFormatError
+from spicethermal.identify.calibration import Calibration
 
 T = np.array([20.0, 40.0, 60.0, 80.0, 100.0, 120.0])
 
@@ -97,7 +97,7 @@ def test_bad_calibration(temp, volt, degree, words) -> None:
 
 # ------------------------------------------------------------------ K-factor and polynomial
 def test_k_factor_is_the_line_through_its_anchor() -> None:
-    from spicethermal.calibration import KFactor, anchored
+    from spicethermal.identify.calibration import KFactor, anchored
 
     k = KFactor.from_mv_per_k(-2.5, v_ref_v=0.62, t_ref_c=20.0)
     t = np.array([-10.0, 20.0, 75.5])
@@ -118,7 +118,7 @@ def test_k_factor_is_the_line_through_its_anchor() -> None:
     ({"k_v_per_k": -2e-3, "v_ref_v": 0.6, "t_ref_c": -300.0}, "absolute zero"),
 ])
 def test_bad_k_factor_names_the_parameter(kwargs, words) -> None:
-    from spicethermal.calibration import KFactor
+    from spicethermal.identify.calibration import KFactor
 
     with pytest.raises(DataFormatError, match=words):
         KFactor(**kwargs)

@@ -6,8 +6,8 @@ import argparse
 
 import pytest
 
-from spicethermal.cli import main
-from spicethermal.commands._types import count, frequency, listed, number, parse_si
+from spicethermal.cli.commands._types import count, frequency, listed, number, parse_si
+from spicethermal.cli.main import main
 
 
 @pytest.mark.parametrize("text, value", [

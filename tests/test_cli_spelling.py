@@ -12,7 +12,7 @@ The rules (each failure message says what to rename):
    ``-o/--output``).
 6. ``--json`` takes no value: it prints the machine-readable document.
 
-Old spellings stay accepted as hidden aliases (:func:`spicethermal.commands._types.add_option`,
+Old spellings stay accepted as hidden aliases (:func:`spicethermal.cli.commands._types.add_option`,
 ``old=(...)``); the rules apply to the spellings ``--help`` shows.
 """
 
@@ -23,8 +23,8 @@ import re
 
 import pytest
 
-from spicethermal.cli import build_parser
-from spicethermal.clidoc import commands
+from spicethermal.cli.clidoc import commands
+from spicethermal.cli.main import build_parser
 
 RENAMED = {"--out": "-o/--output", "--window-s": "--window", "--f-pwm": "--freq",
            "--tref": "--ambient", "--settle-s": "--settle", "--fig": "--plot",

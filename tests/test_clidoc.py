@@ -5,15 +5,15 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from spicethermal.cli import build_parser
-from spicethermal.clidoc import cli_markdown, commands
+from spicethermal.cli.clidoc import cli_markdown, commands
+from spicethermal.cli.main import build_parser
 
 CLI_MD = Path(__file__).resolve().parent.parent / "docs" / "cli.md"
 
 
 def test_cli_md_is_up_to_date():
     assert CLI_MD.read_text(encoding="utf-8") == cli_markdown(), (
-        "docs/cli.md is out of date: run .venv/bin/python -m spicethermal.clidoc > docs/cli.md")
+        "docs/cli.md is out of date: run .venv/bin/python -m spicethermal.cli.clidoc > docs/cli.md")
 
 
 def test_every_command_and_option_is_documented():

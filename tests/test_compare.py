@@ -10,9 +10,7 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
-from spicethermal.cli import main
-from spicethermal.compare import (
+from spicethermal.analysis.compare import (
     COMPARISON_FORMAT,
     Comparison,
     ComparisonPoint,
@@ -20,8 +18,10 @@ from spicethermal.compare import (
     compare_pwm,
     cooling_rise_k,
 )
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
 from spicethermal.effects import Effect
-from spicethermal.errors import DataFormatError
+from spicethermal.io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
 from spicethermal.model import ThermalModel
 
 FREQS = (500.0, 1e3, 3e3, 5e3, 10e3, 25e3)
@@ -258,7 +258,7 @@ def test_compare_command_bad_files(model, bundle_dir, tmp_path, capsys):
 
 # ------------------------------------------------------------------------------ figures
 def test_table2_figures(model, bundle_dir, tmp_path):
-    from spicethermal.plots import fig_table2, plot_table2, plot_table2_heatmap
+    from spicethermal.viz.plots import fig_table2, plot_table2, plot_table2_heatmap
 
     b = Bundle.read(bundle_dir)
     lad = model.ladder

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spicethermal.bundle import Bundle, CoolingTable
-from spicethermal.diagnose import diagnose
-from spicethermal.ladder import Foster
-from spicethermal.scenarios import ACTUATOR_R, ACTUATOR_TAU, scenario_bundle
+from spicethermal.analysis.diagnose import diagnose
+from spicethermal.analysis.scenarios import ACTUATOR_R, ACTUATOR_TAU, scenario_bundle
+from spicethermal.core.ladder import Foster
+from spicethermal.io.bundle import Bundle, CoolingTable
 
 T = 10.0 ** (np.arange(-50, 21) / 10)  # 10 µs ... 100 s
 

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, ZthTable
-from spicethermal.curves import ZthCurve, detect_transient, log_grid
-from spicethermal.errors import DataFormatError
-from spicethermal.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3ster
-from spicethermal.ladder import Foster
-from spicethermal.synthetic import mur880e_foster, synthetic_cooling
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Foster
+from spicethermal.core.synthetic import mur880e_foster, synthetic_cooling
+from spicethermal.identify.curves import ZthCurve, detect_transient, log_grid
+from spicethermal.io.bundle import Bundle, CalibrationTable, CoolingTable, ZthTable
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3ster
 
 PYRTH = DATA / "pyrth_mosfet"
 

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from spicethermal.demo import run_demo
+from spicethermal.analysis.demo import run_demo
 from spicethermal.model import ThermalModel
-from spicethermal.report import SECTION_IDS, figure_is_nontrivial
+from spicethermal.report.html import SECTION_IDS, figure_is_nontrivial
 
 #: A unit at the end of an axis label or a table header: ``(K)``, ``(K/W)``, ``(°C)``, ``(%)``,
 #: ``(1)`` for a ratio, with an SI prefix where it applies.
@@ -219,6 +219,6 @@ def test_report_renders_in_headless_chromium(demo, tmp_path):
 
 
 def test_demo_command_help_names_the_report():
-    from spicethermal.commands import demo as command
+    from spicethermal.cli.commands import demo as command
 
     assert "report" in command.HELP and Path(command.__file__).exists()

@@ -10,10 +10,8 @@ import json
 import numpy as np
 import pytest
 
-from spicethermal.bundle import Bundle
-from spicethermal.cli import main
-from spicethermal.compare import compare
-from spicethermal.diagnose import (
+from spicethermal.analysis.compare import compare
+from spicethermal.analysis.diagnose import (
     DIAGNOSIS_FORMAT,
     MIN_IMPROVEMENT,
     diagnose,
@@ -21,9 +19,11 @@ from spicethermal.diagnose import (
     localise,
     runs_z,
 )
+from spicethermal.analysis.scenarios import SCENARIOS, expected_effect, scenario_bundle
+from spicethermal.cli.main import main
 from spicethermal.effects import known_names
+from spicethermal.io.bundle import Bundle
 from spicethermal.model import ThermalModel
-from spicethermal.scenarios import SCENARIOS, expected_effect, scenario_bundle
 
 SEEDS = (0, 1)
 CATALOGUED = [s for s in SCENARIOS if expected_effect(s) is not None]
@@ -161,10 +161,10 @@ def test_fit_effect_then_compare_shows_the_error_fall(tmp_path, capsys):
 def test_residuals_agree_with_compare_for_measurement_effects():
     """The diagnosis' fast evaluator and ``compare`` (analytic engine) give the same residuals
     for a linear ladder with every measurement effect."""
-    from spicethermal.diagnose import comparison_of
-    from spicethermal.effectfit import BundleData
+    from spicethermal.analysis.diagnose import comparison_of
+    from spicethermal.analysis.scenarios import actuator
     from spicethermal.effects import Effect
-    from spicethermal.scenarios import actuator
+    from spicethermal.fit.effectfit import BundleData
 
     b = scenario_bundle("clean", seed=2)
     effects = (Effect.create("sample-window", window_s=8e-5),
@@ -191,8 +191,8 @@ def test_two_effects_are_named_in_turn_and_the_error_falls_each_time():
     electrical transient: step 1 names one, step 2 the other; the JSON lists both."""
     from dataclasses import replace
 
-    from spicethermal.effectfit import transient_offset
     from spicethermal.effects import Effect
+    from spicethermal.fit.effectfit import transient_offset
 
     b = scenario_bundle("sample-window", seed=4)
     tr = Effect.create("electrical-transient", amplitude_k=-4.0, masked_s=2e-4)

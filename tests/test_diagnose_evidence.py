@@ -10,12 +10,17 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from spicethermal.compare import Comparison, ComparisonPoint
-from spicethermal.diagnose import MIN_EXPLAINED, MIN_IMPROVEMENT, evidence, explained_fraction
-from spicethermal.effectfit import BundleData, EffectFit
+from spicethermal.analysis.compare import Comparison, ComparisonPoint
+from spicethermal.analysis.diagnose import (
+    MIN_EXPLAINED,
+    MIN_IMPROVEMENT,
+    evidence,
+    explained_fraction,
+)
+from spicethermal.analysis.scenarios import scenario_bundle
+from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect
-from spicethermal.ladder import Foster
-from spicethermal.scenarios import scenario_bundle
+from spicethermal.fit.effectfit import BundleData, EffectFit
 
 NOISE = {"cooling_1": 0.02, "cooling_2": 0.02, "pwm": 0.02, "calibration": 0.02}
 #: A number written in scientific notation: never in a sentence.

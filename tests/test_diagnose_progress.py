@@ -5,8 +5,8 @@ from __future__ import annotations
 import io
 import sys
 
-from spicethermal.diagnose import diagnose
-from spicethermal.scenarios import scenario_bundle
+from spicethermal.analysis.diagnose import diagnose
+from spicethermal.analysis.scenarios import scenario_bundle
 
 
 class _Terminal(io.StringIO):

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal.bundle import format_columns
-from spicethermal.cli import main
-from spicethermal.diagnose import DIAGNOSIS_FORMAT, diagnose_table
-from spicethermal.pwm import steady_state
-from spicethermal.scenarios import DUTIES, FREQS_HZ, actuator
+from spicethermal.analysis.diagnose import DIAGNOSIS_FORMAT, diagnose_table
+from spicethermal.analysis.scenarios import DUTIES, FREQS_HZ, actuator
+from spicethermal.cli.main import main
+from spicethermal.engines.pwm import steady_state
+from spicethermal.io.bundle import format_columns
 
 TABLE2 = DATA / "actuator_table2.csv"
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from spicethermal.spice import NgspiceBatch
+from spicethermal.spice.lib import NgspiceBatch
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]

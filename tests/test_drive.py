@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from spicethermal import cli
-from spicethermal.drive import _Dynamics, _switched_peaks, optimize_drive
+from spicethermal.cli import main as cli
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Foster
+from spicethermal.drive.optimize import _Dynamics, _switched_peaks, optimize_drive
 from spicethermal.effects import Effect
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Foster
+from spicethermal.engines.pwm import envelope, steady_state
 from spicethermal.model import Schedule, ThermalModel
-from spicethermal.pwm import envelope, steady_state
 
 #: The paper-like actuator of the issue: Rth 146 K/W.
 DEMO_R = (6.0, 20.0, 50.0, 70.0)
@@ -176,7 +176,7 @@ def test_nonlinear_model_honours_device_effects(nonlinear_drive):
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 def test_ngspice_nonlinear_drive_respects_t_max(nonlinear_drive):
     """Behavioural TC resistors and phase-change capacitor, switched drive in ngspice."""
-    from spicethermal.spice import NgspiceBatch
+    from spicethermal.spice.lib import NgspiceBatch
 
     r = nonlinear_drive
     wave = NgspiceBatch().run(r.spice_bench(tmax_s=r.period_s / 20), ["V(TJ)", "V(X1.N1)"])
@@ -247,7 +247,7 @@ def test_cli_errors_are_one_line(demo, tmp_path, capsys):
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 def test_ngspice_switched_drive_respects_t_max(cavity_drive):
     """The exported schedule, switched at 1 kHz in ngspice over boost, ride and arrival."""
-    from spicethermal.spice import NgspiceBatch
+    from spicethermal.spice.lib import NgspiceBatch
 
     r = cavity_drive
     window = r.verification_window_s()
@@ -308,7 +308,7 @@ def test_cli_verify_runs_the_deck(tmp_path, capsys):
 
 
 def test_smoothing_keeps_energy_and_leaves_the_boost():
-    from spicethermal.drive import _smooth
+    from spicethermal.drive.optimize import _smooth
 
     steps = [(0, 10, 1.0), (10, 2, 0.9), (12, 2, 0.3), (14, 2, 0.8), (16, 3, 0.4), (19, 3, 0.6),
              (22, 4, 0.5)]
@@ -345,8 +345,8 @@ def test_switched_state_is_the_switched_trajectory(cavity_drive):
 @pytest.mark.ngspice
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 def test_check_in_parallel_pieces_is_the_one_long_run():
-    from spicethermal.drivecheck import verify
-    from spicethermal.spice import NgspiceBatch
+    from spicethermal.drive.check import verify
+    from spicethermal.spice.lib import NgspiceBatch
 
     r = optimize_drive(ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])), 70.0, 55.0,
                        p_max_w=1.0)

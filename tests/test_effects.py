@@ -9,8 +9,20 @@ import time
 import numpy as np
 import pytest
 
-from spicethermal.bundle import Bundle, CalibrationTable, PwmTable
-from spicethermal.effectfit import (
+from spicethermal.analysis.scenarios import HIDDEN, actuator, scenario_bundle
+from spicethermal.core.errors import DataFormatError, FitError
+from spicethermal.core.ladder import Foster
+from spicethermal.effects import (
+    CATALOGUE,
+    DEVICE,
+    ENTRY_POINT_GROUP,
+    MEASUREMENT,
+    Effect,
+    EffectSpec,
+    Param,
+    known_names,
+)
+from spicethermal.fit.effectfit import (
     BundleData,
     CalData,
     TimeLimitError,
@@ -28,22 +40,10 @@ from spicethermal.effectfit import (
     tsp_true,
     window_average_k,
 )
-from spicethermal.effects import (
-    CATALOGUE,
-    DEVICE,
-    ENTRY_POINT_GROUP,
-    MEASUREMENT,
-    Effect,
-    EffectSpec,
-    Param,
-    known_names,
-)
-from spicethermal.errors import DataFormatError, FitError
-from spicethermal.fitters import fit_effect, fit_effect_forms
-from spicethermal.ladder import Foster
+from spicethermal.fit.fitters import fit_effect, fit_effect_forms
+from spicethermal.fit.tcjunction import tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
+from spicethermal.io.bundle import Bundle, CalibrationTable, PwmTable
 from spicethermal.model import Schedule, ThermalModel
-from spicethermal.scenarios import HIDDEN, actuator, scenario_bundle
-from spicethermal.tcjunction import tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
 
 CONTRACT = {"temperature-coefficient": DEVICE, "phase-change": DEVICE,
             "sample-window": MEASUREMENT, "electrical-transient": MEASUREMENT,
@@ -95,7 +95,7 @@ def test_tc_pwm_quasi_static_matches_shooting(actuator):
     for f, d in ((500.0, 0.8), (25e3, 0.2)):
         exact = m.pwm(0.1, f, d, 1e-4, 25.0).reading_k
         lad = tc_frozen_ladder(actuator, -3e-3, 25.0, 25.0, 0.1 * d)
-        from spicethermal.pwm import steady_state
+        from spicethermal.engines.pwm import steady_state
 
         assert steady_state(lad, 0.1, f, d, 1e-4).reading_k == pytest.approx(exact, abs=5e-3)
 
@@ -105,7 +105,7 @@ def test_pc_cooling_matches_the_models_integration(actuator):
     eff = HIDDEN["phase-change"]
     m = ThermalModel(actuator, (eff,))
     t = np.geomspace(1e-5, 100, 25)
-    from spicethermal.compare import cooling_rise_k
+    from spicethermal.analysis.compare import cooling_rise_k
 
     exact = cooling_rise_k(m, 0.3, t, 25.0)
     fast = pc_cooling_rise(actuator, eff, 25.0, 0.3, t)
@@ -120,7 +120,7 @@ def test_pc_with_tc_matches_the_models_integration(actuator):
     pc = HIDDEN["phase-change"]
     tc = Effect.create("temperature-coefficient", alpha_per_k=-3e-3)
     t = np.geomspace(1e-5, 100, 25)
-    from spicethermal.compare import cooling_rise_k
+    from spicethermal.analysis.compare import cooling_rise_k
 
     exact = cooling_rise_k(ThermalModel(actuator, (tc, pc)), 0.35, t, 25.0)
     fast = pc_cooling_rise(actuator, pc, 25.0, 0.35, t, tc)
@@ -245,7 +245,7 @@ def test_calibration_reading_equals_the_quadratic_closed_form():
 
 def test_window_average_is_the_mean_of_the_end_readings(actuator):
     """The mean over the window of the readings taken at each instant of it."""
-    from spicethermal.pwm import steady_state
+    from spicethermal.engines.pwm import steady_state
 
     w = 3e-4
     s = np.linspace(0.0, w, 4001)
@@ -265,7 +265,7 @@ def test_a_plugin_effect_registers_and_is_listed(monkeypatch, capsys, tmp_path):
     """A toy effect from outside the package, through the entry-point group."""
     import importlib.metadata
 
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
     from spicethermal.effects import catalogue
 
     toy = EffectSpec.create("toy-gain", MEASUREMENT, "a toy reading gain",

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect
-from spicethermal.engines import NAMES, Analytic, Spice, engine, pwl_corners
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Foster
+from spicethermal.engines.interface import NAMES, Analytic, Spice, engine, pwl_corners
 from spicethermal.model import Schedule, ThermalModel
 
 LADDER = Foster.from_tau((6.0, 20.0, 50.0, 70.0), (1e-4, 5e-3, 0.4, 3.0))
@@ -91,7 +91,7 @@ def _tc_model(tmp_path) -> str:
 def test_commands_refuse_analytic_for_a_nonlinear_model(tmp_path, capsys):
     from conftest import DATA
 
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     (tmp_path / "p.csv").write_text("t_s,power_w\n0,0\n1e-3,0.5\n")
     model = _tc_model(tmp_path)
@@ -108,7 +108,7 @@ def test_commands_refuse_analytic_for_a_nonlinear_model(tmp_path, capsys):
 def test_commands_run_every_engine(tmp_path, capsys):
     import json
 
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     (tmp_path / "p.csv").write_text("t_s,power_w\n0,0\n1e-3,0.5\n0.5,0.5\n")
     model = str(ThermalModel(LADDER).save(tmp_path / "m.json"))
@@ -131,7 +131,7 @@ def test_commands_run_every_engine(tmp_path, capsys):
 
 
 def test_drive_refuses_the_analytic_engine_before_writing(tmp_path, capsys):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     model = str(ThermalModel(LADDER).save(tmp_path / "m.json"))
     deck = tmp_path / "d.cir"

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal.errors import DataFormatError, FitError
-from spicethermal.fit import DENSE_POINTS, FitResult, fit_foster, fit_model
-from spicethermal.ladder import Foster
+from spicethermal.core.errors import DataFormatError, FitError
+from spicethermal.core.ladder import Foster
+from spicethermal.fit.ladder import DENSE_POINTS, FitResult, fit_foster, fit_model
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -219,7 +219,7 @@ def test_no_acceptable_fit_raises_instead_of_returning_nonsense():
 
 # ------------------------------------------------------------------------------ figures
 def test_fig7_and_plot_functions(tmp_path):
-    from spicethermal.plots import fig7, new_figure, plot_fit, plot_ladder, plot_residuals
+    from spicethermal.viz.plots import fig7, new_figure, plot_fit, plot_ladder, plot_residuals
 
     truth = Foster.from_tau(*LADDERS[2])
     t = np.logspace(-4, 0.5, 46)
@@ -254,7 +254,7 @@ def zth_csv(tmp_path):
 
 
 def test_cli_fit_writes_a_model(zth_csv, tmp_path, capsys):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
     from spicethermal.model import ThermalModel
 
     out = tmp_path / "model.json"
@@ -275,10 +275,10 @@ def test_cli_fit_writes_a_model(zth_csv, tmp_path, capsys):
 
 
 def test_cli_fit_normalized_csv_and_bundle(tmp_path):
-    from spicethermal.bundle import Bundle, CoolingTable
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
+    from spicethermal.core.synthetic import synthetic_cooling
+    from spicethermal.io.bundle import Bundle, CoolingTable
     from spicethermal.model import ThermalModel
-    from spicethermal.synthetic import synthetic_cooling
 
     truth = Foster.from_tau([0.5, 1.0], [1e-3, 1e-1])
     t = np.logspace(-4, 1, 51)
@@ -303,7 +303,7 @@ def test_cli_fit_normalized_csv_and_bundle(tmp_path):
     ("t_s,r\n1e-4,0.1\n1e-3,0.5\n1e-2,0.9\n", "--rth"),
 ])
 def test_cli_fit_bad_input_exits_2_with_one_line(tmp_path, capsys, body, message):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     src = tmp_path / "bad.csv"
     src.write_text(body)
@@ -315,7 +315,7 @@ def test_cli_fit_bad_input_exits_2_with_one_line(tmp_path, capsys, body, message
 
 
 def test_cli_fit_effects_are_checked(zth_csv, tmp_path, capsys):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     out = str(tmp_path / "m.json")
     assert main(["fit", str(zth_csv), "-o", out, "--effect", "no-such-effect"]) == 2

@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal.bundle import read_columns
-from spicethermal.cli import main
-from spicethermal.errors import DataFormatError
-from spicethermal.fit import fit_foster
-from spicethermal.ladder import Cauer, Foster
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
+from spicethermal.fit.ladder import fit_foster
+from spicethermal.io.bundle import read_columns
 
 DATA = Path(__file__).resolve().parent / "data"
 #: Infineon OptiMOS 5 80 V typical junction-to-case Cauer ladders (R in K/W, C in J/K), see

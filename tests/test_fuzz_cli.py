@@ -27,9 +27,9 @@ import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
-from spicethermal.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
-from spicethermal.cli import build_parser, main
-from spicethermal.ladder import Foster
+from spicethermal.cli.main import build_parser, main
+from spicethermal.core.ladder import Foster
+from spicethermal.io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
 from spicethermal.model import ThermalModel
 
 EXAMPLES = int(os.environ.get("SPICETHERMAL_FUZZ_EXAMPLES", "60"))

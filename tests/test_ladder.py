@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import ROUND_TRIP_RTOL, Cauer, Foster, round_trip_error
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import ROUND_TRIP_RTOL, Cauer, Foster, round_trip_error
 
 
 def test_single_stage_closed_forms():

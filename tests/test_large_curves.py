@@ -6,9 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spicethermal.bundle import Bundle, CoolingTable, parse_columns
-from spicethermal.compare import MAX_COOLING_POINTS, compare_cooling, cooling_rise_k, log_bin_means
-from spicethermal.errors import DataFormatError
+from spicethermal.analysis.compare import (
+    MAX_COOLING_POINTS,
+    compare_cooling,
+    cooling_rise_k,
+    log_bin_means,
+)
+from spicethermal.core.errors import DataFormatError
+from spicethermal.io.bundle import Bundle, CoolingTable, parse_columns
 from spicethermal.model import ThermalModel
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from conftest import NETLISTS
 
-from spicethermal.netlists import GOLDEN
-from spicethermal.spice import NgspiceBatch
+from spicethermal.spice.lib import NgspiceBatch
+from spicethermal.spice.netlists import GOLDEN
 
 SI = {"": 1.0, "m": 1e-3, "u": 1e-6, "n": 1e-9, "k": 1e3}
 LIBS = sorted(name for name in GOLDEN if name.endswith(".lib"))

@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect, known_names
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
+from spicethermal.engines.pwm import steady_state
 from spicethermal.model import Schedule, ThermalModel
-from spicethermal.pwm import steady_state
 
 
 @pytest.mark.parametrize("topology", ["foster", "cauer"])

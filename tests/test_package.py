@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from spicethermal.cli import build_parser, main
+from spicethermal.cli.main import build_parser, main
 
 HEAVY = ("matplotlib", "scipy", "PySpice", "serial", "jinja2", "mpmath")
 
@@ -39,7 +39,7 @@ def test_every_command_has_help(command, capsys):
 
 
 def test_unknown_arguments_are_one_line_exit_2():
-    proc = subprocess.run([sys.executable, "-m", "spicethermal.cli", "export", "--bogus"],
+    proc = subprocess.run([sys.executable, "-m", "spicethermal.cli.main", "export", "--bogus"],
                           capture_output=True, text=True)
     assert proc.returncode == 2
     assert len(proc.stderr.strip().splitlines()) == 1 and "Traceback" not in proc.stderr

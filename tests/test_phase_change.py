@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from spicethermal import spice
+from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect, phase_change
-from spicethermal.ladder import Foster
 from spicethermal.model import Schedule, ThermalModel
+from spicethermal.spice import lib as spice
 
 FORMS = {"logistic": {"width_k": 2.0}, "gaussian": {"width_k": 2.0},
          "plateau": {"width_k": 6.0, "edge_k": 0.4}}

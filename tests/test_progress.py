@@ -10,12 +10,12 @@ from pathlib import Path
 import pytest
 from conftest import DATA
 
-from spicethermal import cli
-from spicethermal.demo import Steps
+from spicethermal.analysis.demo import Steps
+from spicethermal.cli import main as cli
+from spicethermal.core.ladder import Foster
+from spicethermal.core.progress import bar, enabled, task
 from spicethermal.effects import Effect
-from spicethermal.ladder import Foster
 from spicethermal.model import ThermalModel
-from spicethermal.progress import bar, enabled, task
 
 
 class _Terminal(io.StringIO):

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from spicethermal import pwm
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Foster
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Foster
+from spicethermal.engines import pwm
 
 
 def brute_force(ladder, power_w, freq_hz, duty, window_s=0.0, tol=1e-13):

@@ -8,12 +8,12 @@ import shutil
 import numpy as np
 import pytest
 
-from spicethermal.cli import main
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError, SimulationError
 from spicethermal.effects import Effect
-from spicethermal.errors import DataFormatError, SimulationError
+from spicethermal.engines.pwm import PwmState
+from spicethermal.engines.pwmsim import SpicePwm, pwm_state, pwm_waveform, resolve_engine
 from spicethermal.model import ThermalModel
-from spicethermal.pwm import PwmState
-from spicethermal.pwmsim import SpicePwm, pwm_state, pwm_waveform, resolve_engine
 
 FREQS = (500.0, 1e3, 3e3, 5e3, 10e3, 25e3)
 DUTIES = (0.2, 0.5, 0.8)
@@ -242,8 +242,8 @@ def test_pwm_command_bad_model(tmp_path, capsys):
 
 # ------------------------------------------------------------------------------ Fig. 8
 def test_fig8_curves(actuator):
-    from spicethermal.plots import FIG8_DUTIES, plot_r_duty
-    from spicethermal.pwm import r_duty_eq3, r_duty_exact
+    from spicethermal.engines.pwm import r_duty_eq3, r_duty_exact
+    from spicethermal.viz.plots import FIG8_DUTIES, plot_r_duty
 
     ax = plot_r_duty(actuator)
     lines = ax.get_lines()

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal.bundle import Bundle, format_columns
-from spicethermal.calibration import KFactor
-from spicethermal.cli import main
-from spicethermal.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
+from spicethermal.cli.main import main
+from spicethermal.identify.calibration import KFactor
+from spicethermal.io.bundle import Bundle, format_columns
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
 
 MOSFET = DATA / "pyrth_mosfet"
 #: PyRth's totals for these files (K per watt of the 1 W nominal step) and the ΣR where its
@@ -116,7 +116,7 @@ def test_fit_compare_and_diagnose_run_on_the_bundle(bundles, tmp_path, capsys) -
 # --------------------------------------------------------------- every source, every command
 def _sources(tmp_path: Path, bundles) -> dict[str, list[str]]:
     """One source of each kind, with the options it needs."""
-    from spicethermal.ladder import Foster
+    from spicethermal.core.ladder import Foster
 
     ladder = Foster.from_tau([0.2, 0.5, 1.0], [1e-4, 1e-2, 1.0])
     t = np.geomspace(1e-5, 30.0, 121)

@@ -19,13 +19,13 @@ from pathlib import Path
 
 import pytest
 
-from spicethermal import files
 from spicethermal.bench.session import run_bench
-from spicethermal.bundle import Bundle, CoolingTable
-from spicethermal.cli import main
-from spicethermal.errors import DataFormatError
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
+from spicethermal.io import files
+from spicethermal.io.bundle import Bundle, CoolingTable
 
-CLI = [sys.executable, "-m", "spicethermal.cli"]
+CLI = [sys.executable, "-m", "spicethermal.cli.main"]
 QUICK = ["--powers", "0.094", "--t-last", "5", "--settle-s", "20", "-q"]
 
 
@@ -137,8 +137,8 @@ def test_kill_9_at_random_moments_loses_nothing(base: Path) -> None:
 
 KILLER = textwrap.dedent("""
     import os, signal, sys
-    from spicethermal import bundle, files
-    from spicethermal.bundle import Bundle
+    from spicethermal.io import bundle, files
+    from spicethermal.io.bundle import Bundle
     where = sys.argv[2]
     real = files.replace_dir
 
@@ -328,30 +328,30 @@ def test_a_settle_time_above_the_devices_limit_is_refused_before_heating(tmp_pat
 
 
 # ------------------------------------------------------------------------ every writer
-#: Places that write files without spicethermal.files, each with its reason.
+#: Places that write files without spicethermal.io.files, each with its reason.
 DIRECT_WRITES = {
-    ("ngspice.py", '(work / ".spiceinit").write_text('): "private temporary directory",
-    ("ngspice.py", '(work / "deck.cir").write_text('): "private temporary directory",
-    ("pwmsim.py", "lib.write_text("): "private temporary directory",
-    ("bundle.py", 'with open(tmp / name, "w"'): "inside Bundle.write's temporary directory",
+    ("spice/ngspice.py", '(work / ".spiceinit").write_text('): "private temporary directory",
+    ("spice/ngspice.py", '(work / "deck.cir").write_text('): "private temporary directory",
+    ("engines/pwmsim.py", "lib.write_text("): "private temporary directory",
+    ("io/bundle.py", 'with open(tmp / name, "w"'): "inside Bundle.write's temporary directory",
     ("bench/client.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
     ("bench/client.py", 'open(directory / "frames.jsonl", "a"'): "append-only raw log",
     ("bench/client.py", "json.dumps(rec)"): "raw log records: times and hex strings only",
     ("batch/device.py", "(local / file).write_bytes(data)"): "worker's private temporary copy",
     ("batch/device.py", "local.write_bytes(next(iter(source.files.values())))"):
         "worker's private temporary copy",
-    ("engines.py", "lib.write_text("): "private temporary directory",
+    ("engines/interface.py", "lib.write_text("): "private temporary directory",
 }
 WRITE_CALL = re.compile(r"\.write_(text|bytes)\(|\bopen\([^)]*['\"][wax]b?['\"]|\.savefig\(|"
                         r"shutil\.copy|np\.save|\.to_csv\(|json\.dumps?\(")
 
 
 def test_every_output_file_is_written_through_files_py() -> None:
-    package = Path(files.__file__).parent
+    package = Path(files.__file__).parents[1]
     found = []
     for path in sorted(package.rglob("*.py")):
         rel = str(path.relative_to(package))
-        if rel == "files.py":
+        if rel == "io/files.py":
             continue
         for lineno, line in enumerate(path.read_text().splitlines(), start=1):
             code = line.split("#", 1)[0]
@@ -363,7 +363,7 @@ def test_every_output_file_is_written_through_files_py() -> None:
             if ".savefig(handle" in code:  # into an atomic_open handle (plots.save)
                 continue
             found.append(f"{rel}:{lineno}: {line.strip()}")
-    assert not found, ("write these through spicethermal.files (atomic_write_text, "
+    assert not found, ("write these through spicethermal.io.files (atomic_write_text, "
                        "atomic_open, write_json; JSON text through dumps_json) or add them "
                        "to DIRECT_WRITES with the reason:\n" + "\n".join(found))
 

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal.bundle import Bundle, CoolingTable, PwmTable
-from spicethermal.cli import main
-from spicethermal.ladder import Foster
+from spicethermal.cli.main import main
+from spicethermal.core.ladder import Foster
+from spicethermal.io.bundle import Bundle, CoolingTable, PwmTable
 from spicethermal.model import ThermalModel
 
 LADDER = Foster.from_tau((6.0, 20.0, 50.0, 70.0), (1e-4, 5e-3, 0.4, 30.0))
@@ -79,7 +79,7 @@ def test_nul_and_control_characters_in_file_names(tmp_path, model, capsys) -> No
     one_line_error(code, err, "NUL character")
     odd = tmp_path / "a\nb\x1b[31m.json"
     odd.write_text(model.read_text().replace("foster", "nonsense"))
-    p = subprocess.run([sys.executable, "-m", "spicethermal.cli", "export", str(odd), "-o",
+    p = subprocess.run([sys.executable, "-m", "spicethermal.cli.main", "export", str(odd), "-o",
                         str(tmp_path / "x.lib")], capture_output=True, text=True, timeout=120)
     one_line_error(p.returncode, p.stderr, "a\\nb\\x1b[31m.json")
 

@@ -7,12 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal.bundle import CoolingTable, format_columns
-from spicethermal.compare import compare
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Foster
+from spicethermal.analysis.compare import compare
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Foster
+from spicethermal.io.bundle import CoolingTable, format_columns
+from spicethermal.io.sources import read_source, thin
 from spicethermal.model import ThermalModel
-from spicethermal.sources import read_source, thin
 
 LADDER = Foster.from_tau([0.3, 1.2], [1e-3, 0.5])
 T = np.geomspace(1e-5, 20.0, 80)
@@ -80,7 +80,7 @@ def test_thin_averages_in_log_bins_and_keeps_short_curves() -> None:
 def test_bundle_without_calibration_takes_one_from_the_command_line(tmp_path: Path) -> None:
     """A bundle of raw v_tsp_v and no calibration: the error names the options, and with
     --k-factor/--tref the record reads back as the ladder's Zth."""
-    from spicethermal.bundle import Bundle
+    from spicethermal.io.bundle import Bundle
 
     t = np.geomspace(1e-5, 20.0, 80)
     tj = 25.0 + LADDER.cooling(t)

@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
-from spicethermal.spectrum import (
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
+from spicethermal.core.synthetic import synthetic_cooling
+from spicethermal.identify.spectrum import (
     Spectrum,
     kernel,
     log_derivative,
     time_constant_spectrum,
 )
-from spicethermal.synthetic import synthetic_cooling
 
 MOSFET = DATA / "pyrth_mosfet"
 
@@ -108,7 +108,7 @@ def test_spectrum_is_immutable_and_validated():
 # ------------------------------------------------------------------- real MOSFET data
 @pytest.fixture(scope="module")
 def mosfet():
-    from spicethermal.sources import read_source
+    from spicethermal.io.sources import read_source
 
     cal = MOSFET / "calibration.csv"
     curves = {name: read_source(MOSFET / f"MOSFET_{name}.txt", calibration=cal,
@@ -144,7 +144,7 @@ def test_mosfet_spectra_differ_in_the_long_time_constants(mosfet):
 
 # ------------------------------------------------------------------------------- CLI
 def test_cli_spectrum_json_and_figure(tmp_path, capsys):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     true = Foster.from_tau([1.0, 2.0], [1e-3, 1e-1])
     t = np.geomspace(1e-5, 10, 121)
@@ -163,7 +163,7 @@ def test_cli_spectrum_json_and_figure(tmp_path, capsys):
 
 
 def test_cli_spectrum_bad_input_exits_2_with_one_line(tmp_path, capsys):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     bad = tmp_path / "bad.txt"
     bad.write_text("no data here\n")
@@ -177,7 +177,7 @@ def test_cli_spectrum_bad_input_exits_2_with_one_line(tmp_path, capsys):
 def test_pyrth_text_source_with_calibration_csv_and_power(tmp_path):
     """A PyRth-format file made from a known ladder: Zth comes back through the given
     calibration (V = 0.6 V − 2 mV/K · (T − 20 °C)) and power (2 W)."""
-    from spicethermal.sources import read_source
+    from spicethermal.io.sources import read_source
 
     ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
     t = np.geomspace(1e-6, 20.0, 700)
@@ -201,9 +201,9 @@ def test_bundle_source(tmp_path, capsys):
     """A bundle directory with a cooling curve (electrical transient included, no steady
     junction temperature: Tj at the cut is extrapolated by √t) is read through the
     early-time correction; the spectrum holds the curve's Rth."""
-    from spicethermal.bundle import Bundle, CoolingTable
-    from spicethermal.cli import main
-    from spicethermal.sources import read_source
+    from spicethermal.cli.main import main
+    from spicethermal.io.bundle import Bundle, CoolingTable
+    from spicethermal.io.sources import read_source
 
     ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
     t, tj = synthetic_cooling(ladder, 2.0, np.geomspace(1e-6, 20.0, 600), transient_s=3e-5)

@@ -9,13 +9,14 @@ import numpy as np
 import pytest
 from conftest import NETLISTS, ramp_response
 
-from spicethermal import pwm, spice
-from spicethermal.cli import main
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
+from spicethermal.engines import pwm
 from spicethermal.model import Schedule, ThermalModel
-from spicethermal.netlists import GOLDEN
+from spicethermal.spice import lib as spice
+from spicethermal.spice.netlists import GOLDEN
 
 CASES = [(d, t) for d in spice.DIALECTS for t in spice.TOPOLOGIES]
 
@@ -23,7 +24,8 @@ CASES = [(d, t) for d in spice.DIALECTS for t in spice.TOPOLOGIES]
 @pytest.mark.parametrize("filename", sorted(GOLDEN))
 def test_golden_netlists_regenerate_identically(filename):
     assert (NETLISTS / filename).read_text() == GOLDEN[filename](), (
-        f"netlists/{filename} changed: run `python -m spicethermal.netlists` and review the diff")
+        f"netlists/{filename} changed: run `python -m spicethermal.spice.netlists` and review "
+        f"the diff")
 
 
 @pytest.mark.parametrize("name", ["X\n.control", "-ABC", ".end", "A B", "END", "ends", "", "A" * 65,
@@ -134,7 +136,7 @@ def test_export_command_and_errors(tmp_path, actuator, capsys):
 def test_cli_bad_input_is_one_line_without_traceback(tmp_path):
     bad = tmp_path / "m.json"
     bad.write_text("{not json")
-    proc = subprocess.run([sys.executable, "-m", "spicethermal.cli", "export", str(bad), "-o",
+    proc = subprocess.run([sys.executable, "-m", "spicethermal.cli.main", "export", str(bad), "-o",
                            str(tmp_path / "x.lib")], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
@@ -316,7 +318,7 @@ def distributed():
     the ladder a user fits to its case-held Zth(t) sampled 1 µs ... 10 s with 0.2 % noise."""
     from types import SimpleNamespace
 
-    from spicethermal.fit import fit_model
+    from spicethermal.fit.ladder import fit_model
 
     n = 24
     w = np.geomspace(0.01, 1, n)

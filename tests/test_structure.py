@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
-from spicethermal.spectrum import time_constant_spectrum
-from spicethermal.structure import (
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
+from spicethermal.identify.spectrum import time_constant_spectrum
+from spicethermal.identify.structure import (
     StructureFunction,
     cauer_ladder,
     separation,
@@ -31,7 +31,7 @@ def test_lanczos_cauer_equals_the_rational_continued_fraction():
     f = Foster.from_tau([0.3, 1.0, 0.2, 2.0, 0.5, 0.1, 1.5, 0.7, 0.05, 0.4, 3.0, 0.25, 0.6, 1.1],
                         np.logspace(-6, 2, 14))
     exact = f.to_cauer("rational")
-    import spicethermal.ladder as ld
+    import spicethermal.core.ladder as ld
 
     assert f.order > ld.RATIONAL_MAX_ORDER  # the Lanczos path
     fast = cauer_ladder(f)
@@ -40,7 +40,7 @@ def test_lanczos_cauer_equals_the_rational_continued_fraction():
 
 
 def test_lanczos_cauer_detects_lost_precision_and_retries(monkeypatch):
-    import spicethermal.ladder as ld
+    import spicethermal.core.ladder as ld
 
     f = Foster.from_tau(np.linspace(1, 3, 20), np.logspace(-6, 2, 20))
     good = cauer_ladder(f)
@@ -131,7 +131,7 @@ def test_separation_of_two_synthetic_mountings():
 # ------------------------------------------------------------------- real MOSFET data
 @pytest.fixture(scope="module")
 def mosfet():
-    from spicethermal.sources import read_source
+    from spicethermal.io.sources import read_source
 
     out = {}
     for name in ("dry", "tim"):
@@ -176,7 +176,7 @@ def test_mosfet_dry_and_paste_separate_after_the_die_and_package(mosfet):
 
 # ------------------------------------------------------------------------------- CLI
 def test_cli_structure_json_one_and_two_sources(tmp_path, capsys):
-    from spicethermal.cli import main
+    from spicethermal.cli.main import main
 
     paths = []
     for name, lad in (("dry", Cauer([0.1, 0.3, 1.5, 1.0], [0.001, 0.1, 0.02, 30.0])),

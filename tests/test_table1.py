@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 from conftest import DATA
 
-from spicethermal import cli
-from spicethermal.bundle import Bundle, CoolingTable, format_columns, parse_columns
-from spicethermal.curves import ZthCurve
-from spicethermal.datasheet import mur880e, read_foster_table, read_zth_points, table1
-from spicethermal.errors import DataFormatError
-from spicethermal.synthetic import mur880e_foster, synthetic_cooling
+from spicethermal.cli import main as cli
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.synthetic import mur880e_foster, synthetic_cooling
+from spicethermal.identify.curves import ZthCurve
+from spicethermal.io.bundle import Bundle, CoolingTable, format_columns, parse_columns
+from spicethermal.io.datasheet import mur880e, read_foster_table, read_zth_points, table1
 
 DENSE_T = np.unique(np.concatenate([np.arange(1, 1000) * 1e-6, np.geomspace(1e-3, 30, 400)]))
 
@@ -120,7 +120,7 @@ def test_command_on_csv_sources(tmp_path: Path, capsys) -> None:
 
 
 def _run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "spicethermal.cli", *args],
+    return subprocess.run([sys.executable, "-m", "spicethermal.cli.main", *args],
                           capture_output=True, text=True, timeout=60)
 
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spicethermal.bundle import Bundle, CoolingTable, format_columns, read_columns
-from spicethermal.cli import main
-from spicethermal.datasheet import read_foster_table
-from spicethermal.ladder import Foster
+from spicethermal.cli.main import main
+from spicethermal.core.ladder import Foster
+from spicethermal.core.synthetic import synthetic_cooling
+from spicethermal.engines.pwm import steady_state
+from spicethermal.io.bundle import Bundle, CoolingTable, format_columns, read_columns
+from spicethermal.io.datasheet import read_foster_table
 from spicethermal.model import ThermalModel
-from spicethermal.pwm import steady_state
-from spicethermal.synthetic import synthetic_cooling
 
 LADDER = Foster.from_tau([0.4, 1.1, 2.5], [2e-4, 2e-2, 1.5])
 

@@ -10,20 +10,21 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from spicethermal import spice, tcfit
-from spicethermal.bundle import Bundle
-from spicethermal.effectfit import BundleData, baseline_ladder, sse
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect
-from spicethermal.errors import DataFormatError
-from spicethermal.fitters import fit_effect_forms
-from spicethermal.ladder import Cauer, Foster
-from spicethermal.model import Schedule, ThermalModel
-from spicethermal.tcforward import (
+from spicethermal.fit import tcfit
+from spicethermal.fit.effectfit import BundleData, baseline_ladder, sse
+from spicethermal.fit.fitters import fit_effect_forms
+from spicethermal.fit.tcforward import (
     local_cooling_rise,
     local_frozen_ladder,
     local_steady_nodes,
     tc_cooling,
 )
+from spicethermal.io.bundle import Bundle
+from spicethermal.model import Schedule, ThermalModel
+from spicethermal.spice import lib as spice
 from spicethermal.validation.cases import case
 from spicethermal.validation.network import Network, ResistanceLaw
 
@@ -124,7 +125,7 @@ def test_frozen_ladder_pwm_reading_is_close_to_the_shooting_solution(effect):
     """Quasi-static PWM: every layer frozen at its mean temperature, against the exact
     periodic state (shooting). The error grows with the ripple (the resistance ripple times
     the temperature ripple): a few mK at 1 kHz, a few % of the effect at 10 Hz (4 K ripple)."""
-    from spicethermal.pwm import steady_state
+    from spicethermal.engines.pwm import steady_state
 
     model = ThermalModel(Cauer(R4, C4), (effect,))
     for f, d, share in ((10.0, 0.5, 0.05), (1e3, 0.3, 0.01)):
@@ -206,7 +207,7 @@ def test_junction_form_files_are_unchanged_and_bad_combinations_are_refused():
 def _data(name: str, tmp_path) -> tuple[BundleData, Foster, dict]:
     from dataclasses import replace
 
-    from spicethermal.diagnose import comparison_of, noise_estimates
+    from spicethermal.analysis.diagnose import comparison_of, noise_estimates
 
     c = case(name)
     c.record().bundle.write(tmp_path / "b")
@@ -250,7 +251,7 @@ def test_heater_sag_is_an_amplitude_not_a_temperature_coefficient(tmp_path):
     """A heater whose power falls as it warms (the independent generator's uncatalogued case)
     scales each cooling curve without changing its shape: the diagnosis, with every form of
     the temperature coefficient available, names nothing and says why."""
-    from spicethermal.diagnose import diagnose
+    from spicethermal.analysis.diagnose import diagnose
 
     bundle = case("uncatalogued/heater-sag").record().bundle
     d = diagnose(bundle)
@@ -263,6 +264,7 @@ def test_local_fits_never_end_worse_than_the_linear_ladder(tmp_path, monkeypatch
     as the linear ladder it extends (its nested start)."""
     monkeypatch.setattr(tcfit, "GATE_BIC", -math.inf)
     monkeypatch.setattr(tcfit, "GATE_SSE_RATIO", 0.0)
+    monkeypatch.setattr(tcfit, "GATE_NOISE_SIGMAS", -math.inf)
     data, ladder, _ = _data("clean/mosfet-2", tmp_path)
     fits = tcfit.fit_temperature_coefficient(data, ladder)
     assert {f.effect.form for f in fits} >= {"junction", "local", "power-law"}

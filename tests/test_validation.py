@@ -10,7 +10,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import lambertw
 
-from spicethermal.bundle import Bundle
+from spicethermal.io.bundle import Bundle
 from spicethermal.validation.cases import FAST, FORMS, case, catalogue
 from spicethermal.validation.detect import detectability
 from spicethermal.validation.measure import Bench, Transient, Tsp, measure
@@ -167,7 +167,7 @@ def test_detectability_separates_clean_from_a_strong_effect():
 # -- the fast subset through the diagnosis ------------------------------------------------------
 @pytest.mark.parametrize("name", FAST)
 def test_diagnosis_on_fast_validation_subset(name):
-    from spicethermal.diagnose import diagnose
+    from spicethermal.analysis.diagnose import diagnose
 
     c = case(name)
     result = diagnose(c.record().bundle)

@@ -16,12 +16,12 @@ import pytest
 from conftest import NETLISTS, ROOT
 from test_spice import COUPLED_TOLERANCE, coupled_error, exact_rise, ladder_branches
 
-from spicethermal import spice
-from spicethermal.cli import main
-from spicethermal.errors import DataFormatError
-from spicethermal.ladder import Cauer, Foster
+from spicethermal.cli.main import main
+from spicethermal.core.errors import DataFormatError
+from spicethermal.core.ladder import Cauer, Foster
+from spicethermal.io.vendor import evaluate, import_model, spice_number
 from spicethermal.model import ThermalModel
-from spicethermal.vendor import evaluate, import_model, spice_number
+from spicethermal.spice import lib as spice
 
 VENDOR = ROOT / "spicethermal" / "data" / "vendor"
 SCHEMA = json.loads((ROOT / "spicethermal" / "data" / "model.schema.json").read_text())
@@ -294,7 +294,7 @@ def test_cauer_fitted_to_a_vendor_zth_coupled_to_heatsinks(tmp_path, key):
     capacitance leaves no trace in a case-held Zth; the heatsink carries it here."""
     from types import SimpleNamespace
 
-    from spicethermal.fit import fit_model
+    from spicethermal.fit.ladder import fit_model
 
     topology, r, c, case_c = NETWORKS[key]
     t = np.logspace(-6, 2, 81)
@@ -311,7 +311,7 @@ def test_cauer_fitted_to_a_vendor_zth_coupled_to_heatsinks(tmp_path, key):
 
 @pytest.mark.ngspice
 def test_readme_heatsink_example_runs_and_matches_the_vendor_network(tmp_path):
-    from spicethermal.netlists import HEATSINK_EXAMPLE, VENDOR_EXAMPLE
+    from spicethermal.spice.netlists import HEATSINK_EXAMPLE, VENDOR_EXAMPLE
 
     deck_file = NETLISTS / f"{VENDOR_EXAMPLE[1]}_heatsink.cir"
     readme = (ROOT / "README.md").read_text()

@@ -21,12 +21,12 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..bundle import Bundle
-from ..diagnose import diagnose
-from ..errors import SpiceThermalError
-from ..fit import fit_model
-from ..sources import read_source
-from ..spice import check_name, render_lib
+from ..analysis.diagnose import diagnose
+from ..core.errors import SpiceThermalError
+from ..fit.ladder import fit_model
+from ..io.bundle import Bundle
+from ..io.sources import read_source
+from ..spice.lib import check_name, render_lib
 
 __all__ = ["COLUMNS", "Options", "Source", "characterize", "make_row", "subckt_name"]
 
@@ -91,7 +91,7 @@ class Source:
 
 def subckt_name(name: str) -> str:
     """A valid subcircuit name for a device name (letters, digits, ``_``; not a SPICE
-    keyword: see :func:`spicethermal.spice.check_name`).
+    keyword: see :func:`spicethermal.spice.lib.check_name`).
 
     >>> subckt_name("device-007"), subckt_name("12 V rail"), subckt_name("end")
     ('DEVICE_007', '12_V_RAIL', 'D_END')

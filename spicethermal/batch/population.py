@@ -12,7 +12,7 @@ the junction, which is what :mod:`spicethermal.batch.spread` must find.
 
 Each bundle holds one cooling curve after ``power_w`` is cut from the steady state, sampled
 10 points per decade from 3 µs to 100 s with white noise ``noise_k``
-(:func:`spicethermal.synthetic.synthetic_cooling`), the steady state just before the cut
+(:func:`spicethermal.core.synthetic.synthetic_cooling`), the steady state just before the cut
 read with the same noise. The truth (layers and defects) goes into ``population.json`` beside
 the bundles, never into them.
 
@@ -31,11 +31,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..bundle import Bundle, CoolingTable
-from ..errors import DataFormatError
-from ..files import atomic_write_text, dumps_json
-from ..ladder import Cauer
-from ..synthetic import synthetic_cooling
+from ..core.errors import DataFormatError
+from ..core.ladder import Cauer
+from ..core.synthetic import synthetic_cooling
+from ..io.bundle import Bundle, CoolingTable
+from ..io.files import atomic_write_text, dumps_json
 
 if TYPE_CHECKING:  # pragma: no cover
     import os

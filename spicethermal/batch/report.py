@@ -1,5 +1,5 @@
 """The batch report: figures of the population and the HTML page (``OUTDIR/index.html``, laid
-out by the project's report template, :func:`spicethermal.report.render`)."""
+out by the project's report template, :func:`spicethermal.report.html.render`)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from ..files import atomic_write_text
-from ..plots import new_figure, save_figure
-from ..report import Section, render
+from ..io.files import atomic_write_text
+from ..report.html import Section, render
+from ..viz.plots import new_figure, save_figure
 from .spread import PERCENTILES, Z_OUTLIER, Outlier
 
 __all__ = ["fig_rth_histogram", "fig_verdicts", "fig_zth_population", "verdict_counts",

@@ -32,9 +32,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..bundle import MANIFEST
-from ..errors import DataFormatError, SpiceThermalError
-from ..files import atomic_open, atomic_write_text, dumps_json, read_json
+from ..core.errors import DataFormatError, SpiceThermalError
+from ..io.bundle import MANIFEST
+from ..io.files import atomic_open, atomic_write_text, dumps_json, read_json
 from .device import COLUMNS, Options, Source, characterize, make_row
 
 __all__ = ["BatchRun", "check_output", "cluster_client", "find_sources", "load_results",

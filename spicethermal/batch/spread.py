@@ -11,7 +11,7 @@ Hoaglin's 3.5) for
 
 * its Rth, or
 * its heat path: the cumulative structure function ΣR(ΣC) of its fitted ladder (exact
-  Cauer equivalent, :mod:`spicethermal.structure`) read at fixed ΣC levels
+  Cauer equivalent, :mod:`spicethermal.identify.structure`) read at fixed ΣC levels
   (:data:`LEVELS_PER_DECADE` per decade, from the population's first to last ΣC), each level
   z-scored across the population. As a path is compared at many levels, its limit is
   raised so that a device has the same chance of a false alarm as from its Rth alone
@@ -34,7 +34,7 @@ outlier is a part production would screen), each fitted like any curve (automati
 PWM peaks (:func:`pwm_peaks`)
 -----------------------------
 For each (frequency, duty) of a grid, the periodic steady-state junction peak of every
-device's model (:func:`spicethermal.pwm.steady_state`) and its percentiles over the
+device's model (:func:`spicethermal.engines.pwm.steady_state`) and its percentiles over the
 population: the measured population is the Monte-Carlo sample.
 """
 
@@ -49,12 +49,12 @@ import numpy as np
 from scipy.stats import norm
 
 from .. import __version__
-from ..curves import ZthCurve
-from ..errors import DataFormatError
-from ..fit import fit_model
+from ..core.errors import DataFormatError
+from ..engines.pwm import steady_state
+from ..fit.ladder import fit_model
+from ..identify.curves import ZthCurve
+from ..identify.structure import StructureFunction
 from ..model import ThermalModel
-from ..pwm import steady_state
-from ..structure import StructureFunction
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -120,7 +120,7 @@ def find_outliers(rth_k_per_w: ArrayLike, ladders: Sequence[Any]) -> list[Outlie
 
     Examples
     --------
-    >>> from spicethermal.ladder import Cauer
+    >>> from spicethermal.core.ladder import Cauer
     >>> rng = np.random.default_rng(0)
     >>> parts = [Cauer([0.05, 0.2, 1.0] * np.exp(rng.normal(0, 0.05, 3)), [2e-4, 5e-3, 1.0])
     ...          for _ in range(30)]
@@ -241,7 +241,7 @@ def pwm_peaks(ladders: Sequence[Any], power_w: float, freqs_hz: Sequence[float],
     """Percentiles (:data:`PERCENTILES`) and maximum over ``ladders`` of the junction peak
     rise (K) at ``power_w`` for every (frequency, duty), one row each.
 
-    >>> from spicethermal.ladder import Foster
+    >>> from spicethermal.core.ladder import Foster
     >>> rows = pwm_peaks([Foster.from_tau([r], [1e-3]) for r in (1.0, 2.0, 3.0)], 1.0, [1e6],
     ...                  [0.5])
     >>> round(rows[0]["peak_p50_k"], 3), round(rows[0]["peak_max_k"], 3)  # D·P·R at 1 MHz

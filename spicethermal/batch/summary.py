@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from ..files import atomic_write_text
+from ..io.files import atomic_write_text
 from ..model import ThermalModel
-from ..spice import export
+from ..spice.lib import export
 from .report import write_page
 from .spread import PERCENTILES, Outlier, envelopes, find_outliers, fit_envelope, pwm_peaks
 

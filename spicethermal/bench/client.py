@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
-from ..errors import DataFormatError, InstrumentError
+from ..core.errors import DataFormatError, InstrumentError
 from . import protocol as p
 from .link import Link
 

@@ -11,7 +11,7 @@ Two presets, chosen by the ``sim://NAME`` URL:
   (Rth falls with temperature, α = −2e-3 /K) and ``phase-change`` (latent heat on the cavity
   node).
 * ``mur880e`` — the paper's validation device (§5): MUR880E power diode, junction to case,
-  Rthjc = 1.51 K/W with the Foster ladder of :func:`spicethermal.synthetic.mur880e_foster`
+  Rthjc = 1.51 K/W with the Foster ladder of :func:`spicethermal.core.synthetic.mur880e_foster`
   (matches the datasheet r(t) of Table 1), on a bulky heat sink (0.3 K/W, 300 J/K) whose
   temperature the reference thermocouple reads.
 
@@ -24,8 +24,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..errors import InstrumentError
-from ..ladder import Foster
+from ..core.errors import InstrumentError
+from ..core.ladder import Foster
 
 #: ADC: 10 bits over 0..5 V (PIC18F4431 high-speed ADC, AVdd reference).
 ADC_BITS = 10
@@ -131,7 +131,7 @@ def _actuator() -> Preset:
 
 
 def _mur880e() -> Preset:
-    from ..synthetic import mur880e_foster
+    from ..core.synthetic import mur880e_foster
 
     return Preset(
         name="mur880e",

@@ -11,7 +11,7 @@ from collections import deque
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
-from ..errors import InstrumentError
+from ..core.errors import InstrumentError
 from . import protocol as p
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -1,7 +1,7 @@
 """The simulated plant: the device's thermal network and the bench's analog front end.
 
 :class:`Plant` holds the node temperature rises θ of the device's Cauer network (from
-:meth:`spicethermal.ladder.Cauer.state_matrices`, ``C dθ/dt = −G θ + e0 P``) over its reference
+:meth:`spicethermal.core.ladder.Cauer.state_matrices`, ``C dθ/dt = −G θ + e0 P``) over its reference
 (the ambient, or the calibration hot plate while that is on) and steps it exactly for
 piecewise-constant power: in the eigenbasis of the symmetrised network every mode is a scalar
 exponential, so a step of any length, and a block of N whole PWM periods, cost O(n) (the
@@ -30,9 +30,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.errors import InstrumentError
+from ..core.ladder import Cauer
 from ..effects import Effect
-from ..errors import InstrumentError
-from ..ladder import Cauer
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray

@@ -23,7 +23,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, fields
 from typing import ClassVar
 
-from ..errors import InstrumentError
+from ..core.errors import InstrumentError
 
 PROTOCOL_VERSION = 2
 #: Last cooling-curve sample the device accepts, ms after the cut (ST_CURVE_MAX_MS).

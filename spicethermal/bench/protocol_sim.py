@@ -33,7 +33,7 @@ from urllib.parse import parse_qs, urlparse
 import numpy as np
 from serial import SerialBase, SerialException
 
-from ..errors import InstrumentError
+from ..core.errors import InstrumentError
 from .simulator import SimulatedDevice, parse_effects
 
 KEYS = ("seed", "noise", "effects", "faults", "stall", "mute", "firmware")

@@ -1,6 +1,6 @@
 """Bench sessions: a measurement plan run on the bench and added to a bundle, losing nothing.
 
-A session holds the bundle's lock (:func:`spicethermal.files.locked`) from start to end, so a
+A session holds the bundle's lock (:func:`spicethermal.io.files.locked`) from start to end, so a
 second writer stops with a one-line error (or waits, ``wait=True``). Raw bytes go to
 ``BUNDLE/raw/<session>/`` inside the live bundle, appended and fsynced before they are
 processed (:class:`~spicethermal.bench.client.RawLog`); a new bundle starts empty on disk
@@ -8,7 +8,7 @@ for that. The data sets measured are *added*: a rerun gets a new file name (``co
 ``calibration_2.csv``); a single section's previous entry (calibration, pwm, the Rth summary)
 moves to the manifest's ``superseded`` list and its file stays; only ``replace=[NAME]`` puts
 new data in the place of a listed file. The bundle is then replaced in one atomic step
-(:meth:`spicethermal.bundle.Bundle.write`). Killed at any moment, the bundle holds every data
+(:meth:`spicethermal.io.bundle.Bundle.write`). Killed at any moment, the bundle holds every data
 set it held before plus the raw log of the session.
 
 The measurement plan (powers, settling times, the PWM grid) comes from :data:`PLANS`, chosen
@@ -29,14 +29,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import DataFormatError, InstrumentError, SpiceThermalError
-from ..files import clean_leftovers, locked
+from ..core.errors import DataFormatError, InstrumentError, SpiceThermalError
+from ..io.files import clean_leftovers, locked
 from . import protocol as p
 from .client import ACTIONS, BenchClient, Run
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..bundle import Bundle
-    from ..calibration import Calibration
+    from ..identify.calibration import Calibration
+    from ..io.bundle import Bundle
 
 #: Data-set sections a procedure adds to, and the stem of their file names.
 SECTIONS = {"calibrate": "calibration", "cooling": "cooling", "pwm": "pwm"}
@@ -251,7 +251,7 @@ class Session:
                                       f"{kinds[name]} data set")
 
     def run(self, actions: Sequence[str]) -> Path:
-        from ..bundle import MANIFEST, Bundle
+        from ..io.bundle import MANIFEST, Bundle
 
         for a in actions:
             if a not in ACTIONS:
@@ -380,7 +380,7 @@ class Session:
         return new
 
     def _calibrate(self, bench: BenchClient, plan: Plan, step):
-        from ..bundle import CalibrationTable
+        from ..io.bundle import CalibrationTable
 
         temps, volts = [], []
         for t_set in plan.calibration_c:
@@ -413,7 +413,7 @@ class Session:
         return out
 
     def _cooling_table(self, run: Run, conv: TspConversion | None, plan: Plan, k: int):
-        from ..bundle import CoolingTable
+        from ..io.bundle import CoolingTable
 
         steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
         curve = run.of_kind(p.KIND_CURVE)
@@ -438,7 +438,7 @@ class Session:
 
     def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion, step,
              ambient: list[float]):
-        from ..bundle import PwmTable
+        from ..io.bundle import PwmTable
 
         rows = []
         for duty in plan.pwm_duties:

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InstrumentError
+from ..core.errors import InstrumentError
 from .devices import preset as get_preset
 from .plant import DEFAULT_EFFECTS, DEVICE_EFFECTS, MEASUREMENT_EFFECTS, Frontend, Plant
 

@@ -8,8 +8,9 @@ spec carries its physics as hooks (``resistance_scale``, ``extra_capacitance``,
 ``latent_heat``); the effect modules of this package hold them and document each form.
 
 Fast forward models of every effect and the fit of each effect's parameters from a bundle
-live in :mod:`spicethermal.effectfit`; the ranking of candidate effects in
-:mod:`spicethermal.diagnose`; the SPICE export of device effects in :mod:`spicethermal.spice`.
+live in :mod:`spicethermal.fit.effectfit`; the ranking of candidate effects in
+:mod:`spicethermal.analysis.diagnose`; the SPICE export of device effects in
+:mod:`spicethermal.spice.lib`.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-from ..errors import DataFormatError
+from ..core.errors import DataFormatError
 
 DEVICE = "device"
 MEASUREMENT = "measurement"
@@ -54,9 +55,9 @@ class EffectSpec:
     ``extra_capacitance``). ``physical_nodes(effect)`` is true when the physics needs
     physical node temperatures: the model is then simulated (and exported) on its ladder's
     Cauer equivalent. ``check(effect)`` may reject parameters that do not fit the form
-    (raise :class:`~spicethermal.errors.DataFormatError`). ``fit`` names the function that
+    (raise :class:`~spicethermal.core.errors.DataFormatError`). ``fit`` names the function that
     fits the effect to a bundle, ``"module:function"`` (imported when first used, as an entry
-    point is; see :mod:`spicethermal.effectfit`).
+    point is; see :mod:`spicethermal.fit.effectfit`).
 
     Their SPICE renderings are the same physics as dialect-neutral behavioural expressions
     (``+ - * /``, ``EXP``, ``LOG``, ``MAX``, ``MIN``, ``PWR``; temperatures in °C):

@@ -9,7 +9,7 @@ A cooling reading at ``t`` after the cut is off by
   ringing.
 
 ``masked_s`` is the span after which the error has fallen below 1 % (e⁻⁵); the fix is masking
-and √t extrapolation (:mod:`spicethermal.curves`).
+and √t extrapolation (:mod:`spicethermal.identify.curves`).
 """
 
 from __future__ import annotations
@@ -24,4 +24,4 @@ SPEC = register(EffectSpec(
                           " the masked span (forms fixed, ringing)"),
      "k_per_w": Param("K/W", 0.0, -1e4, 1e4, "error at the cut per watt cut off (form power)"),
      "ring_hz": Param("Hz", 0.0, 0.0, 1e9, "ringing frequency (form ringing)")},
-    ("fixed", "power", "ringing"), fit="spicethermal.measfit:fit_electrical_transient"))
+    ("fixed", "power", "ringing"), fit="spicethermal.fit.measfit:fit_electrical_transient"))

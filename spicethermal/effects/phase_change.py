@@ -185,4 +185,4 @@ SPEC = register(EffectSpec(
                      "(form plateau)")},
     ("logistic", "gaussian", "plateau"), extra_capacitance=extra_capacitance,
     latent_heat=latent_heat, spice_stored_heat=spice_stored_heat,
-    fit="spicethermal.pcfit:fit_phase_change"))
+    fit="spicethermal.fit.pcfit:fit_phase_change"))

@@ -14,4 +14,4 @@ SPEC = register(EffectSpec(
     "sample-window", MEASUREMENT,
     "power is interrupted for a window before each PWM temperature sample",
     {"window_s": Param("s", 1e-4, 0.0, 1.0, "length of the power-off sample window")},
-    ("end", "average"), fit="spicethermal.measfit:fit_sample_window"))
+    ("end", "average"), fit="spicethermal.fit.measfit:fit_sample_window"))

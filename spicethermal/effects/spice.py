@@ -2,7 +2,7 @@
 
 A rendering is a dialect-neutral behavioural expression (``+ - * /``, ``EXP``, ``LOG`` (the
 natural logarithm in ngspice and its PSPICE and LTspice modes), ``MAX``, ``MIN``, ``PWR``) that
-:mod:`spicethermal.spice` places in the dialect's behavioural element.
+:mod:`spicethermal.spice.lib` places in the dialect's behavioural element.
 """
 
 from __future__ import annotations

@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from ..errors import DataFormatError
+from ..core.errors import DataFormatError
 from .catalogue import DEVICE, EffectSpec, Param, register
 from .spice import number
 
@@ -218,4 +218,4 @@ SPEC = register(EffectSpec(
     extra_capacitance=extra_capacitance, latent_heat=latent_heat,
     spice_resistance_scale=spice_resistance_scale, spice_stored_heat=spice_stored_heat,
     physical_nodes=physical_nodes, check=check,
-    fit="spicethermal.tcfit:fit_temperature_coefficient"))
+    fit="spicethermal.fit.tcfit:fit_temperature_coefficient"))

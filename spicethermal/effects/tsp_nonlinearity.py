@@ -17,4 +17,4 @@ SPEC = register(EffectSpec(
      "t_cal_c": Param("°C", 25.0, -273.15, 1000.0, "centre of the linear calibration"),
      "cub_k_per_k3": Param("1/K²", 0.0, -0.1, 0.1, "reading error per (T − T_cal)³, K/K³ "
                            "(form cubic)")},
-    ("quadratic", "cubic"), fit="spicethermal.measfit:fit_tsp_nonlinearity"))
+    ("quadratic", "cubic"), fit="spicethermal.fit.measfit:fit_tsp_nonlinearity"))

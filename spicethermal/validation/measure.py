@@ -18,7 +18,7 @@ own:
   second cooling curve on (``contact_k_per_w``: the device was remounted).
 
 :func:`measure` returns a :class:`Record`: the bundle (``spicethermal-bundle/1``, built with
-:class:`spicethermal.bundle.Bundle`) and the noise-free and measured readings in kelvin that
+:class:`spicethermal.io.bundle.Bundle`) and the noise-free and measured readings in kelvin that
 :mod:`.detect` needs.
 """
 
@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
+from ..io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
 from .network import Network
 from .periodic import pwm_reading
 

@@ -1,0 +1,448 @@
+"""Measured versus model, point by point, over every data set of a bundle.
+
+:func:`compare` predicts what the bench would have read for each measured point and returns a
+:class:`Comparison` (immutable): the ``spicethermal-comparison/1`` document of DESIGN.md, the
+paper-style Table 2 text, and per-data-set views for the diagnosis. Data sets:
+
+* ``pwm`` — each row of ``pwm.csv`` (``at = {"freq_hz", "duty"}``): the periodic-steady-state
+  *reading* (junction temperature at the end of the power-off sample window that starts when an
+  on-phase ends) plus the row's reference temperature. The engine is ``analytic`` (closed form;
+  shooting for a model with device effects), ``ngspice`` or ``pyspice`` (the exported subcircuit
+  from the periodic steady state, :mod:`spicethermal.engines.pwmsim`); ``auto`` is analytic for
+  linear models and ngspice for models with a temperature coefficient
+  (:func:`~spicethermal.engines.pwmsim.resolve_engine`).
+* ``cooling_1``, ``cooling_2``, ... — each point of each cooling curve (``at = {"t_s"}``): the
+  model's cooling response from its steady state at the curve's power (self-consistent with the
+  device effects), plus the reference temperature (``tref_c`` column, else ``tref_steady_c``,
+  else the bundle's ``ambient_c``).
+
+Calibration and Zth tables are not temperatures the model predicts, so they are not compared.
+
+Measurement effects turn a model temperature into a reading. The model's own ones apply:
+``sample-window`` (its ``window_s`` replaces the bundle's ``sample_window_s``),
+``tsp-nonlinearity`` (reading ``T + q (T − T_cal)²``) and ``electrical-transient`` (cooling
+readings off by ``amplitude_k · exp(−5 t / masked_s)``). Any other, or a trial one, is a
+``measurement`` callable ``(dataset, at, model_c) -> reading_c`` applied last.
+
+``residual_k = measured_c − model_c``.
+
+>>> from spicethermal.core.ladder import Foster
+>>> from spicethermal.model import ThermalModel
+>>> from spicethermal.io.bundle import Bundle, PwmTable
+>>> m = ThermalModel(Foster.from_tau([100.0], [10.0]))   # ripple 0.5 mK at 1 kHz
+>>> b = Bundle(ambient_c=25.0, pwm=PwmTable([1e3], [0.5], [30.5], power_w=0.1))
+>>> c = compare(m, b)
+>>> round(c.points[0].model_c, 3), round(c.rms_k, 3)
+(30.0, 0.5)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..core.errors import DataFormatError
+from ..engines.pwmsim import resolve_engine
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..io.bundle import Bundle, PwmTable
+    from ..model import ThermalModel
+
+COMPARISON_FORMAT = "spicethermal-comparison/1"
+#: Reference temperature assumed when a bundle gives none (the paper's Table 2 adds 25 °C).
+DEFAULT_REFERENCE_C = 25.0
+#: Cooling curves with more samples are compared as means over log-time bins.
+MAX_COOLING_POINTS = 2000
+#: Log-time bins per decade of a long cooling curve (:func:`log_bin_means`).
+COOLING_BINS_PER_DECADE = 100
+
+#: ``measurement(dataset, at, model_c) -> reading_c``: what the bench would read.
+Measurement = Callable[[str, Mapping[str, float], float], float]
+
+
+@dataclass(frozen=True)
+class ComparisonPoint:
+    """One measured point and the model's prediction of it (°C).
+
+    ``at`` locates the point in its data set (``{"freq_hz", "duty"}`` or ``{"t_s"}``);
+    ``info`` carries what the prediction used (power, reference, window) and is not part of
+    the JSON document.
+    """
+
+    dataset: str
+    at: Mapping[str, float]
+    measured_c: float
+    model_c: float
+    info: Mapping[str, float] = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "at", MappingProxyType(dict(self.at)))
+        object.__setattr__(self, "info", MappingProxyType(dict(self.info)))
+
+    @property
+    def residual_k(self) -> float:
+        """Measured minus model, K."""
+        return self.measured_c - self.model_c
+
+    def to_json(self) -> dict[str, Any]:
+        return {"dataset": self.dataset, "at": dict(self.at), "measured_c": self.measured_c,
+                "model_c": self.model_c, "residual_k": self.residual_k}
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Points of one or more data sets, measured vs model.
+
+    >>> c = Comparison((ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.5}, 30.0, 29.0),
+    ...                 ComparisonPoint("cooling_1", {"t_s": 1e-3}, 40.0, 40.5)))
+    >>> c.rms_k, c.max_abs_k, c.datasets
+    (0.7905694150420949, 1.0, ('pwm', 'cooling_1'))
+    """
+
+    points: tuple[ComparisonPoint, ...]
+    engine: str = "analytic"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "points", tuple(self.points))
+
+    # -- numbers ---------------------------------------------------------------------------
+    @property
+    def residuals_k(self) -> NDArray:
+        """Measured minus model of every point, K."""
+        return np.array([p.residual_k for p in self.points], dtype=float)
+
+    @property
+    def rms_k(self) -> float:
+        """Root mean square residual, K (NaN without points)."""
+        r = self.residuals_k
+        return float(np.sqrt(np.mean(r * r))) if r.size else math.nan
+
+    @property
+    def max_abs_k(self) -> float:
+        """Largest absolute residual, K (NaN without points)."""
+        r = self.residuals_k
+        return float(np.max(np.abs(r))) if r.size else math.nan
+
+    @property
+    def datasets(self) -> tuple[str, ...]:
+        """Data set names in order of appearance."""
+        return tuple(dict.fromkeys(p.dataset for p in self.points))
+
+    def dataset(self, name: str) -> Comparison:
+        """The points of one data set (``"pwm"``, ``"cooling_1"``, ...)."""
+        return Comparison(tuple(p for p in self.points if p.dataset == name), self.engine)
+
+    def by_dataset(self) -> dict[str, Comparison]:
+        """Every data set's own comparison."""
+        return {name: self.dataset(name) for name in self.datasets}
+
+    def worst(self, n: int = 5) -> tuple[ComparisonPoint, ...]:
+        """The ``n`` points with the largest absolute residual, worst first."""
+        return tuple(sorted(self.points, key=lambda p: -abs(p.residual_k))[:n])
+
+    # -- output ----------------------------------------------------------------------------
+    def to_json(self) -> dict[str, Any]:
+        """The ``spicethermal-comparison/1`` document."""
+        return {"format": COMPARISON_FORMAT, "rms_k": _finite(self.rms_k),
+                "max_abs_k": _finite(self.max_abs_k),
+                "points": [p.to_json() for p in self.points]}
+
+    def table(self) -> str:
+        """Text: the PWM points as the paper's Table 2 (Freq × duty: T_exp, T_mod, Δ), then one
+        summary line per data set and the overall RMS."""
+        lines = []
+        pwm = self.dataset("pwm")
+        if pwm.points:
+            lines += _pwm_table(pwm.points, self.engine)
+            lines.append("")
+        width = max([len(n) for n in self.datasets] + [7])
+        lines.append(f"{'dataset':<{width}}  points   rms (K)   max |Δ| (K)   mean Δ (K)")
+        for name, c in self.by_dataset().items():
+            lines.append(f"{name:<{width}}  {len(c.points):6d}  {c.rms_k:8.3f}  {c.max_abs_k:12.3f}"
+                         f"  {float(np.mean(c.residuals_k)):11.3f}")
+        lines.append(f"{'all':<{width}}  {len(self.points):6d}  {self.rms_k:8.3f}  "
+                     f"{self.max_abs_k:12.3f}  "
+                     f"{float(np.mean(self.residuals_k)) if self.points else math.nan:11.3f}")
+        return "\n".join(lines)
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+def _pwm_table(points: Sequence[ComparisonPoint], engine: str) -> list[str]:
+    """Table 2 layout; one block per (power, window) when the rows use several."""
+    groups: dict[tuple[float, float], list[ComparisonPoint]] = {}
+    for p in points:
+        groups.setdefault((p.info.get("power_w", math.nan), p.info.get("window_s", math.nan)),
+                          []).append(p)
+    lines: list[str] = []
+    for (power, window), pts in groups.items():
+        freqs = sorted({p.at["freq_hz"] for p in pts})
+        duties = sorted({p.at["duty"] for p in pts})
+        cell = {(p.at["freq_hz"], p.at["duty"]): p for p in pts}
+        lines.append(f"PWM: junction temperature, measured (T_exp) vs model (T_mod), °C; "
+                     f"Δ = T_exp − T_mod, K  [{power:g} W, sample window {window * 1e6:g} µs, "
+                     f"engine {engine}]")
+        head = f"{'Freq (kHz)':>10} |" + "".join(f"{'D=' + _pct(d):^23}|" for d in duties)
+        sub = f"{'':>10} |" + "".join(f"{'T_exp':>7}{'T_mod':>8}{'Δ':>7} |" for _ in duties)
+        lines += [head, sub, "-" * len(sub)]
+        for f in freqs:
+            row = f"{f / 1e3:>10g} |"
+            for d in duties:
+                p = cell.get((f, d))
+                row += (f"{p.measured_c:7.2f}{p.model_c:8.2f}{p.residual_k:7.2f} |" if p
+                        else f"{'':22} |")
+            lines.append(row)
+    return lines
+
+
+def _pct(d: float) -> str:
+    return f"{100 * d:g}%"
+
+
+# --------------------------------------------------------------------------------------------
+# measurement effects
+# --------------------------------------------------------------------------------------------
+def _reading(model: ThermalModel, dataset: str, at: Mapping[str, float], model_c: float,
+             measurement: Measurement | None, power_w: float = 0.0) -> float:
+    """Model temperature → what the bench reads: the model's measurement effects (the one
+    measurement model of :mod:`spicethermal.fit.effectfit`, shared with fit and diagnose), then
+    the hook. ``power_w`` is the power cut before a cooling reading."""
+    from ..fit.effectfit import transient_offset, tsp_reading
+
+    value = float(tsp_reading(model_c, model.effect("tsp-nonlinearity")))
+    if "t_s" in at:
+        value += float(transient_offset(at["t_s"], model.effect("electrical-transient"),
+                                        power_w))
+    if measurement is not None:
+        value = float(measurement(dataset, at, value))
+    return value
+
+
+def _window_nodes(model: ThermalModel, window_s: float) -> tuple[list[float], list[float]]:
+    """Offsets into the sample window at which a PWM reading is taken, and their weights: its
+    end, or 4-point Gauss–Legendre over it for the ``average`` form of ``sample-window``."""
+    sw = model.effect("sample-window")
+    if sw is None or sw.form != "average" or window_s <= 0:
+        return [window_s], [1.0]
+    x, w = np.polynomial.legendre.leggauss(4)
+    return (0.5 * window_s * (1 + x)).tolist(), (w / 2).tolist()
+
+
+def sample_window_s(model: ThermalModel, table: PwmTable | None = None,
+                    window_s: float | None = None) -> float:
+    """The sample window used for PWM readings: ``window_s`` if given, else the model's
+    ``sample-window`` effect, else the bundle's ``sample_window_s`` (0 without a table)."""
+    if window_s is not None:
+        if not (math.isfinite(window_s) and window_s >= 0):
+            raise DataFormatError(f"window_s = {window_s!r}: must be >= 0 and finite")
+        return float(window_s)
+    effect = model.effect("sample-window")
+    if effect is not None:
+        return float(effect.params["window_s"])
+    return float(table.sample_window_s) if table is not None else 0.0
+
+
+# --------------------------------------------------------------------------------------------
+# data sets
+# --------------------------------------------------------------------------------------------
+def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
+                reference_c: float | None = None, window_s: float | None = None,
+                measurement: Measurement | None = None, dialect: str = "ngspice",
+                dataset: str = "pwm", quiet: bool = True) -> tuple[ComparisonPoint, ...]:
+    """Every row of a PWM table against the model's reading.
+
+    ``reference_c`` is the reference temperature for rows without ``tref_c`` (default
+    :data:`DEFAULT_REFERENCE_C`); ``window_s`` overrides the sample window (see
+    :func:`sample_window_s`); unless ``quiet``, ngspice runs show progress on stderr.
+
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> from spicethermal.io.bundle import PwmTable
+    >>> m = ThermalModel(Foster.from_tau([100.0], [10.0]))
+    >>> pts = compare_pwm(m, PwmTable([1e3, 1e3], [0.2, 0.8], [27.0, 33.0], power_w=0.1))
+    >>> [abs(round(p.residual_k, 3)) for p in pts]
+    [0.0, 0.0]
+    """
+    from ..engines.pwmsim import SpicePwm, run_parallel
+
+    engine = resolve_engine(engine, model)
+    window = sample_window_s(model, table, window_s)
+    ref_default = DEFAULT_REFERENCE_C if reference_c is None else float(reference_c)
+    trefs = table.tref_c if table.tref_c is not None else np.full(table.freq_hz.size, ref_default)
+    trefs = np.asarray(trefs, dtype=float)
+    rows = list(zip(table.powers_w.tolist(), table.freq_hz.tolist(), table.duty.tolist(),
+                    trefs.tolist(), strict=True))
+    nodes, weights = _window_nodes(model, window)
+    if engine == "analytic" and model.is_linear and len(nodes) > 1:
+        from ..fit.effectfit import window_average_k  # the window average in closed form
+
+        rises = [window_average_k(model.ladder, p, f, d, window) for p, f, d, _ in rows]
+    else:
+        if engine == "analytic":
+            states = [model.pwm(p, f, d, w, tref) for p, f, d, tref in rows for w in nodes]
+        else:  # the ngspice points in parallel
+            sims = {tref: SpicePwm(model, engine, dialect, tref_c=tref)
+                    for tref in set(trefs.tolist())}
+            states = run_parallel([(sims[tref], p, f, d, w) for p, f, d, tref in rows
+                                   for w in nodes], quiet=quiet)
+        k = len(nodes)
+        rises = [sum(wt * s.reading_k for wt, s in zip(weights, states[i * k:(i + 1) * k],
+                                                         strict=True))
+                 for i in range(len(rows))]
+    points = []
+    for (p, f, d, tref), tj, rise in zip(rows, table.tj_c, rises, strict=True):
+        at = {"freq_hz": f, "duty": d}
+        model_c = _reading(model, dataset, at, tref + rise, measurement)
+        points.append(ComparisonPoint(dataset, at, float(tj), model_c,
+                                      {"power_w": p, "tref_c": tref, "window_s": window}))
+    return tuple(points)
+
+
+def cooling_rise_k(model: ThermalModel, power_w: float, t_s: ArrayLike,
+                   tref_c: float = DEFAULT_REFERENCE_C) -> NDArray:
+    """Junction rise (K) at ``t_s`` after power ``power_w`` is cut from the steady state.
+
+    Closed form for a linear model; with device effects, the self-consistent steady state
+    integrated with the power off.
+
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> cooling_rise_k(ThermalModel(Foster.from_tau([10.0], [1.0])), 2.0, [0.0]).tolist()
+    [20.0]
+    """
+    from ..model import Schedule
+
+    t = np.asarray(t_s, dtype=float)
+    if model.is_linear:
+        return power_w * model.ladder.cooling(t)
+    theta0 = model.steady_nodes(power_w, tref_c)
+    return model.simulate(t, Schedule((0.0,), (0.0,)), tref_c, theta0).tj_k
+
+
+def compare_cooling(model: ThermalModel, bundle: Bundle, index: int = 0, *,
+                    measurement: Measurement | None = None) -> tuple[ComparisonPoint, ...]:
+    """Cooling curve ``index`` of ``bundle`` (data set ``cooling_{index + 1}``) against the
+    model's cooling response at the curve's power."""
+    table = bundle.cooling[index]
+    name = f"cooling_{index + 1}"
+    measured = np.asarray(bundle.cooling_tj_c(index), dtype=float)
+    tref_rows, tref_steady = bundle.cooling_reference_c(index)
+    if tref_steady is None:
+        tref_steady = float(tref_rows[0]) if tref_rows is not None else DEFAULT_REFERENCE_C
+    trefs = np.asarray(tref_rows, dtype=float) if tref_rows is not None else \
+        np.full(measured.size, float(tref_steady))
+    rise = cooling_rise_k(model, table.power_w, table.t_s, float(tref_steady))
+    columns = (np.asarray(table.t_s, dtype=float), measured, trefs, rise)
+    if measured.size > MAX_COOLING_POINTS:  # a long record: means over log-time bins
+        columns = log_bin_means(*columns)
+    points = []
+    for t, tj, tref, r in zip(*columns, strict=True):
+        at = {"t_s": float(t)}
+        model_c = _reading(model, name, at, float(tref) + float(r), measurement, table.power_w)
+        points.append(ComparisonPoint(name, at, float(tj), model_c,
+                                      {"power_w": table.power_w, "tref_c": float(tref)}))
+    return tuple(points)
+
+
+def log_bin_means(t_s: ArrayLike, *columns: ArrayLike, per_decade: int = COOLING_BINS_PER_DECADE
+                  ) -> tuple[NDArray, ...]:
+    """Means of ``t_s`` and each column over bins of equal width in log t (``per_decade``).
+
+    A record of 10^6 samples becomes a few hundred points, each the mean of its samples (noise
+    averages down; a smooth response is changed only to second order in the bin width).
+    Samples at t <= 0 form one bin.
+
+    Parameters
+    ----------
+    t_s : sample times, ascending.
+    columns : arrays of the same length.
+    per_decade : bins per decade of t.
+
+    Returns
+    -------
+    tuple of arrays : the bin means of ``t_s`` and of each column, bins with samples only.
+
+    Examples
+    --------
+    >>> t, y = log_bin_means([1.0, 1.5, 10.0, 10.5], [1.0, 3.0, 5.0, 7.0], per_decade=2)
+    >>> t.tolist(), y.tolist()
+    ([1.25, 10.25], [2.0, 6.0])
+    """
+    t = np.asarray(t_s, dtype=float)
+    positive = t[t > 0]
+    if positive.size == 0:
+        return (t, *(np.asarray(c, dtype=float) for c in columns))
+    scaled = np.log10(np.maximum(t, positive[0]) / positive[0]) * per_decade
+    key = np.where(t > 0, np.floor(scaled + 1e-9).astype(np.int64) + 1, 0)
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    return tuple(np.bincount(inverse, weights=np.asarray(c, dtype=float)) / counts
+                 for c in (t, *columns))
+
+
+def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
+            window_s: float | None = None, measurement: Measurement | None = None,
+            datasets: Sequence[str] | None = None, dialect: str = "ngspice",
+            quiet: bool = True) -> Comparison:
+    """Measured vs model over every data set of ``bundle`` (or only the named ``datasets``).
+
+    Parameters
+    ----------
+    model : ThermalModel
+    bundle : Bundle
+    engine : ``auto`` (analytic if the model is linear, else ngspice), ``analytic``,
+        ``ngspice`` or ``pyspice``: how PWM readings are computed.
+    window_s : sample window overriding the model's ``sample-window`` effect and the bundle's.
+    measurement : ``(dataset, at, model_c) -> reading_c`` applied to every prediction.
+    datasets : e.g. ``["pwm"]`` or ``["cooling_1"]``; default all.
+    dialect : ``.lib`` dialect for the ngspice engines.
+    quiet : no progress bar for the ngspice runs (shown on a terminal otherwise).
+
+    Returns
+    -------
+    Comparison
+
+    Examples
+    --------
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> from spicethermal.io.bundle import Bundle, CoolingTable
+    >>> m = ThermalModel(Foster.from_tau([10.0], [1.0]))
+    >>> b = Bundle(ambient_c=25.0, cooling=(CoolingTable([0.0, 1.0], 2.0,
+    ...            tj_c=[45.0, 25.0 + 20 * np.exp(-1)]),))
+    >>> compare(m, b).max_abs_k < 1e-12
+    True
+    """
+    if model.reference != bundle.reference:
+        raise DataFormatError(f"{bundle.source or 'bundle'}: measured against the "
+                              f"{bundle.reference} but the model's reference is "
+                              f"{model.reference}")
+    engine = resolve_engine(engine, model)
+    available = (["pwm"] if bundle.pwm is not None else []) + \
+        [f"cooling_{i + 1}" for i in range(len(bundle.cooling))]
+    wanted = available if datasets is None else list(datasets)
+    unknown = [d for d in wanted if d not in available]
+    if unknown:
+        raise DataFormatError(f"{bundle.source or 'bundle'}: no data set {unknown[0]!r} "
+                              f"(available: {', '.join(available) or 'none'})")
+    if not wanted:
+        raise DataFormatError(f"{bundle.source or 'bundle'}: nothing to compare (no pwm or "
+                              f"cooling data)")
+    points: list[ComparisonPoint] = []
+    for name in wanted:
+        if name == "pwm":
+            points += compare_pwm(model, bundle.pwm, engine=engine, reference_c=bundle.ambient_c,
+                                  window_s=window_s, measurement=measurement, dialect=dialect,
+                                  quiet=quiet)
+        else:
+            points += compare_cooling(model, bundle, int(name.split("_")[1]) - 1,
+                                      measurement=measurement)
+    return Comparison(tuple(points), engine)

@@ -1,0 +1,147 @@
+"""Does a named device effect's physics hold on the data, beyond the numbers it lowers?
+
+A device effect (a resistance that follows temperature, a latent heat) changes the cooling
+*dynamics*: after the cut the network relaxes through temperature-dependent elements. An
+error in the heating power (a heater whose power sags as it warms, a power meter's gain, a
+current that drifts with the supply) changes only the *amplitude* of each cooling curve:
+with the power off the network is linear, so every curve is the linear Zth shape scaled by
+the power actually dissipated before the cut.
+
+:func:`amplitude_only` fits that alternative: the linear ladder jointly to every cooling curve
+with one free power scale per curve (the reference curve's held at 1). When it fits the
+cooling curves at the noise and decisively better than every form of the device effect does
+(its BIC lower by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`), the effect only mimics an
+amplitude change that its own dynamics contradict: the physics at work is not the catalogued
+one (:func:`device_effect_contradicted`). On a weak effect whose dynamics are within the noise
+both fit alike and the effect keeps its name; when the amplitudes alone leave a misfit, the
+test says nothing (an effect of another form may be at work).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.ladder import Foster
+from ..effects import DEVICE, Effect
+from ..fit.effectfit import BundleData, as_foster, robust_lsq, transient_spans
+from .verdict import AT_NOISE_CHI2, MIN_BIC_DROP
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..core.ladder import Cauer
+    from .compare import Comparison
+
+__all__ = ["amplitude_only", "device_effect_contradicted"]
+
+
+def _kept(data: BundleData) -> dict[str, np.ndarray]:
+    """Per cooling curve, the points outside its detected electrical transient."""
+    spans = transient_spans(data)
+    return {c.name: c.t_s >= spans.get(c.name, 0.0) for c in data.cooling}
+
+
+def amplitude_only(data: BundleData, ladder: Foster | Cauer) -> tuple[float, int]:
+    """Noise-weighted χ² of the cooling curves (outside their transients) under the linear
+    ladder refitted jointly with a free power scale per curve, and the number of scales.
+
+    Parameters
+    ----------
+    data : BundleData
+        The bundle's arrays, with the noise scales set.
+    ladder : Foster or Cauer
+        Start of the ladder's fit.
+
+    Returns
+    -------
+    tuple of (float, int)
+        χ² and the number of free scales (cooling curves − 1).
+
+    Examples
+    --------
+    >>> from spicethermal.io.bundle import Bundle, CoolingTable
+    >>> lad = Foster.from_tau([10.0, 30.0], [0.01, 1.0])
+    >>> t = np.geomspace(1e-3, 10, 40)
+    >>> curves = [CoolingTable(t, p, tj_c=25 + p * s * lad.cooling(t))
+    ...           for p, s in ((1.0, 1.0), (2.0, 0.9))]  # the hot curve's power sagged 10 %
+    >>> data = BundleData.from_bundle(Bundle(ambient_c=25.0, cooling=curves))
+    >>> chi2, k = amplitude_only(data, Foster.from_tau([12.0, 25.0], [0.02, 0.8]))
+    >>> chi2 < 1e-8, k
+    (True, 1)
+    """
+    f = as_foster(ladder)
+    m = f.order
+    ref = data.reference_curve
+    kept = _kept(data)
+    rest = [c for c in data.cooling if c is not ref]
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        lad = Foster.from_tau(np.exp(x[:m]), np.exp(x[m:2 * m]))
+        scales = dict(zip((c.name for c in rest), np.exp(x[2 * m:]), strict=True))
+        parts = []
+        for c in data.cooling:
+            keep = kept[c.name]
+            model = c.tref_c[keep] + scales.get(c.name, 1.0) * c.power_w * lad.cooling(
+                c.t_s[keep])
+            parts.append((model - c.tj_c[keep]) / data.scale(c.name))
+        return np.concatenate(parts)
+
+    x0 = np.concatenate([np.log(f.r), np.log(f.tau), np.zeros(len(rest))])
+    big = np.full(x0.size, np.inf)
+    res = robust_lsq(fun, x0, -big, big)
+    return 2.0 * float(res.cost), len(rest)
+
+
+def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect: Effect,
+                               n_params: int, comparisons: Sequence[Comparison],
+                               amplitude: tuple[float, int] | None = None) -> str:
+    """Why device effect ``effect`` is contradicted by the cooling dynamics ("" when it is
+    not, or when the test does not apply: a measurement effect, fewer than two cooling
+    curves): the cooling curves are the linear shape scaled per curve at the noise
+    (:func:`amplitude_only`, χ²/n within the white-noise bound of
+    :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`), and that fits them decisively better than
+    every form of the effect.
+
+    Parameters
+    ----------
+    data : BundleData
+        The bundle's arrays, with the noise scales set.
+    ladder : Foster or Cauer
+        The ladder of the model the effect extends (start of the alternative's fit).
+    effect : Effect
+        The effect (its best form), for the sentence.
+    n_params : int
+        Its number of fitted parameters.
+    comparisons : sequence of Comparison
+        The model with each form of the effect against the bundle.
+    amplitude : tuple, optional
+        :func:`amplitude_only` of ``data`` if already computed.
+
+    Returns
+    -------
+    str
+        The reason, or "".
+    """
+    if effect.kind != DEVICE or len(data.cooling) < 2 or not comparisons:
+        return ""
+    kept = _kept(data)
+    n = sum(int(np.sum(k)) for k in kept.values())
+
+    def cooling_chi2(comparison: Comparison) -> float:
+        by_set = comparison.by_dataset()
+        return sum(float(np.sum(by_set[c.name].residuals_k[kept[c.name]] ** 2))
+                   / data.scale(c.name) ** 2 for c in data.cooling)
+
+    chi2_effect = min(cooling_chi2(c) for c in comparisons)
+    chi2_amp, k_amp = amplitude if amplitude is not None else amplitude_only(data, ladder)
+    log_n = math.log(max(n, 2))
+    gap = (chi2_effect + n_params * log_n) - (chi2_amp + k_amp * log_n)
+    at_noise = chi2_amp / max(n, 1) <= AT_NOISE_CHI2 + 3 * math.sqrt(2 / max(n, 1))
+    if gap < MIN_BIC_DROP or not at_noise:
+        return ""
+    return (f"{effect.name} would change the cooling dynamics, but the cooling curves are the "
+            f"linear ladder's shape scaled per curve, at the noise (a power that is not the "
+            f"recorded one; χ² {chi2_amp:.0f} on {n} points against {chi2_effect:.0f} with the "
+            f"effect: BIC {gap:.0f} lower)")

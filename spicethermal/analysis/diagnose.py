@@ -1,0 +1,289 @@
+"""Diagnosis: where a linear ladder fails, which catalogued effect is missing, and by how much
+the error falls when it is added.
+
+:func:`diagnose` compares a model with every data set of a bundle (each cooling curve, the
+PWM grid, the calibration), localises the misfit (time decade, frequency, duty, temperature
+band), fits every candidate effect of the catalogue (:mod:`spicethermal.fit.effectfit`) and ranks
+them. The result (:class:`Diagnosis`) prints as a short report and serialises to the
+``spicethermal-diagnosis/2`` document (docs/diagnosis-json.md).
+
+Criterion (stated)
+------------------
+Residuals ``r = measured − model`` in kelvin. Each data set ``d`` gets a noise estimate
+``σ_d`` that no model choice can bias: the scatter of consecutive baseline residuals (smooth
+misfits cancel in the differences; the largest 10 % are trimmed, see
+:func:`noise_estimates`), at least :data:`NOISE_FLOOR_K`. A model's criterion is
+``BIC = Σ_d RSS_d / σ_d² + k ln N`` with ``k`` the number of effect parameters fitted and
+``N`` the number of points. An effect is *found* when the best candidate (lowest BIC)
+
+1. lowers the BIC by at least :data:`MIN_BIC_DROP` (strong evidence on Kass & Raftery's scale),
+2. lowers the pooled RMS by at least :data:`MIN_IMPROVEMENT` ×, and
+3. explains the misfit: every data set's RMS with the effect is within
+   :data:`EXPLAINED_RATIO` × its noise estimate.
+
+Clean data fail (1) and (2): an effect fitted to noise gains little. An effect outside the
+catalogue fails (2) or (3): the verdict is then null and the reason says where the misfit is.
+When the baseline already fits every data set within :data:`EXPLAINED_RATIO` × its noise,
+nothing is missing.
+
+The pooled RMS (``rms_k``; ``improvement = baseline rms / candidate rms``) weighs every point
+equally, as ``spicethermal compare`` does, with the calibration points added.
+
+A table of measured vs simulated PWM readings (the paper's Table 2, :func:`diagnose_table`)
+goes through the same rule with the simulated column as the baseline; its noise is the
+scatter of one measured reading beyond an offset per frequency (see :class:`TableAnalysis`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from ..core.errors import DataFormatError, FitError, SimulationError
+from ..core.progress import bar
+from ..effects import CATALOGUE, DEVICE, Effect
+from ..fit.effectfit import (
+    NUMERICAL_ERRORS,
+    BundleData,
+    baseline_ladder,
+    needs,
+    time_limit,
+    transient_spans,
+)
+from ..fit.fitters import choose_form, fit_effect_forms, fit_with_effects
+from ..report.diagnosis import write_report
+from .compare import Comparison
+from .consistency import amplitude_only, device_effect_contradicted
+from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
+from .evidence import evidence
+from .residuals import comparison_of, localise, noise_estimates
+from .table2 import TableAnalysis, analyse_table, diagnose_table
+from .verdict import (
+    MIN_EXPLAINED,
+    MIN_IMPROVEMENT,
+    MIN_TOTAL_EXPLAINED,
+    at_noise,
+    can_be_decisive,
+    criterion,
+    decisive,
+    explained_fraction,
+    runs_z,
+    structured,
+    verdict_reason,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..core.ladder import Foster
+    from ..io.bundle import Bundle
+    from ..model import ThermalModel
+
+__all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", "Diagnosis",
+           "Step", "TableAnalysis", "analyse_table", "candidates", "comparison_of", "diagnose",
+           "diagnose_table", "evidence", "explained_fraction", "fit_with_effects", "localise",
+           "noise_estimates", "runs_z", "structured", "write_report"]
+
+#: Effects whose only signature is in some data sets (those whose name starts so) and their
+#: least number of parameters: they are not fitted when those data sets leave no room for a
+#: decisive improvement (:func:`~spicethermal.analysis.verdict.can_be_decisive`).
+SIGNATURE = {"phase-change": ("cooling", 4), "electrical-transient": ("cooling", 2),
+             "sample-window": ("pwm", 1)}
+#: ... of which these act on the cooling curves beyond their electrical transient.
+AFTER_TRANSIENT = ("phase-change",)
+#: Costly fits (an integration per evaluation) come last and are skipped when a cheaper
+#: candidate already brings every data set to its noise without structure.
+FITTED_LAST = ("phase-change",)
+#: Effects added at most, one per step.
+MAX_STEPS = 3
+#: Time budget (s of CPU time, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
+#: candidate's fit at the first step; a fit past it keeps its
+#: best point so far (a fit that cannot start fails).
+CANDIDATE_BUDGET_S = 8.0
+#: ... and at later steps (their forward models carry the effects added so far; a second
+#: effect is often the one that needs an integration).
+LATER_BUDGET_S = 8.0
+
+
+def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
+                names: Sequence[str], before: Comparison, noise: Mapping[str, float],
+                say: Callable[[str], None], skipped: dict[str, str],
+                budget_s: float = 6.0, quiet: bool = True, step: int = 1) -> list[Candidate]:
+    """Every effect of ``names`` fitted on top of ``ladder`` and ``effects`` (each form; the
+    default form unless another is decisively better, :func:`choose_form`), each within
+    ``budget_s`` of CPU time; failures go to ``skipped``."""
+    present = {e.name for e in effects}
+    amplitude = None  # the power-per-curve alternative of the device effects, fitted once
+    cands: list[Candidate] = []
+    settled = ""
+    bic_before = criterion(before, noise, 0)
+    order = sorted(names, key=lambda n: n in FITTED_LAST)
+    for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
+        if name in present:
+            skipped.setdefault(name, "already in the model")
+            continue
+        if settled and name in FITTED_LAST:
+            skipped[name] = f"not needed: {settled} brings every data set to its noise"
+            continue
+        why = needs(name, data)
+        if why:
+            skipped[name] = why
+            continue
+        if name in SIGNATURE:
+            sets = [d for d in before.datasets if d.startswith(SIGNATURE[name][0])]
+            seen = before
+            if name in AFTER_TRANSIENT and "electrical-transient" not in present:
+                spans = transient_spans(data)
+                seen = Comparison(tuple(p for p in before.points if p.dataset not in spans
+                                        or p.at["t_s"] >= spans[p.dataset]), before.engine)
+            if not can_be_decisive(seen, noise, sets, SIGNATURE[name][1]):
+                skipped[name] = (f"cannot be decisive: {', '.join(sets)} (where it acts) are "
+                                 f"within their noise")
+                continue
+        say(f"fitting {name}")
+        t0 = time.perf_counter()
+        try:
+            with time_limit(budget_s):
+                fits = fit_effect_forms(data, ladder, name, effects)
+            scored = []
+            for fit in fits:
+                cmp = comparison_of(data, fit.ladder, [*effects, fit.effect])
+                scored.append((fit, cmp, criterion(cmp, noise, fit.n_params)))
+            best = scored[choose_form([x[2] for x in scored])]
+        except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS) as exc:
+            skipped[name] = f"fit failed: {exc}"
+            continue
+        fit, cmp, bic = best
+        contradicted = ""
+        if fit.effect.kind == DEVICE and len(data.cooling) > 1:
+            try:
+                if amplitude is None:
+                    amplitude = amplitude_only(data, ladder)
+                contradicted = device_effect_contradicted(data, ladder, fit.effect,
+                                                          fit.n_params, [x[1] for x in scored],
+                                                          amplitude)
+            except (FitError, *NUMERICAL_ERRORS):  # no alternative: nothing contradicts
+                contradicted = ""
+        improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
+        cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
+                               evidence(fit, data, before, cmp, noise),
+                               explained_fraction(before, cmp, noise),
+                               time.perf_counter() - t0, contradicted))
+        if not contradicted and decisive(cands[-1], bic_before) and at_noise(cmp, noise):
+            settled = settled or name
+    cands.sort(key=lambda c: c.bic)
+    return cands
+
+
+def diagnose(bundle: Bundle, model: ThermalModel | None = None,
+             effects: Sequence[str] | None = None,
+             progress: Callable[[str], None] | None = None, quiet: bool = True) -> Diagnosis:
+    """Compare, localise, fit every candidate effect, add the decisive one, and again.
+
+    Each step fits every catalogued effect the model lacks (each of its forms) on top of the
+    model so far and adds the best when it is decisively better (:data:`MIN_BIC_DROP`,
+    :data:`MIN_IMPROVEMENT`, :data:`MIN_EXPLAINED`); the steps stop when the residual is at
+    the noise, nothing is decisive, or after :data:`MAX_STEPS`.
+
+    Parameters
+    ----------
+    bundle : the measurements (``spicethermal-bundle/1``).
+    model : the baseline model; default the linear ladder of the bundle's lowest-power cooling
+        curve refitted to all its cooling curves
+        (:func:`~spicethermal.fit.effectfit.baseline_ladder`).
+        Its effects stay in every candidate; the candidates are the catalogued effects it lacks.
+    effects : candidate names (default: every catalogued effect).
+    progress : called with a short text before each step.
+    quiet : no progress bar on stderr (one bar per step over the candidate fits, shown only
+        when stderr is a terminal; :mod:`spicethermal.core.progress`).
+
+    Returns
+    -------
+    Diagnosis
+
+    Examples
+    --------
+    >>> from spicethermal.analysis.scenarios import scenario_bundle
+    >>> d = diagnose(scenario_bundle("sample-window", seed=0))
+    >>> d.verdict_effect, d.effects, d.best.improvement > 3
+    ('sample-window', ['sample-window'], True)
+    """
+    from ..model import ThermalModel
+
+    t_start = time.perf_counter()
+    say = progress or (lambda _text: None)
+    data = BundleData.from_bundle(bundle)
+    if not data.datasets:
+        raise DataFormatError(f"{data.source}: nothing to diagnose (no cooling, pwm or "
+                              f"calibration data)")
+    if model is not None and model.reference != bundle.reference:
+        raise DataFormatError(f"{data.source}: measured against the {bundle.reference} but the "
+                              f"model's reference is {model.reference}")
+    say("baseline ladder")
+    if model is None:
+        try:
+            ladder = baseline_ladder(data)
+        except (SimulationError, *NUMERICAL_ERRORS) as exc:
+            raise FitError(f"{data.source}: no linear ladder fits the cooling curves: "
+                           f"{exc}") from None
+        model = ThermalModel(ladder, (), bundle.reference,
+                             {"tool": "spicethermal diagnose", "baseline": "linear ladder"})
+    else:
+        ladder = model.ladder if model.ladder.topology == "foster" else model.ladder.to_foster()
+    base = comparison_of(data, ladder, model.effects)
+    noise = noise_estimates(base)
+    data = replace(data, scales=noise)  # the fits weigh each data set by its noise
+    bic0 = criterion(base, noise, 0)
+    names = list(effects) if effects is not None else list(CATALOGUE)
+    skipped: dict[str, str] = {e.name: "already in the model" for e in model.effects
+                               if e.name in names}
+    steps: list[Step] = []
+    first: list[Candidate] = []
+    cur_ladder, cur_effects, cur, cur_bic = ladder, list(model.effects), base, bic0
+    k_total = 0
+    contradicted = ""
+    while len(steps) < MAX_STEPS and not at_noise(cur, noise):
+        # the first step's candidates and skips are the report's; later ones are its steps'
+        cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
+                           skipped if not steps else {},
+                           CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S, quiet,
+                           len(steps) + 1)
+        if not steps:
+            first = cands
+        winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
+        if not winners:
+            break
+        chosen = winners[0]
+        contradicted = chosen.contradicted
+        if contradicted:
+            break
+        k_total += chosen.n_params
+        steps.append(Step(chosen, tuple(cands)))
+        cur_ladder, cur_effects, cur = chosen.ladder, [*cur_effects, chosen.effect], \
+            chosen.comparison
+        cur_bic = criterion(cur, noise, k_total)
+    where = tuple(localise(base, noise))
+    total = explained_fraction(base, cur, noise)
+    if contradicted:
+        located = localise(cur, noise) or localise(cur)
+        done = "".join(f"{st.chosen.effect.name} explains part of the misfit; then "
+                       for st in steps)
+        reason = (f"{done}no catalogued effect explains the misfit: {contradicted}; not in the "
+                  f"catalogue: the error sits in {'; and in '.join(located[:2])}")
+    elif steps and total < MIN_TOTAL_EXPLAINED and structured(cur, noise):
+        # the effects found explain part of the misfit and leave a structured residual: the
+        # physics at work is not in the catalogue (a remounted contact, a heater that sags
+        # or a convection that switches can each pass for a temperature coefficient)
+        tried = ", ".join(s.chosen.effect.name for s in steps)
+        located = localise(cur, noise) or localise(cur)
+        reason = (f"no catalogued effect explains the misfit: {tried} would explain only "
+                  f"{100 * total:.0f} % of it (needs {100 * MIN_TOTAL_EXPLAINED:.0f} % when a "
+                  f"structured residual remains) and leave {'; and '.join(located[:2])}; not in "
+                  f"the catalogue")
+        steps = []
+    else:
+        reason = verdict_reason(base, cur, noise, first, steps, skipped)
+    effect = steps[0].chosen.effect.name if steps else None
+    return Diagnosis(base, model, noise, bic0, tuple(first), effect, reason, where, skipped,
+                     time.perf_counter() - t_start, data.source, {}, tuple(steps))

@@ -1,0 +1,192 @@
+"""The verdict rule: when an effect is decisively better than the model without it, how much
+of the misfit it explains, whether a structured residual remains, and the reason given.
+
+Criterion: ``BIC = Σ_d RSS_d / σ_d² + k ln N`` (noise-weighted χ² plus ``k ln N`` for ``k``
+effect parameters over ``N`` points). An effect is decisive when it lowers the BIC by at least
+:data:`MIN_BIC_DROP`, the pooled RMS by :data:`MIN_IMPROVEMENT` × and explains at least
+:data:`MIN_EXPLAINED` of the misfit beyond the noise (:func:`explained_fraction`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .residuals import EXPLAINED_RATIO, localise
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+    from .compare import Comparison
+
+__all__ = ["AT_NOISE_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
+           "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "bic_drop", "can_be_decisive", "chi2",
+           "criterion",
+           "decisive", "explained_fraction", "runs_z", "structured", "verdict_reason"]
+
+#: An effect must lower the pooled RMS at least this many times ...
+MIN_IMPROVEMENT = 1.15
+#: ... lower the BIC by at least this much ...
+MIN_BIC_DROP = 10.0
+#: ... and explain at least this fraction of the misfit beyond the noise,
+#: ``(χ²_before − χ²_after) / (χ²_before − N)``.
+MIN_EXPLAINED = 0.4
+#: Effects that leave a structured residual are named only when together they explain at
+#: least this fraction of the baseline's misfit beyond the noise (else: not in the catalogue).
+MIN_TOTAL_EXPLAINED = 0.97
+#: The residual is at the noise when every data set's ``χ² / n`` is below this (plus its
+#: statistical spread) and none has a structured residual (:func:`runs_z` below :data:`RUNS_Z`).
+AT_NOISE_CHI2 = 1.5
+#: A data set's residual is structured when its runs test gives z below this.
+RUNS_Z = -3.0
+
+
+def criterion(comparison: Comparison, noise: Mapping[str, float], k: int) -> float:
+    return chi2(comparison, noise) + k * math.log(max(len(comparison.points), 2))
+
+
+def chi2(comparison: Comparison, noise: Mapping[str, float]) -> float:
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged candidate: inf
+        return sum(float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2
+                   for name, sub in comparison.by_dataset().items())
+
+
+def explained_fraction(before: Comparison, after: Comparison,
+                       noise: Mapping[str, float]) -> float:
+    """Fraction of ``before``'s misfit beyond the noise that ``after`` removes,
+    ``(χ²_before − χ²_after) / (χ²_before − N)`` with noise-weighted χ² (1 when ``before``
+    is already at the noise and ``after`` is no worse).
+
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> c = lambda r: Comparison(tuple(ComparisonPoint("x", {"t_s": i + 1.0}, x, 0.0)
+    ...                                for i, x in enumerate(r)))
+    >>> round(explained_fraction(c([3.0, -3.0]), c([1.0, 1.0]), {"x": 1.0}), 3)
+    1.0
+    >>> round(explained_fraction(c([3.0, -3.0]), c([2.0, 2.0]), {"x": 1.0}), 3)
+    0.625
+    """
+    c0, c1 = chi2(before, noise), chi2(after, noise)
+    excess = c0 - len(before.points)
+    if excess <= 0:
+        return 1.0 if c1 <= c0 else 0.0
+    return float(min(1.0, (c0 - c1) / excess))
+
+
+def runs_z(residuals: NDArray) -> float:
+    """Wald–Wolfowitz runs test on the signs of ``residuals`` in data order: z of the number
+    of runs (very negative: too few runs, a structured residual; about 0 for white noise;
+    0 for fewer than 8 residuals or one sign only).
+
+    >>> runs_z(np.array([1.0] * 10 + [-1.0] * 10)) < -3
+    True
+    >>> abs(runs_z(np.array([1.0, -1.0] * 10))) > 3
+    True
+    """
+    r = np.asarray(residuals, dtype=float)
+    r = r[r != 0]
+    pos = int(np.sum(r > 0))
+    neg = r.size - pos
+    if r.size < 8 or pos == 0 or neg == 0:
+        return 0.0
+    runs = 1 + int(np.sum(np.diff(np.sign(r)) != 0))
+    n = r.size
+    mu = 2.0 * pos * neg / n + 1
+    var = (mu - 1) * (mu - 2) / (n - 1)
+    return float((runs - mu) / math.sqrt(var)) if var > 0 else 0.0
+
+
+def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
+    """Data sets whose residual is beyond their noise (RMS above :data:`EXPLAINED_RATIO` ×)
+    and structured (:func:`runs_z` below :data:`RUNS_Z`)."""
+    return [name for name, sub in comparison.by_dataset().items()
+            if sub.rms_k > EXPLAINED_RATIO * noise[name] and runs_z(sub.residuals_k) < RUNS_Z]
+
+
+def at_noise(comparison: Comparison, noise: Mapping[str, float]) -> bool:
+    """Every data set within its noise: ``χ²_d / n_d`` at most :data:`AT_NOISE_CHI2` plus
+    three standard deviations of that ratio for white noise (``3 √(2/n_d)``: a small data
+    set such as the calibration is judged on its own, not drowned in the curves' points),
+    and no structured residual."""
+    for name, sub in comparison.by_dataset().items():
+        n = max(len(sub.points), 1)
+        ratio = float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2 / n
+        if ratio > AT_NOISE_CHI2 + 3 * math.sqrt(2 / n):
+            return False
+    return not structured(comparison, noise)
+
+
+def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
+                    datasets: Sequence[str], n_params: int) -> bool:
+    """Whether an effect that acts only on ``datasets`` could lower the BIC of ``comparison``
+    by :data:`MIN_BIC_DROP` with ``n_params`` parameters: their χ² must exceed what white noise
+    can leave (``n − 3 √(2n)`` for their ``n`` points) by at least that drop plus
+    ``n_params ln N`` (a cheap test that prunes candidates before any fit).
+
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> c = Comparison(tuple(ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.5}, x, 0.0)
+    ...                      for x in (1.0, -1.0) * 20))
+    >>> can_be_decisive(c, {"pwm": 2.0}, ["pwm"], 1), can_be_decisive(c, {"pwm": 0.5}, ["pwm"], 1)
+    (False, True)
+    """
+    sets = comparison.by_dataset()
+    subs = [sets[d] for d in datasets if d in sets]
+    n = sum(len(sub.points) for sub in subs)
+    if not n:
+        return False
+    excess = sum(float(np.sum(sub.residuals_k ** 2)) / noise[sub.points[0].dataset] ** 2
+                 for sub in subs) - (n - 3 * math.sqrt(2 * n))
+    return excess >= MIN_BIC_DROP + n_params * math.log(max(len(comparison.points), 2))
+
+
+def decisive(cand: Any, bic_before: float, min_improvement: float = MIN_IMPROVEMENT,
+             min_explained: float = MIN_EXPLAINED) -> bool:
+    """True when candidate ``cand`` is decisively better than a model of BIC ``bic_before``."""
+    return (bic_before - cand.bic >= MIN_BIC_DROP and cand.improvement >= min_improvement
+            and cand.explained >= min_explained)
+
+
+def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, float],
+                   first: Sequence[Any], steps: Sequence[Any],
+                   skipped: Mapping[str, str]) -> str:
+    """The verdict's reason: what was added and why, what is left, and where."""
+    if not steps and at_noise(base, noise):
+        return (f"the model fits every data set at its noise (RMS {base.rms_k:.3g} K, "
+                f"{chi2(base, noise) / max(len(base.points), 1):.2f}× the noise variance, no "
+                f"structured residual): no effect is missing")
+    parts = []
+    prev = base
+    for s in steps:
+        c = s.chosen
+        parts.append(f"{c.effect.name} ({c.effect.form}) lowers the RMS {c.improvement:.3g}× "
+                     f"({prev.rms_k:.3g} → {c.rms_k:.3g} K) and explains "
+                     f"{100 * c.explained:.0f} % of the misfit beyond the noise")
+        prev = c.comparison
+    left = structured(final, noise)
+    if steps and not left:
+        tail = ("the residual is at the noise" if at_noise(final, noise)
+                else "what is left has no structure beyond the noise")
+        return "; then ".join(parts) + f"; {tail}"
+    if not steps:
+        if first:
+            c = first[0]
+            why = (f"the best candidate, {c.effect.name} ({c.effect.form}), lowers the RMS only "
+                   f"{c.improvement:.3g}× and explains {100 * max(c.explained, 0):.0f} % of the "
+                   f"misfit (needs {MIN_IMPROVEMENT:g}×, {100 * MIN_EXPLAINED:.0f} % and a BIC "
+                   f"drop of {MIN_BIC_DROP:g}; it gives {bic_drop(c, base, noise):.0f})")
+        else:
+            why = "no candidate effect could be fitted"
+        located = localise(final, noise) or localise(final)
+        return (f"no catalogued effect explains the misfit: {why}; not in the catalogue: the "
+                f"error sits in {'; and in '.join(located[:2])}")
+    located = localise(final, noise) or localise(final)
+    return ("; then ".join(parts) + "; a structured residual remains that no catalogued effect "
+            f"explains (not in the catalogue): "
+            f"{'; and '.join(located[:2]) if located else ', '.join(left)}")
+
+
+def bic_drop(cand: Any, base: Comparison, noise: Mapping[str, float]) -> float:
+    """BIC of ``base`` (no extra parameter) minus the candidate's."""
+    return criterion(base, noise, 0) - cand.bic

@@ -1,0 +1,1 @@
+"""The command line: argparse only (parse, call the library, print)."""

@@ -1,0 +1,77 @@
+"""docs/cli.md: the command-line reference, generated from the argparse definitions.
+
+Regenerate after changing an option (``tests/test_clidoc.py`` fails while it is out of date)::
+
+    .venv/bin/python -m spicethermal.cli.clidoc > docs/cli.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Iterator
+from unittest import mock
+
+__all__ = ["cli_markdown", "commands"]
+
+#: Width of the generated help text (independent of the terminal).
+WIDTH = 100
+
+
+def commands(parser: argparse.ArgumentParser, name: str = "spicethermal"
+             ) -> Iterator[tuple[str, argparse.ArgumentParser]]:
+    """Every (sub-)command's full name and parser, depth first, as ``--help`` lists them.
+
+    Parameters
+    ----------
+    parser : the top-level parser (:func:`spicethermal.cli.main.build_parser`).
+    name : its program name.
+
+    Returns
+    -------
+    Iterator of ``(name, parser)``, the top level first.
+
+    Examples
+    --------
+    >>> from spicethermal.cli.main import build_parser
+    >>> names = [n for n, _ in commands(build_parser())]
+    >>> names[0], "spicethermal bench run" in names
+    ('spicethermal', True)
+    """
+    yield name, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub, subparser in action.choices.items():
+                yield from commands(subparser, f"{name} {sub}")
+
+
+def cli_markdown() -> str:
+    """The Markdown reference of every command and sub-command, in the order of ``--help``.
+
+    Returns
+    -------
+    str : the text of docs/cli.md.
+
+    Examples
+    --------
+    >>> text = cli_markdown()
+    >>> text.startswith("# Command-line reference") and "## spicethermal fit" in text
+    True
+    """
+    from .main import build_parser
+
+    with mock.patch.dict(os.environ, {"COLUMNS": str(WIDTH)}):
+        pages = [(name, p.format_help()) for name, p in commands(build_parser())]
+    out = ["# Command-line reference", "",
+           "Generated from the argparse definitions by `python -m spicethermal.cli.clidoc > "
+           "docs/cli.md`; `tests/test_clidoc.py` fails when it is out of date. Numbers take SI "
+           "prefixes and optional units (`1k`, `25kHz`, `100u`, `100us`, `2.5m`, `20%`).", ""]
+    out += [f"- [`{name}`](#{name.replace(' ', '-')})" for name, _ in pages[1:]]
+    for name, text in pages:
+        out += ["", f"## {name}", "", "```text", text.rstrip(), "```"]
+    return "\n".join(out) + "\n"
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.stdout.write(cli_markdown())

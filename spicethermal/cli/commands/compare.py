@@ -1,0 +1,52 @@
+"""``spicethermal compare MODEL.json BUNDLE [--json] [--engine auto|analytic|ngspice|pyspice]``.
+
+Measured vs model over every data set of the bundle: the PWM readings as the paper's Table 2
+(Freq × duty: T_exp, T_mod, Δ) and the cooling curves point by point. ``--json`` prints the
+``spicethermal-comparison/1`` document. Δ = measured − model.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from ...engines.interface import NAMES
+from ...io.files import dumps_json
+from ._source import SOURCE_HELP, add_source_arguments, comparable_source
+from ._types import nonnegative as _window
+
+NAME = "compare"
+HELP = "measured vs model over every data set of a bundle (the paper's Table 2)"
+
+
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
+    parser.add_argument("bundle", metavar="SOURCE", help=SOURCE_HELP)
+    parser.add_argument("--json", action="store_true",
+                        help="print the spicethermal-comparison/1 document")
+    parser.add_argument("--engine", choices=NAMES, default="auto",
+                        help="PWM engine: auto (analytic for linear models, ngspice with device "
+                             "effects), analytic, ngspice or pyspice")
+    parser.add_argument("--window", type=_window, metavar="S",
+                        help="sample window for PWM readings, s (default: the model's "
+                             "sample-window effect, else the bundle's sample_window_s)")
+    add_source_arguments(parser, curve=False, early=False)
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bar on stderr (none either when it is not a terminal)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ...analysis.compare import compare
+    from ...engines.interface import engine
+    from ...model import ThermalModel
+
+    model = ThermalModel.load(args.model)
+    engine(args.engine, model)  # --engine analytic refuses device effects in one line
+    bundle = comparable_source(args, args.bundle)
+    result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
+    if args.json:
+        print(dumps_json(result.to_json(), indent=2))
+    else:
+        print(result.table())
+    return 0

@@ -1,0 +1,1 @@
+"""The fastest safe drive of the thermopneumatic actuator."""

@@ -1,0 +1,1 @@
+"""Simulation engines: the analytic periodic steady state and the ngspice/PySpice sweeps."""

@@ -1,0 +1,169 @@
+"""Fitting the measurement effects: ``sample-window``, ``electrical-transient`` and
+``tsp-nonlinearity`` (their forward models are the measurement model of
+:mod:`spicethermal.fit.effectfit`).
+
+Each fit returns one :class:`~spicethermal.fit.effectfit.EffectFit` per form it tried; the choice
+among forms and the nested-model guarantee are :mod:`spicethermal.fit.fitters`'. The ladder is
+held for ``sample-window`` (cooling curves are not affected) and refitted jointly for the
+other two (the readings the ladder was fitted from carry the artefact).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.errors import FitError
+from ..effects import CATALOGUE, Effect
+from .effectfit import (
+    BundleData,
+    EffectFit,
+    effects_map,
+    joint_fit,
+    others,
+    predict,
+    subset,
+    transient_spans,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+    from ..core.ladder import Cauer, Foster
+
+__all__ = ["fit_electrical_transient", "fit_sample_window", "fit_tsp_nonlinearity"]
+
+#: Evaluations allowed to each start of the transient's fit on the early points (ladder held;
+#: 2-3 parameters): the starts are many, a start that has not converged by then is a poor one.
+HELD_NFEV = 60
+
+
+def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
+                      effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """``window_s`` from the PWM readings, ladder held (cooling curves are not affected), for
+    each form (reading at the end of the window, averaged over it); three starts each."""
+    if data.pwm is None:
+        raise FitError("sample-window needs a PWM data set")
+    base = others(effects, "sample-window")
+    hi_us = 1e6 * min(1.0, 20.0 / float(np.min(data.pwm.freq_hz)))
+    out = []
+    for form in CATALOGUE["sample-window"].forms:
+        def build(x: NDArray, form: str = form) -> list[Effect]:
+            return [*base, Effect.create("sample-window", form, window_s=float(x[0]) * 1e-6)]
+
+        best = None
+        for s in (10.0, 100.0, 1000.0):
+            if s < hi_us:
+                r = joint_fit(data, ["pwm"], ladder, False, [s], [0.0], [hi_us], build)
+                if best is None or r[2].cost < best[2].cost:
+                    best = r
+        lad, effs, _ = best
+        out.append(EffectFit(effs[-1], lad, 1, {"declared_s": data.pwm.window_s}))
+    return out
+
+
+def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
+                             effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """Each form of the transient: its parameters first on the early points of every cooling
+    curve with the ladder held (a multi-start), then jointly with the ladder from every point
+    of every cooling curve (the early ones included)."""
+    if not data.cooling:
+        raise FitError("electrical-transient needs cooling curves")
+    names = [c.name for c in data.cooling]
+    base = others(effects, "electrical-transient")
+    first = min(float(c.t_s[0]) for c in data.cooling)
+    pred = predict(subset(data, names), ladder, base)
+    amp0 = float(np.mean([data.measured(n)[0] - pred[n][0] for n in names]))
+    per_w0 = float(np.mean([(data.measured(c.name)[0] - pred[c.name][0]) / c.power_w
+                            for c in data.cooling]))
+    spans = [s for s in transient_spans(data).values() if s > 0]
+    span0 = max(float(np.median(spans)) if spans else 1e-4, 10 * first)
+    lspan = math.log10(span0)
+    lo_s, hi_s = math.log10(first) - 1, 0.0
+    forms = {  # form: (starts, lower, upper, parameters from x)
+        "fixed": ([[amp0, lspan]], [-1e3, lo_s], [1e3, hi_s],
+                  lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1]}),
+        "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
+                  lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
+        "ringing": ([[amp0, ls, lf] for ls in (lspan, lspan + 0.5)
+                     for lf in (-0.3, 0.3, 0.9)],
+                    [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
+                    lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
+                               "ring_hz": 10 ** (x[2] - x[1])}),
+    }
+    early = {n: 10 * span0 for n in names}
+    n_early = sum(int(np.sum(c.t_s < early[c.name])) for c in data.cooling)
+    # the held fits see the early points only: the curves cut there (the forward models of
+    # the device effects then integrate only that far)
+    head = replace(data, cooling=tuple(
+        replace(c, t_s=c.t_s[k], tj_c=c.tj_c[k], tref_c=c.tref_c[k])
+        for c in data.cooling for k in [c.t_s < early[c.name]] if np.any(k)))
+    if not head.cooling:
+        raise FitError("electrical-transient: no reading within the early span")
+    early_names = [c.name for c in head.cooling]
+    held = {}
+    for form, (starts, lo, hi, params) in forms.items():
+        def build(x: NDArray, form: str = form, params=params) -> list[Effect]:
+            return [*base, Effect.create("electrical-transient", form,
+                                         **{k: float(v) for k, v in params(x).items()})]
+
+        res = min((joint_fit(head, early_names, ladder, False, x0, lo, hi, build,
+                             max_nfev=HELD_NFEV)[2] for x0 in starts), key=lambda r: r.cost)
+        held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
+    # the ladder is refitted with the default form and with the best other form when the
+    # early points prefer it decisively
+    best = min(held, key=lambda k: held[k][0])
+    refine = ["fixed"] + ([best] if best != "fixed" and held[best][0] < held["fixed"][0] - 10
+                          else [])
+    out = []
+    for form in refine:
+        _, x0, build = held[form]
+        lo, hi = forms[form][1], forms[form][2]
+        lad, effs, _ = joint_fit(data, names, ladder, True, list(x0), lo, hi, build)
+        out.append(EffectFit(effs[-1], lad, len(lo), {}))
+    return out
+
+
+def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
+                         effects: Sequence[Effect] = ()) -> list[EffectFit]:
+    """``q`` and ``t_cal_c`` (and, in the cubic form, ``c``) jointly with the ladder from every
+    data set: the calibration residuals fix the curvature, the readings of the curves and the
+    PWM grid ``t_cal_c``. The cubic form starts from the quadratic fit."""
+    names = list(data.datasets)
+    if not names:
+        raise FitError("tsp-nonlinearity needs data")
+    base = others(effects, "tsp-nonlinearity")
+    tcal0 = data.reference_c
+    q0 = 0.0
+    if data.calibration is not None:
+        basis, _ = data.calibration.curvature_basis(tcal0)
+        resid = data.calibration.read_c - data.calibration.temp_c
+        q0 = float(basis @ resid / max(float(basis @ basis), 1e-300))
+    temps = np.concatenate([data.measured(n) for n in names])
+    lo_t, hi_t = float(np.min(temps)) - 50, float(np.max(temps)) + 50
+    qmax = 1e4 * 0.2 / max(hi_t - lo_t, 1.0)
+    cmax = 1e6 * 0.2 / max(hi_t - lo_t, 1.0) ** 2
+    exclude = transient_spans(data) if "electrical-transient" not in effects_map(base) \
+        else None
+
+    def build(x: NDArray) -> list[Effect]:
+        cubic = {"cub_k_per_k3": float(x[2]) * 1e-6} if len(x) > 2 else {}
+        return [*base, Effect.create("tsp-nonlinearity", "cubic" if cubic else "quadratic",
+                                     quad_k_per_k2=float(x[0]) * 1e-4, t_cal_c=float(x[1]),
+                                     **cubic)]
+
+    x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]
+    fit_ladder = bool(data.cooling)
+    lad, effs, res = joint_fit(data, names, ladder, fit_ladder, x0, [-qmax, lo_t], [qmax, hi_t],
+                               build, exclude=exclude)
+    out = [EffectFit(effs[-1], lad, 2, {})]
+    q = effs[-1].params
+    x1 = [q["quad_k_per_k2"] * 1e4, q["t_cal_c"], 0.0]
+    lad3, effs3, _ = joint_fit(data, names, lad, fit_ladder, x1, [-qmax, lo_t, -cmax],
+                               [qmax, hi_t, cmax], build, exclude=exclude)
+    out.append(EffectFit(effs3[-1], lad3, 3, {}))
+    return out

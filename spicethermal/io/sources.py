@@ -1,0 +1,381 @@
+"""One reader for every command that takes a curve (``fit``, ``compare``, ``diagnose``,
+``spectrum``, ``structure``, ``table1``).
+
+A *source* is one of:
+
+* a bundle directory (``spicethermal-bundle/1`` or ``/2``, ``docs/bundle-format.md``);
+* a Zth CSV — measured or digitized datasheet points: ``t_s`` and ``zth_k_per_w``, or ``r``
+  (normalized, needs ``rth_k_per_w``);
+* a cooling CSV: ``t_s`` and ``tj_c`` (optional ``tref_c``) or raw ``v_tsp_v`` (needs a
+  calibration);
+* a PyRth transient ``.txt`` (time, sensor voltage; needs a calibration);
+* a T3Ster ``.raw`` record (its ``.pwr`` and ``.tco`` beside it).
+
+:func:`read_source` turns any of them into a :class:`Source`: a
+:class:`~spicethermal.io.bundle.Bundle` plus what was assumed on the way (``notes``, printed by the
+commands). Nothing is silently
+defaulted: a file without a calibration needs ``calibration`` (a CSV of ``temp_c, v_tsp_v``)
+or ``k_factor_mv_per_k`` with ``tref_c``, and the error says which option to pass.
+
+>>> from spicethermal.data import path
+>>> src = read_source(path("pyrth_mosfet/MOSFET_dry.txt"), k_factor_mv_per_k=-2.324,
+...                   tref_c=25.0)
+>>> src.kind, round(src.curve().rth_k_per_w, 1)
+('pyrth', 13.8)
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..core.errors import DataFormatError
+from ..fit.ladder import BINS_PER_DECADE, DENSE_POINTS, log_bins
+from ..identify.calibration import KFactor
+from .bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ZthTable, read_columns
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..identify.curves import ZthCurve
+
+#: Kinds of source (:attr:`Source.kind`).
+KINDS = ("bundle", "zth-csv", "cooling-csv", "pyrth", "t3ster")
+#: The options that name a calibration, as the command line spells them.
+CALIBRATION_OPTIONS = "--calibration CSV (temp_c, v_tsp_v) or --k-factor MV_PER_K with --tref DEGC"
+
+
+def read_calibration(path: str | os.PathLike) -> CalibrationTable:
+    """A calibration CSV (``temp_c``, ``v_tsp_v``) as a table.
+
+    Parameters
+    ----------
+    path : the CSV file.
+
+    Returns
+    -------
+    CalibrationTable
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "cal.csv"
+    >>> _ = p.write_text("temp_c,v_tsp_v\\n25,0.6\\n75,0.5\\n")
+    >>> round(read_calibration(p).fit().k_factor_mv_per_k, 9)
+    -2.0
+    """
+    path = Path(path)
+    cols = read_columns(path, ["temp_c", "v_tsp_v"])
+    return CalibrationTable(cols["temp_c"], cols["v_tsp_v"], file=path.name, rows=cols.rows)
+
+
+@dataclass(frozen=True)
+class Source:
+    """A curve source read into a bundle; ``notes`` say what was assumed or done on reading."""
+
+    path: Path
+    kind: str
+    bundle: Bundle
+    notes: tuple[str, ...] = ()
+    rth_given: bool = False
+
+    @property
+    def n_curves(self) -> int:
+        """Cooling curves, then zth tables."""
+        return len(self.bundle.cooling) + len(self.bundle.zth)
+
+    def curve(self, index: int = 0, *, early_window_s: tuple[float, float] | None = None,
+              mask_s: float | str | None = "auto", tj_steady_c: float | None = None
+              ) -> ZthCurve:
+        """Curve ``index`` as Zth(t): cooling curves first (early-time correction, ``v_tsp_v``
+        through the calibration), then zth tables.
+
+        Parameters
+        ----------
+        index : which curve (``--curve``).
+        early_window_s : the √t fit window (``--early-window``); default chosen from the
+            electrical transient (:meth:`~spicethermal.identify.curves.ZthCurve.from_cooling`).
+        mask_s : the electrical transient to mask, s, ``"auto"`` or ``None``.
+        tj_steady_c : junction temperature at the cut of a cooling curve that lacks it.
+
+        Returns
+        -------
+        ZthCurve
+            Labelled ``name/curve`` for a bundle, the file's stem otherwise.
+        """
+        from ..identify.curves import ZthCurve
+
+        n_cool = len(self.bundle.cooling)
+        if self.n_curves == 0:
+            raise DataFormatError(f"{self.path}: no cooling curve and no zth table")
+        if not 0 <= index < self.n_curves:
+            raise DataFormatError(f"--curve {index}: {self.path} has {n_cool} cooling curve(s) "
+                                  f"and {len(self.bundle.zth)} zth table(s) (valid: 0.."
+                                  f"{self.n_curves - 1})")
+        if index < n_cool:
+            c = self.bundle.cooling[index]
+            tref, tref_steady = self.bundle.cooling_reference_c(index)
+            tjs = c.tj_steady_c if c.tj_steady_c is not None else tj_steady_c
+            zc = ZthCurve.from_cooling(c.t_s, self.bundle.cooling_tj_c(index), c.power_w, tjs,
+                                       tref, tref_steady, mask_s=mask_s,
+                                       fit_window_s=early_window_s,
+                                       label=c.file or f"cooling[{index}]")
+        else:
+            z = self.bundle.zth[index - n_cool]
+            if z.normalized and z.rth_k_per_w is None:
+                raise DataFormatError(f"{self.path}: {z.file or 'zth table'} holds normalized r "
+                                      f"(Zth/Rth): give --rth")
+            zc = ZthCurve.from_table(z, label=z.file or f"zth[{index - n_cool}]")
+        label = (f"{self.path.name}/{zc.label}" if self.kind == "bundle" else self.path.stem)
+        return replace(zc, label=label)
+
+    def rth_held(self, index: int = 0) -> bool:
+        """Whether the curve's Rth is measured (a cooling curve, eq. 1) or given, so that a fit
+        should hold ``ΣR = Rth``; False for a Zth table whose Rth is only its last point."""
+        if index < len(self.bundle.cooling):
+            return True
+        z = self.bundle.zth[index - len(self.bundle.cooling)]
+        return z.rth_k_per_w is not None
+
+    def comparable(self, points_per_decade: int = BINS_PER_DECADE) -> tuple[Bundle, list[str]]:
+        """The bundle as ``compare`` and ``diagnose`` take it, and what was done to it: zth
+        tables become the cooling curves they imply at 1 W (``Tj(t) = Tref + Rth − Zth(t)`` by
+        superposition, ``Tref`` the ambient or 25 degC), and cooling curves denser than
+        :data:`DENSE_POINTS` samples are averaged into ``points_per_decade`` log-spaced bins
+        (:func:`thin`)."""
+        notes: list[str] = []
+        cooling = []
+        for c in self.bundle.cooling:
+            thinned = thin(c, points_per_decade)
+            if thinned is not c:
+                notes.append(f"{c.file}: {c.t_s.size} samples averaged into {thinned.t_s.size} "
+                             f"log-spaced bins ({points_per_decade} per decade)")
+            cooling.append(thinned)
+        bundle = self.bundle.with_(cooling=tuple(cooling))
+        if not self.bundle.zth:
+            return bundle, notes
+        ambient = self.bundle.ambient_c if self.bundle.ambient_c is not None else 25.0
+        for i in range(len(self.bundle.zth)):
+            zc = self.curve(len(self.bundle.cooling) + i)
+            cooling.append(CoolingTable(zc.t_s, 1.0, tj_c=ambient + zc.rth_k_per_w
+                                        - zc.zth_k_per_w,
+                                        tj_steady_c=ambient + zc.rth_k_per_w,
+                                        tref_steady_c=ambient,
+                                        file=f"cooling_{len(cooling) + 1}.csv",
+                                        extra={"from_zth": zc.label}))
+            notes.append(f"{zc.label}: compared as the cooling curve it implies at 1 W from "
+                         f"{ambient:g} degC")
+        return bundle.with_(cooling=tuple(cooling), zth=(), ambient_c=ambient), notes
+
+
+def thin(cooling: CoolingTable, points_per_decade: int = BINS_PER_DECADE) -> CoolingTable:
+    """A cooling curve with more than :data:`DENSE_POINTS` samples averaged into log-spaced
+    bins (every column by the same bins; a bin of one sample keeps it); others unchanged.
+
+    Parameters
+    ----------
+    cooling : the curve.
+    points_per_decade : bins per decade of time.
+
+    Returns
+    -------
+    CoolingTable
+        The thinned curve (the same object when it is not dense).
+
+    >>> t = np.geomspace(1e-6, 1.0, 2000)
+    >>> c = thin(CoolingTable(t, 1.0, tj_c=30 - np.sqrt(t), tref_steady_c=25.0), 10)
+    >>> c.t_s.size, bool(np.all(np.diff(c.t_s) > 0))
+    (61, True)
+    """
+    t = cooling.t_s
+    if t.size <= DENSE_POINTS:
+        return cooling
+    keep = t > 0
+    start, counts = log_bins(t[keep], points_per_decade)
+
+    def mean(values: np.ndarray | None) -> np.ndarray | None:
+        return None if values is None else np.add.reduceat(values[keep], start) / counts
+
+    return replace(cooling, t_s=mean(t), tj_c=mean(cooling.tj_c), v_tsp_v=mean(cooling.v_tsp_v),
+                   tref_c=mean(cooling.tref_c), rows=None)
+
+
+def read_source(source: str | os.PathLike, *, calibration: str | os.PathLike | None = None,
+                k_factor_mv_per_k: float | None = None, tref_c: float | None = None,
+                power_w: float | None = None, rth_k_per_w: float | None = None) -> Source:
+    """Read any curve source (see the module docstring).
+
+    Parameters
+    ----------
+    source : the bundle directory (or its ``bundle.json``) or file.
+    calibration : a calibration CSV (``temp_c, v_tsp_v``); replaces a bundle's or a ``.tco``.
+    k_factor_mv_per_k : a K-factor instead, anchored by ``tref_c``.
+    tref_c : temperature of the device at the end of the record (re-anchors the calibration
+        of a raw transient), or the reference of a cooling CSV without ``tref_c``.
+    power_w : heating power of a PyRth ``.txt`` (the file has none; 1 W nominal) or of a
+        cooling CSV.
+    rth_k_per_w : Rth of a normalized Zth CSV (``r``), held as ``ΣR = Rth`` by a fit.
+
+    Returns
+    -------
+    Source
+    """
+    from .importers import read_pyrth, read_t3ster
+
+    path = Path(source)
+    if path.name == MANIFEST and path.is_file():
+        path = path.parent
+    if not path.exists():
+        raise DataFormatError(f"{path}: no such file or bundle directory")
+    cal = _calibration(calibration, k_factor_mv_per_k, tref_c)
+    notes: list[str] = []
+    if path.is_dir():
+        bundle = Bundle.read(path, cal)
+        if cal is not None:
+            raw = [c.v_tsp_v for c in bundle.cooling if c.v_tsp_v is not None]
+            if isinstance(cal, KFactor) and raw:
+                cal, note = _anchor(cal, raw[0])
+                notes.append(note)
+                bundle = bundle.with_(calibration=cal)
+            notes.append(f"calibration from the command line: {cal}")
+        return Source(path, "bundle", _with_rth(bundle, rth_k_per_w), tuple(notes),
+                      rth_k_per_w is not None)
+    suffix = path.suffix.lower()
+    if suffix == ".txt":
+        if power_w is None:
+            notes.append("power 1 W nominal (the file holds none; --power W)")
+        bundle = read_pyrth(path, cal, 1.0 if power_w is None else power_w, tref_c=tref_c)
+        return Source(path, "pyrth", bundle, tuple(notes + _anchor_note(bundle)))
+    if suffix == ".raw":
+        bundle = read_t3ster(path, tref_c=tref_c)
+        if cal is not None:
+            bundle = bundle.with_(calibration=cal)
+            notes.append(f"calibration replaced: {cal}")
+        return Source(path, "t3ster", bundle, tuple(notes + _anchor_note(bundle)))
+    return _read_csv(path, cal, tref_c, power_w, rth_k_per_w)
+
+
+def _calibration(calibration: str | os.PathLike | None, k_mv_per_k: float | None,
+                 tref_c: float | None) -> CalibrationTable | KFactor | None:
+    if calibration is not None and k_mv_per_k is not None:
+        raise DataFormatError("give --calibration or --k-factor, not both")
+    if calibration is not None:
+        return read_calibration(calibration)
+    if k_mv_per_k is None:
+        return None
+    if tref_c is None:
+        raise DataFormatError("--k-factor needs --tref DEGC: the temperature at the end of the "
+                              "record, where the K-factor is anchored")
+    return KFactor.from_mv_per_k(k_mv_per_k, 0.0, tref_c, "--k-factor")
+
+
+def csv_header(path: str | os.PathLike) -> list[str]:
+    """The column names of a CSV file (its first line that is not a ``#`` comment).
+
+    Parameters
+    ----------
+    path : the file.
+
+    Returns
+    -------
+    list of str
+        Empty for a file without a header.
+    """
+    from .files import read_text
+
+    for line in read_text(Path(path)).splitlines():
+        line = line.split("#", 1)[0].strip()
+        if line:
+            return [f.strip() for f in line.split(",")]
+    return []
+
+
+def _anchor(cal: KFactor, v_tsp_v: np.ndarray) -> tuple[KFactor, str]:
+    """The K-factor anchored at the end of a record (the device back at ``t_ref_c``)."""
+    from .importers import END_SAMPLES
+
+    cal = replace(cal, v_ref_v=float(np.mean(v_tsp_v[-END_SAMPLES:])))
+    return cal, (f"calibration anchored: {cal.v_ref_v:.6g} V (end of record) = "
+                 f"{cal.t_ref_c:g} degC")
+
+
+def _anchor_note(bundle: Bundle) -> list[str]:
+    anchor = bundle.extra.get("source", {}).get("anchored")
+    if anchor:
+        return [f"calibration anchored: {anchor}"]
+    return [f"the record ends at {bundle.cooling[0].tref_steady_c:.4g} degC through the "
+            f"calibration as given (--tref DEGC anchors it at the device's true temperature)"]
+
+
+def _with_rth(bundle: Bundle, rth: float | None) -> Bundle:
+    if rth is None or not bundle.zth:
+        return bundle
+    return bundle.with_(zth=tuple(replace(z, rth_k_per_w=rth) for z in bundle.zth))
+
+
+def _read_csv(path: Path, cal: CalibrationTable | KFactor | None, tref_c: float | None,
+              power_w: float | None, rth: float | None) -> Source:
+    cols = read_columns(path, ["t_s", ("zth_k_per_w", "r", "tj_c", "v_tsp_v")], ["tref_c"])
+    if "zth_k_per_w" in cols or "r" in cols:
+        if "zth_k_per_w" in cols and "r" in cols:
+            raise DataFormatError(f"{path}: has both zth_k_per_w and r; keep one")
+        if "r" in cols and rth is None:
+            raise DataFormatError(f"{path}: column r is normalized (Zth/Rth): give --rth")
+        for col in ("zth_k_per_w", "r"):
+            bad = np.flatnonzero(cols[col] < 0) if col in cols else []
+            if len(bad):
+                raise DataFormatError(f"{path}, row {int(cols.rows[bad[0]])}, column {col}: "
+                                      f"{float(cols[col][bad[0]])!r} must be >= 0")
+        table = ZthTable(cols["t_s"], zth_k_per_w=cols.get("zth_k_per_w"), r=cols.get("r"),
+                         rth_k_per_w=rth, file=path.name, rows=cols.rows)
+        return Source(path, "zth-csv", Bundle(zth=(table,), source=str(path)), (),
+                      rth is not None)
+    notes = []
+    if "tj_c" not in cols and cal is None:
+        raise DataFormatError(f"{path}: column v_tsp_v needs a calibration: "
+                              f"{CALIBRATION_OPTIONS}")
+    if "tref_c" not in cols and tref_c is None:
+        raise DataFormatError(f"{path}: a cooling curve needs a reference: a tref_c column or "
+                              f"--tref DEGC")
+    if power_w is None:
+        notes.append("power 1 W nominal (--power W)")
+    v = None if "tj_c" in cols else cols["v_tsp_v"]
+    if isinstance(cal, KFactor) and v is not None:
+        cal, note = _anchor(cal, v)
+        notes.append(note)
+    cooling = CoolingTable(cols["t_s"], 1.0 if power_w is None else power_w,
+                           tj_c=cols.get("tj_c"), v_tsp_v=v, tref_c=cols.get("tref_c"),
+                           tref_steady_c=tref_c, file=path.name, rows=cols.rows)
+    bundle = Bundle(calibration=cal, cooling=(cooling,), source=str(path))
+    return Source(path, "cooling-csv", bundle, tuple(notes))
+
+
+def early_time_json(curve: ZthCurve) -> dict[str, Any] | None:
+    """The early-time correction of ``curve`` for JSON outputs (``None`` without one).
+
+    Parameters
+    ----------
+    curve : a curve from :meth:`Source.curve`.
+
+    Returns
+    -------
+    dict or None
+        ``masked_s``, ``fit_window_s``, ``fit_points``, ``tj0_c`` (the extrapolated Tj at the
+        cut), ``slope_k_per_sqrt_s``, ``fit_rms_k``, ``detected``.
+
+    Examples
+    --------
+    >>> from spicethermal.identify.curves import ZthCurve
+    >>> t = np.geomspace(1e-6, 1.0, 300)
+    >>> c = ZthCurve.from_cooling(t, 40 - 10 * np.sqrt(t), 1.0, tref_steady_c=25.0,
+    ...                           mask_s=1e-4)
+    >>> round(early_time_json(c)["tj0_c"], 9)
+    40.0
+    """
+    e = curve.early
+    if e is None:
+        return None
+    return {"masked_s": list(e.masked_s), "fit_window_s": list(e.fit_window_s),
+            "fit_points": e.fit_points, "tj0_c": e.t0_c,
+            "slope_k_per_sqrt_s": e.slope_k_per_sqrt_s, "fit_rms_k": e.fit_rms_k,
+            "detected": e.detected}

@@ -1,0 +1,103 @@
+"""The example models and test benches kept in ``netlists/`` as golden files.
+
+``python -m spicethermal.spice.netlists`` regenerates them; the tests regenerate them in memory and
+diff against the files, so any change in the export format is seen and reviewed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from ..core.ladder import Foster
+from ..effects import Effect
+from ..io.files import atomic_write_text
+from ..model import ThermalModel
+from .lib import (
+    DIALECTS,
+    TOPOLOGIES,
+    Pins,
+    Pulse,
+    environment,
+    initial_conditions,
+    render_bench,
+    render_lib,
+)
+
+#: The vendor network of the README's "Using the model in your circuit" example.
+VENDOR_EXAMPLE = ("vendor/infineon_optimos3_80v_thermal.lib", "IPB019N08N3")
+#: Its heatsink (base capacity J/K, resistance to ambient K/W), ambient and drive.
+HEATSINK_EXAMPLE = {"heatsink_c": 2.0, "heatsink_r": 1.0, "ambient_c": 25.0, "power_w": 20.0,
+                    "on_s": 1.0, "tstop_s": 10.0, "tmax_s": 1e-3}
+
+
+def golden_models() -> dict[str, ThermalModel]:
+    """The paper-like actuator (linear) and the same with device effects."""
+    actuator = ThermalModel(Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0]),
+                            provenance={"source": "example: paper-like actuator, Rth 146 K/W"})
+    effects = actuator.with_effects([
+        Effect.create("temperature-coefficient", alpha_per_k=-3e-3, t0_c=25.0),
+        Effect.create("phase-change", t_c=64.7, width_k=2.0, latent_j=0.05, node=2)])
+    return {"actuator": actuator, "actuator_effects": effects}
+
+
+def _lib(key: str, dialect: str, topology: str) -> Callable[[], str]:
+    name = key.upper()
+    return lambda: render_lib(golden_models()[key], dialect, topology, name,
+                              f"{key}_{dialect}_{topology}.lib")
+
+
+def _pwm_bench() -> str:
+    model = golden_models()["actuator"].with_topology("cauer")
+    freq, duty, power, tref = 1e3, 0.5, 0.094, 25.0
+    x0 = model.pwm_initial_state(power, freq, duty)
+    ic = [(n, round(v, 9)) for n, v in initial_conditions(model, x0, tref)]
+    return render_bench("actuator_ngspice_cauer.lib", "ACTUATOR", power_w=power, tstop_s=3e-3,
+                        tmax_s=5e-6, tref_c=tref, pulse=Pulse.of(freq, duty), ic=ic,
+                        title="actuator, 1 kHz 50 % PWM from the periodic steady state",
+                        description="run: ngspice actuator_pwm_1khz.cir")
+
+
+def vendor_model() -> ThermalModel:
+    """The README example's vendor network, imported from the shipped excerpt."""
+    from ..data import path
+    from ..io.vendor import import_model
+
+    return import_model(path(VENDOR_EXAMPLE[0]), VENDOR_EXAMPLE[1])
+
+
+def _vendor_lib() -> str:
+    return render_lib(vendor_model(), "ngspice", "cauer", filename=f"{VENDOR_EXAMPLE[1]}.lib",
+                      pins=Pins.parse("Tj,Tcase"), temperature="absolute")
+
+
+def _heatsink_deck() -> str:
+    from .. import __version__
+
+    return environment().get_template("bench/coupled.cir.j2").render(
+        name=VENDOR_EXAMPLE[1], lib_path=f"{VENDOR_EXAMPLE[1]}.lib", pins=["Tj", "Tcase"],
+        version=__version__, **HEATSINK_EXAMPLE)
+
+
+GOLDEN: dict[str, Callable[[], str]] = {
+    **{f"{k}_{d}_{t}.lib": _lib(k, d, t) for k in ("actuator", "actuator_effects")
+       for d in DIALECTS for t in TOPOLOGIES},
+    "actuator_pwm_1khz.cir": _pwm_bench,
+    f"{VENDOR_EXAMPLE[1]}.lib": _vendor_lib,
+    f"{VENDOR_EXAMPLE[1]}_heatsink.cir": _heatsink_deck,
+}
+
+
+def write_all(directory: Path) -> list[Path]:
+    directory.mkdir(parents=True, exist_ok=True)
+    out = []
+    for name, make in GOLDEN.items():
+        path = directory / name
+        atomic_write_text(path, make())
+        out.append(path)
+    return out
+
+
+if __name__ == "__main__":  # pragma: no cover
+    for p in write_all(Path(__file__).resolve().parents[2] / "netlists"):
+        print(p)
