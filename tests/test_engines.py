@@ -138,3 +138,49 @@ def test_drive_refuses_the_analytic_engine_before_writing(tmp_path, capsys):
     assert main(["drive", model, "--t-max", "70", "--target", "50", "--spice", str(deck),
                  "--engine", "analytic"]) == 2
     assert "--engine analytic" in capsys.readouterr().err and not deck.exists()
+
+
+# ------------------------------------------------------------------------- plugin effects
+def test_a_plugin_device_effect_is_simulated_by_every_engine_and_exported(monkeypatch, tmp_path):
+    """A toy device effect registered from outside the package (issue #13): the first layer's
+    resistance falls with the junction temperature, ``R0 (1 − g (Tj − 25))``. The package
+    knows it only through its hooks: the Python integration, ngspice -b and ngspice in
+    process agree, and its exported .lib holds its own expression."""
+    import importlib.metadata
+
+    from spicethermal.effects import DEVICE, ENTRY_POINT_GROUP, EffectSpec, Param, catalogue
+    from spicethermal.effects.spice import number
+    from spicethermal.spice.lib import render_lib
+
+    def scale(effect, layer, _t_layer_c, tj_c):
+        return 1.0 - effect.params["g_per_k"] * (tj_c - 25.0) if layer == 0 else 1.0
+
+    def spice_scale(effect, layer, _t_layer, t_junction):
+        if layer != 0:
+            return None
+        return f"(1-({number(effect.params['g_per_k'])})*({t_junction}-25))"
+
+    toy = EffectSpec("toy-sink", DEVICE, "a toy: the first layer conducts better when hot",
+                     {"g_per_k": Param("1/K", 0.0, 0.0, 0.01)}, ("standard",),
+                     resistance_scale=scale, spice_resistance_scale=spice_scale)
+
+    class EntryPoint:
+        def load(self):
+            return toy
+
+    monkeypatch.setattr(catalogue, "_PLUGINS_LOADED", False)
+    monkeypatch.setattr(catalogue, "_REGISTRY", dict(catalogue._REGISTRY))
+    monkeypatch.setattr(importlib.metadata, "entry_points",
+                        lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
+    model = ThermalModel(LADDER, (Effect.create("toy-sink", g_per_k=0.008),))
+    assert not model.is_linear
+    with pytest.raises(DataFormatError):
+        engine("analytic", model)
+    lib = render_lib(model, "ngspice", "cauer")
+    assert "BR1 TJ N1 I=V(TJ,N1)/(" in lib and "*(1-(0.008)*(V(TJ)+TOFFSET-25)))" in lib
+    python = model.simulate(T, SCHEDULE, 25.0).tj_k
+    linear = Analytic().simulate(ThermalModel(LADDER), SCHEDULE, T)
+    assert np.max(np.abs(python - linear)) > 0.1  # the toy effect matters here
+    for name in ("ngspice", "pyspice"):
+        rise = engine(name, model).simulate(model, SCHEDULE, T, 25.0)
+        np.testing.assert_allclose(rise, python, rtol=0, atol=1e-3 * POWER * LADDER.rth)
