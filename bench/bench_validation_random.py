@@ -121,14 +121,23 @@ def _uncatalogued(rng: random.Random, dev, variant: dict) -> tuple[str, object, 
         _bench(dev, variant)
 
 
-def draw(n: int, seed: int) -> list[Case]:
-    """``n`` random cases: 60 % single effects, 15 % pairs, 10 % clean, 15 % uncatalogued."""
+#: The share of each kind of case in a draw (cumulative bounds of one uniform number).
+KINDS = {"effect": (0.0, 0.60), "pair": (0.60, 0.75), "clean": (0.75, 0.85),
+         "uncatalogued": (0.85, 1.0)}
+
+
+def draw(n: int, seed: int, only: str | None = None) -> list[Case]:
+    """``n`` random cases: 60 % single effects, 15 % pairs, 10 % clean, 15 % uncatalogued
+    (or ``n`` of the one kind ``only``)."""
     rng = random.Random(seed)
     out: list[Case] = []
     for i in range(n):
         dev = DEVICES[rng.choice(list(DEVICES))]
         variant = _variant(rng.randrange(60))
         u = rng.random()
+        if only is not None:
+            lo, hi = KINDS[only]
+            u = lo + (hi - lo) * u
         sid = seed * 100000 + i
         if u < 0.60:
             effect = rng.choice(EFFECTS)
@@ -176,9 +185,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=60.0, metavar="S")
+    ap.add_argument("--only", choices=sorted(KINDS), help="draw only cases of this kind")
     ap.add_argument("--out", default=str(ROOT / "out" / "validation-random"), metavar="DIR")
     args = ap.parse_args(argv)
-    cases = draw(args.n, args.seed)
+    cases = draw(args.n, args.seed, args.only)
     out = Path(args.out)
     (out / "bundles").mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

@@ -45,9 +45,11 @@ from typing import TYPE_CHECKING
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
 from ..effects import CATALOGUE, DEVICE, Effect
+from ..fit.backfit import refit_effects
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
+    EffectFit,
     baseline_ladder,
     needs,
     time_limit,
@@ -62,11 +64,13 @@ from .evidence import evidence
 from .residuals import comparison_of, localise, noise_estimates
 from .table2 import TableAnalysis, analyse_table, diagnose_table
 from .verdict import (
+    MIN_BIC_DROP,
     MIN_EXPLAINED,
     MIN_IMPROVEMENT,
     MIN_TOTAL_EXPLAINED,
     at_noise,
     can_be_decisive,
+    chi2,
     criterion,
     decisive,
     explained_fraction,
@@ -74,6 +78,7 @@ from .verdict import (
     structured,
     verdict_reason,
 )
+from .verdict import improvement as improvement_of
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Foster
@@ -104,6 +109,12 @@ CANDIDATE_BUDGET_S = 8.0
 #: ... and at later steps (their forward models carry the effects added so far; a second
 #: effect is often the one that needs an integration).
 LATER_BUDGET_S = 8.0
+#: CPU time (s) allowed to the joint refit of every effect found and the ladder after each
+#: later step (:func:`refit_step`).
+REFIT_BUDGET_S = 8.0
+#: ... and to the joint refit of a later candidate that is not decisive on top of the effects
+#: found so far (:func:`rescue`).
+RESCUE_BUDGET_S = 4.0
 
 
 def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
@@ -155,6 +166,9 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             skipped[name] = f"fit failed: {exc}"
             continue
         fit, cmp, bic = best
+        model_effects: tuple[Effect, ...] = ()
+        if effects and not decisive_fit(before, cmp, bic, bic_before, noise):
+            fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise)
         contradicted = ""
         if fit.effect.kind == DEVICE and len(data.cooling) > 1:
             try:
@@ -169,11 +183,73 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
                                evidence(fit, data, before, cmp, noise),
                                explained_fraction(before, cmp, noise),
-                               time.perf_counter() - t0, contradicted))
+                               time.perf_counter() - t0, contradicted, fit.facts,
+                               improvement_of(before, cmp, noise), model_effects))
         if not contradicted and decisive(cands[-1], bic_before) and at_noise(cmp, noise):
             settled = settled or name
     cands.sort(key=lambda c: c.bic)
     return cands
+
+
+def decisive_fit(before: Comparison, cmp: Comparison, bic: float, bic_before: float,
+                 noise: Mapping[str, float]) -> bool:
+    """Whether a fit whose comparison is ``cmp`` (criterion ``bic``) would be decisive
+    against ``before`` (criterion ``bic_before``)."""
+    gain = improvement_of(before, cmp, noise)
+    return (bic_before - bic >= MIN_BIC_DROP and gain >= MIN_IMPROVEMENT
+            and explained_fraction(before, cmp, noise) >= MIN_EXPLAINED)
+
+
+def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: Comparison,
+           cmp: Comparison, bic: float, noise: Mapping[str, float]
+           ) -> tuple[EffectFit, Comparison, float, tuple[Effect, ...]]:
+    """A later step's candidate that is not decisive on top of the effects found so far (their
+    parameters held), refitted jointly with them (:func:`~spicethermal.fit.backfit.refit_effects`,
+    within :data:`RESCUE_BUDGET_S`) when its own fit shows it somewhere: some data set's
+    noise-weighted squared error falls by :data:`MIN_BIC_DROP` (a TSP bow that fits the
+    calibration, which an effect found before had mimicked in the curves). Returns the fit,
+    its comparison, its criterion and the model's refitted effects (empty: unchanged)."""
+    tried = fit.facts.get("tried", fit)
+    tried_cmp = cmp if tried is fit else comparison_of(data, tried.ladder, [*effects,
+                                                                            tried.effect])
+    was = before.by_dataset()
+    if not any(chi2(was[n], {n: noise[n]}) - chi2(sub, {n: noise[n]}) >= MIN_BIC_DROP
+               for n, sub in tried_cmp.by_dataset().items() if n in was):
+        return fit, cmp, bic, ()
+    try:
+        with time_limit(RESCUE_BUDGET_S):
+            ladder, refitted = refit_effects(data, tried.ladder, [*effects, tried.effect])
+        new = comparison_of(data, ladder, refitted)
+    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+        return fit, cmp, bic, ()
+    if not chi2(new, noise) < chi2(cmp, noise):
+        return fit, cmp, bic, ()
+    facts = {k: v for k, v in fit.facts.items() if k not in ("no_gain", "tried")}
+    return (EffectFit(refitted[-1], ladder, fit.n_params, facts), new,
+            criterion(new, noise, fit.n_params), tuple(refitted))
+
+
+def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
+               before: Comparison, noise: Mapping[str, float]) -> tuple[Candidate, list[Effect]]:
+    """``chosen`` (the last of ``effects``) after the joint refit of every effect and the ladder
+    (:func:`~spicethermal.fit.backfit.refit_effects`, within :data:`REFIT_BUDGET_S`), with its
+    figures against ``before``; unchanged when the refit does not lower the noise-weighted
+    squared error."""
+    try:
+        with time_limit(REFIT_BUDGET_S):
+            ladder, refitted = refit_effects(data, chosen.ladder, effects)
+        cmp = comparison_of(data, ladder, refitted)
+    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+        return chosen, effects
+    if not chi2(cmp, noise) < chi2(chosen.comparison, noise):
+        return chosen, effects
+    fit = EffectFit(refitted[-1], ladder, chosen.n_params, chosen.facts)
+    return replace(chosen, effect=refitted[-1], ladder=ladder, comparison=cmp,
+                   bic=criterion(cmp, noise, chosen.n_params),
+                   improvement=before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf,
+                   explained=explained_fraction(before, cmp, noise),
+                   evidence=evidence(fit, data, before, cmp, noise),
+                   gain=improvement_of(before, cmp, noise)), refitted
 
 
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,
@@ -259,9 +335,12 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         if contradicted:
             break
         k_total += chosen.n_params
-        steps.append(Step(chosen, tuple(cands)))
-        cur_ladder, cur_effects, cur = chosen.ladder, [*cur_effects, chosen.effect], \
-            chosen.comparison
+        model_effects = list(chosen.model_effects) or [*cur_effects, chosen.effect]
+        if steps and not chosen.model_effects:
+            # the effects found before held their one-at-a-time fits: refit all
+            chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
+        steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
+        cur_ladder, cur_effects, cur = chosen.ladder, model_effects, chosen.comparison
         cur_bic = criterion(cur, noise, k_total)
     where = tuple(localise(base, noise))
     total = explained_fraction(base, cur, noise)

@@ -44,6 +44,15 @@ class Candidate:
     explained: float
     fit_s: float
     contradicted: str = ""
+    #: The fit's facts behind the evidence sentence (see
+    #: :class:`~spicethermal.fit.effectfit.EffectFit`).
+    facts: Mapping[str, Any] = field(default_factory=dict)
+    #: The improvement the decision weighs: ``improvement`` or, when larger, the
+    #: noise-weighted one (:func:`~spicethermal.analysis.verdict.improvement`).
+    gain: float = 1.0
+    #: Every effect of the model with this candidate, when they were refitted jointly with it
+    #: (empty: the model's effects as they were, and this one).
+    model_effects: tuple[Effect, ...] = ()
 
     @property
     def rms_k(self) -> float:
@@ -59,10 +68,13 @@ class Candidate:
 @dataclass(frozen=True, eq=False)
 class Step:
     """One step of the iterative diagnosis: the effect added (its candidate, with the ladder
-    refitted) and the candidates that were weighed at this step, best first."""
+    refitted), the candidates that were weighed at this step, best first, and the model's
+    effects after it (from the second step on, every effect refitted jointly with the
+    ladder: :func:`~spicethermal.fit.backfit.refit_effects`)."""
 
     chosen: Candidate
     candidates: tuple[Candidate, ...]
+    effects: tuple[Effect, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         c = self.chosen
@@ -108,12 +120,15 @@ class Diagnosis:
         return self.steps[-1].chosen.comparison if self.steps else self.baseline
 
     def model(self) -> ThermalModel:
-        """The baseline model with every effect of the steps (and the last step's ladder)."""
+        """The baseline model with every effect of the steps (as refitted at the last step) and
+        the last step's ladder."""
         if not self.steps:
             return self.baseline_model
+        last = self.steps[-1]
         return type(self.baseline_model)(
-            self.steps[-1].chosen.ladder,
-            (*self.baseline_model.effects, *(s.chosen.effect for s in self.steps)),
+            last.chosen.ladder,
+            last.effects or (*self.baseline_model.effects,
+                             *(s.chosen.effect for s in self.steps)),
             self.baseline_model.reference, self.baseline_model.provenance)
 
     def to_json(self) -> dict[str, Any]:

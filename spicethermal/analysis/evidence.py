@@ -15,6 +15,7 @@ from ..fit.effectfit import BundleData, EffectFit
 from .compare import Comparison
 from .residuals import fmt_number, fmt_time
 from .verdict import MIN_EXPLAINED, MIN_IMPROVEMENT, explained_fraction
+from .verdict import improvement as gain_of
 
 __all__ = ["evidence", "neutral"]
 
@@ -67,7 +68,8 @@ def evidence(fit: EffectFit, data: BundleData, base: Comparison, cand: Compariso
     improvement = base.rms_k / cand.rms_k if cand.rms_k > 0 else math.inf
     frac = explained_fraction(base, cand, noise)
     no_gain = bool(fit.facts.get("no_gain")) or neutral(e)
-    explains = not no_gain and improvement >= MIN_IMPROVEMENT and frac >= MIN_EXPLAINED
+    explains = (not no_gain and gain_of(base, cand, noise) >= MIN_IMPROVEMENT
+                and frac >= MIN_EXPLAINED)
     verdict = (f"explains {100 * frac:.0f} % of the misfit" if explains else
                f"does not explain the misfit (RMS {fmt_number(improvement)}× lower, "
                f"{100 * max(frac, 0):.0f} % of the misfit)")

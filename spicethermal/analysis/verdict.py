@@ -24,8 +24,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["AT_NOISE_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
            "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "bic_drop", "can_be_decisive", "chi2",
-           "criterion",
-           "decisive", "explained_fraction", "runs_z", "structured", "verdict_reason"]
+           "criterion", "decisive", "explained_fraction", "improvement", "runs_z", "structured",
+           "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
 MIN_IMPROVEMENT = 1.15
@@ -141,10 +141,38 @@ def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
     return excess >= MIN_BIC_DROP + n_params * math.log(max(len(comparison.points), 2))
 
 
+def improvement(before: Comparison, after: Comparison,
+                noise: Mapping[str, float] | None = None) -> float:
+    """How many times ``after`` lowers the misfit of ``before``: the pooled RMS ratio, or
+    (given ``noise``) the larger of that and the noise-weighted ratio
+    ``√(χ²_before / χ²_after)``. The pooled RMS weighs every point alike, so an effect seen in
+    one small data set only (a TSP's bow in the calibration, once another effect has taken up
+    the curves) barely moves it; in units of each data set's noise it shows.
+
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> c = lambda r, d: Comparison(tuple(ComparisonPoint(n, {"t_s": i + 1.0}, x, 0.0)
+    ...                                   for i, (x, n) in enumerate(zip(r, d))))
+    >>> sets = ["x"] * 18 + ["y"] * 2
+    >>> before, after = c([0.5] * 18 + [0.3, -0.3], sets), c([0.5] * 18 + [0.01, -0.01], sets)
+    >>> noise = {"x": 1.0, "y": 0.01}
+    >>> round(improvement(before, after), 2), round(improvement(before, after, noise), 1)
+    (1.02, 16.7)
+    """
+    pooled = before.rms_k / after.rms_k if after.rms_k > 0 else math.inf
+    if noise is None:
+        return pooled
+    c0, c1 = chi2(before, noise), chi2(after, noise)
+    weighted = math.sqrt(c0 / c1) if c1 > 0 else math.inf
+    return max(pooled, weighted)
+
+
 def decisive(cand: Any, bic_before: float, min_improvement: float = MIN_IMPROVEMENT,
              min_explained: float = MIN_EXPLAINED) -> bool:
-    """True when candidate ``cand`` is decisively better than a model of BIC ``bic_before``."""
-    return (bic_before - cand.bic >= MIN_BIC_DROP and cand.improvement >= min_improvement
+    """True when candidate ``cand`` is decisively better than a model of BIC ``bic_before``
+    (its ``gain``, :func:`improvement` with the noise, when it has one, else its
+    ``improvement``)."""
+    gain = getattr(cand, "gain", cand.improvement)
+    return (bic_before - cand.bic >= MIN_BIC_DROP and gain >= min_improvement
             and cand.explained >= min_explained)
 
 
@@ -173,9 +201,10 @@ def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, floa
         if first:
             c = first[0]
             why = (f"the best candidate, {c.effect.name} ({c.effect.form}), lowers the RMS only "
-                   f"{c.improvement:.3g}× and explains {100 * max(c.explained, 0):.0f} % of the "
-                   f"misfit (needs {MIN_IMPROVEMENT:g}×, {100 * MIN_EXPLAINED:.0f} % and a BIC "
-                   f"drop of {MIN_BIC_DROP:g}; it gives {bic_drop(c, base, noise):.0f})")
+                   f"{c.improvement:.3g}× ({c.gain:.3g}× weighted by the noise) and explains "
+                   f"{100 * max(c.explained, 0):.0f} % of the misfit (needs {MIN_IMPROVEMENT:g}×, "
+                   f"{100 * MIN_EXPLAINED:.0f} % and a BIC drop of {MIN_BIC_DROP:g}; it gives "
+                   f"{bic_drop(c, base, noise):.0f})")
         else:
             why = "no candidate effect could be fitted"
         located = localise(final, noise) or localise(final)

@@ -30,8 +30,11 @@ ENTRY_POINT_GROUP = "spicethermal.effects"
 
 @dataclass(frozen=True)
 class Param:
-    """A parameter of an effect: unit, default, allowed range, and the forms that use it
-    (empty: every form)."""
+    """A parameter of an effect: unit, default, allowed range, the forms that use it (empty:
+    every form), and whether a fit moves it (``fitted``; false for a reference such as a
+    temperature at which the law is written, or a discrete choice such as a node, which the
+    effect's own fit chooses and the joint refit of a model's effects holds,
+    :mod:`spicethermal.fit.backfit`)."""
 
     unit: str
     default: float
@@ -39,6 +42,7 @@ class Param:
     high: float = math.inf
     doc: str = ""
     forms: tuple[str, ...] = ()
+    fitted: bool = True
 
 
 @dataclass(frozen=True)

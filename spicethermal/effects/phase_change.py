@@ -180,7 +180,8 @@ SPEC = register(EffectSpec(
      "width_k": Param("K", 2.0, 0.05, 100.0, "standard deviation of the band (logistic, "
                       "gaussian) or its full width (plateau)"),
      "latent_j": Param("J", 0.0, 0.0, 1e6, "latent heat absorbed across the band"),
-     "node": Param("", 0, 0, 1000, "ladder node holding the latent heat (0 = junction)"),
+     "node": Param("", 0, 0, 1000, "ladder node holding the latent heat (0 = junction)",
+                   fitted=False),
      "edge_k": Param("K", 0.2, 0.005, 100.0, "logistic scale of the plateau's edges "
                      "(form plateau)")},
     ("logistic", "gaussian", "plateau"), extra_capacitance=extra_capacitance,

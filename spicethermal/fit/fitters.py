@@ -72,7 +72,8 @@ def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
 
     A nested model never fits worse than the model it extends: a form whose fit leaves a
     larger squared error than ``ladder`` and ``effects`` alone is replaced by the effect
-    switched off (:func:`switched_off`) on ``ladder`` (``facts["no_gain"]``). Raises
+    switched off (:func:`switched_off`) on ``ladder`` (``facts["no_gain"]``; the fit itself
+    is ``facts["tried"]``). Raises
     :class:`~spicethermal.core.errors.FitError` when the data cannot show the effect.
     """
     fit_forms = fitter(name)
@@ -92,9 +93,9 @@ def fit_effect_forms(data: BundleData, ladder: Foster | Cauer, name: str,
                 worse = sse(data, fit.ladder, [*rest, fit.effect]) > off
         except (SimulationError, *NUMERICAL_ERRORS):
             worse = True
-        if worse:
+        if worse:  # the fit itself is kept in the facts (a joint refit may still use it)
             fit = EffectFit(switched_off(name, fit.effect.form, data), as_foster(ladder),
-                            fit.n_params, {**fit.facts, "no_gain": True})
+                            fit.n_params, {**fit.facts, "no_gain": True, "tried": fit})
         out.append(fit)
     return out
 

@@ -40,6 +40,9 @@ __all__ = ["fit_electrical_transient", "fit_sample_window", "fit_tsp_nonlinearit
 #: Evaluations allowed to each start of the transient's fit on the early points (ladder held;
 #: 2-3 parameters): the starts are many, a start that has not converged by then is a poor one.
 HELD_NFEV = 60
+#: A calibration with at least this many points beyond its line (2) and the form's parameters
+#: fixes the TSP's nonlinearity by itself (a residual scatter can then be told from a bow).
+CAL_SPARE = 3
 
 
 def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
@@ -130,25 +133,35 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
 
 def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
                          effects: Sequence[Effect] = ()) -> list[EffectFit]:
-    """``q`` and ``t_cal_c`` (and, in the cubic form, ``c``) jointly with the ladder from every
-    data set: the calibration residuals fix the curvature, the readings of the curves and the
-    PWM grid ``t_cal_c``. The cubic form starts from the quadratic fit."""
+    """``q`` and ``t_cal_c`` (and, in the cubic form, ``c``) of the TSP, and the ladder.
+
+    The nonlinearity belongs to the sensor, and the calibration measures it directly: when the
+    calibration has enough points (:data:`CAL_SPARE` beyond its line and the form's
+    parameters), the form's parameters are fitted to the calibration alone and the ladder is
+    then refitted to the readings of the curves through them, so that another effect's
+    signature in the curves (a temperature coefficient, a phase change) cannot bend the
+    sensor's curvature. With a sparse calibration (or none) they are fitted jointly with the
+    ladder to every data set: the calibration residuals fix the curvature, the readings of the
+    curves and the PWM grid ``t_cal_c``. The cubic form starts from the quadratic fit."""
     names = list(data.datasets)
     if not names:
         raise FitError("tsp-nonlinearity needs data")
     base = others(effects, "tsp-nonlinearity")
     tcal0 = data.reference_c
     q0 = 0.0
+    n_cal = 0
     if data.calibration is not None:
         basis, _ = data.calibration.curvature_basis(tcal0)
         resid = data.calibration.read_c - data.calibration.temp_c
         q0 = float(basis @ resid / max(float(basis @ basis), 1e-300))
+        n_cal = int(data.calibration.temp_c.size)
     temps = np.concatenate([data.measured(n) for n in names])
     lo_t, hi_t = float(np.min(temps)) - 50, float(np.max(temps)) + 50
     qmax = 1e4 * 0.2 / max(hi_t - lo_t, 1.0)
     cmax = 1e6 * 0.2 / max(hi_t - lo_t, 1.0) ** 2
     exclude = transient_spans(data) if "electrical-transient" not in effects_map(base) \
         else None
+    fit_ladder = bool(data.cooling)
 
     def build(x: NDArray) -> list[Effect]:
         cubic = {"cub_k_per_k3": float(x[2]) * 1e-6} if len(x) > 2 else {}
@@ -156,14 +169,33 @@ def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
                                      quad_k_per_k2=float(x[0]) * 1e-4, t_cal_c=float(x[1]),
                                      **cubic)]
 
+    def fit(x0: list[float], lo: list[float], hi: list[float],
+            lad: Foster | Cauer) -> tuple[Foster | Cauer, list[Effect]]:
+        if n_cal < 2 + len(x0) + CAL_SPARE:
+            new_lad, effs, _ = joint_fit(data, names, lad, fit_ladder, x0, lo, hi, build,
+                                         exclude=exclude)
+            return new_lad, effs
+        # the calibration fixes the bow: the coefficients of T² (q − 3 c T_cal) and T³ (c)
+        _, effs, _ = joint_fit(data, ["calibration"], lad, False, x0, lo, hi, build)
+        rest = [n for n in names if n != "calibration"]
+        if not rest:
+            return lad, effs
+        p = effs[-1].params
+        cub = p["cub_k_per_k3"] * 1e6 if len(x0) > 2 else 0.0
+        a2 = p["quad_k_per_k2"] * 1e4 - 3e-2 * cub * p["t_cal_c"]
+
+        def on_bow(x: NDArray) -> list[Effect]:  # the curves place T_cal on that bow
+            return build(np.array([a2 + 3e-2 * cub * x[0], x[0], cub][:len(x0)]))
+
+        new_lad, effs, _ = joint_fit(data, rest, lad, fit_ladder, [p["t_cal_c"]], [lo_t],
+                                     [hi_t], on_bow, exclude=exclude)
+        return new_lad, effs
+
     x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]
-    fit_ladder = bool(data.cooling)
-    lad, effs, res = joint_fit(data, names, ladder, fit_ladder, x0, [-qmax, lo_t], [qmax, hi_t],
-                               build, exclude=exclude)
+    lad, effs = fit(x0, [-qmax, lo_t], [qmax, hi_t], ladder)
     out = [EffectFit(effs[-1], lad, 2, {})]
     q = effs[-1].params
     x1 = [q["quad_k_per_k2"] * 1e4, q["t_cal_c"], 0.0]
-    lad3, effs3, _ = joint_fit(data, names, lad, fit_ladder, x1, [-qmax, lo_t, -cmax],
-                               [qmax, hi_t, cmax], build, exclude=exclude)
+    lad3, effs3 = fit(x1, [-qmax, lo_t, -cmax], [qmax, hi_t, cmax], lad)
     out.append(EffectFit(effs3[-1], lad3, 3, {}))
     return out

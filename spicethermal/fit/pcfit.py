@@ -153,10 +153,18 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         raise FitError("phase-change needs cooling curves")
     names = [c.name for c in data.cooling]
     base = others(effects, "phase-change")
+    refs = [as_foster(ladder)]
     try:
-        ref = reference_ladder(data, as_foster(ladder).order)
+        refs.insert(0, reference_ladder(data, as_foster(ladder).order))
     except (FitError, DataFormatError):
-        ref = as_foster(ladder)
+        pass
+    if base and len(refs) > 1:
+        # the reference curve's own ladder reads it without the effects found before (a TSP
+        # bow, a transient): keep the one that fits it better through them
+        cold_only = subset(data, [data.reference_curve.name])
+        with unlimited():
+            refs.sort(key=lambda r: sse(cold_only, r, base))
+    ref = refs[0]
     hot = max(data.cooling, key=lambda c: float(np.max(c.tj_c)))
     cold = data.reference_curve
     fractions = node_fractions(ref)
