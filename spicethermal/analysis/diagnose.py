@@ -112,6 +112,9 @@ LATER_BUDGET_S = 8.0
 #: CPU time (s) allowed to the joint refit of every effect found and the ladder after each
 #: later step (:func:`refit_step`).
 REFIT_BUDGET_S = 8.0
+#: Several effects that leave a structured residual whose noise-weighted ``χ²/N`` is above
+#: this (an RMS above 3× the noise) are not named (:func:`unexplained`).
+MAX_LEFT_CHI2 = 9.0
 #: ... and to the joint refit of a later candidate that is not decisive on top of the effects
 #: found so far (:func:`rescue`).
 RESCUE_BUDGET_S = 4.0
@@ -189,6 +192,13 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             settled = settled or name
     cands.sort(key=lambda c: c.bic)
     return cands
+
+
+def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
+    """Whether several effects (``n_steps`` > 1) leave a misfit too large to call them the
+    diagnosis: noise-weighted ``χ²/N`` above :data:`MAX_LEFT_CHI2` (a structured residual that
+    large after two or three catalogued effects is physics they only approximate together)."""
+    return n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2
 
 
 def decisive_fit(before: Comparison, cmp: Comparison, bic: float, bic_before: float,
@@ -344,22 +354,30 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         cur_bic = criterion(cur, noise, k_total)
     where = tuple(localise(base, noise))
     total = explained_fraction(base, cur, noise)
+    partial = bool(steps) and bool(structured(cur, noise)) and (
+        total < MIN_TOTAL_EXPLAINED or unexplained(cur, noise, len(steps)))
     if contradicted:
         located = localise(cur, noise) or localise(cur)
         done = "".join(f"{st.chosen.effect.name} explains part of the misfit; then "
                        for st in steps)
         reason = (f"{done}no catalogued effect explains the misfit: {contradicted}; not in the "
                   f"catalogue: the error sits in {'; and in '.join(located[:2])}")
-    elif steps and total < MIN_TOTAL_EXPLAINED and structured(cur, noise):
+        if partial:  # what was found is no diagnosis either (see below)
+            steps = []
+    elif partial:
         # the effects found explain part of the misfit and leave a structured residual: the
         # physics at work is not in the catalogue (a remounted contact, a heater that sags
-        # or a convection that switches can each pass for a temperature coefficient)
+        # or a convection that switches can each pass for a temperature coefficient, and
+        # several effects together for more of it)
         tried = ", ".join(s.chosen.effect.name for s in steps)
         located = localise(cur, noise) or localise(cur)
-        reason = (f"no catalogued effect explains the misfit: {tried} would explain only "
-                  f"{100 * total:.0f} % of it (needs {100 * MIN_TOTAL_EXPLAINED:.0f} % when a "
-                  f"structured residual remains) and leave {'; and '.join(located[:2])}; not in "
-                  f"the catalogue")
+        why = (f"would explain only {100 * total:.0f} % of it (needs "
+               f"{100 * MIN_TOTAL_EXPLAINED:.0f} % when a structured residual remains)"
+               if total < MIN_TOTAL_EXPLAINED else
+               f"together would still leave {math.sqrt(chi2(cur, noise) / len(cur.points)):.3g}× "
+               f"the noise (more than {math.sqrt(MAX_LEFT_CHI2):g}× after several effects)")
+        reason = (f"no catalogued effect explains the misfit: {tried} {why} and leave "
+                  f"{'; and '.join(located[:2])}; not in the catalogue")
         steps = []
     else:
         reason = verdict_reason(base, cur, noise, first, steps, skipped)

@@ -37,7 +37,8 @@ STRENGTHS = ("weak", "medium", "strong")
 #: the diagnosis names today (tests/test_validation.py runs it).
 FAST = ("clean/mosfet-2", "temperature-coefficient/local-linear/strong",
         "phase-change/gaussian-junction/strong", "electrical-transient/fixed/strong",
-        "tsp-nonlinearity/quadratic/strong", "sample-window/average/strong")
+        "tsp-nonlinearity/quadratic/strong", "sample-window/average/strong",
+        "pair/temperature-coefficient+tsp-nonlinearity", "uncatalogued/convection-switch")
 
 
 @dataclass(frozen=True)
