@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         written.append(str(fig_drive(result, args.plot)))
     check = verify(result, quiet=args.quiet, engine=spice) if args.verify else None
     if args.json:
-        doc = result.as_json()
+        doc = result.to_dict()
         if check is not None:
             doc["ngspice"] = check
         print(dumps_json(doc, indent=2))

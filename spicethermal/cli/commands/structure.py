@@ -26,7 +26,8 @@ import argparse
 
 from ...io.files import dumps_json
 from ._source import SOURCE_HELP
-from .spectrum import _positive, add_spectrum_arguments, load_curve, spectrum_options
+from ._types import positive
+from .spectrum import add_spectrum_arguments, load_curve, spectrum_options
 
 NAME = "structure"
 HELP = "cumulative and differential structure functions; two sources: where they separate"
@@ -40,9 +41,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "functions, separation marked)")
     parser.add_argument("--json", action="store_true",
                         help="print ΣR and ΣC as JSON (a list of two objects for two sources)")
-    parser.add_argument("--stages-per-decade", type=_positive, default=10.0, metavar="N",
+    parser.add_argument("--stages-per-decade", type=positive, default=10.0, metavar="N",
                         help="Foster stages per decade of τ from the spectrum (default 10)")
-    parser.add_argument("--threshold", type=_positive, default=None, metavar="DECADES",
+    parser.add_argument("--threshold", type=positive, default=None, metavar="DECADES",
                         help="separation threshold on |Δ log10 ΣC| (default 0.05)")
     add_spectrum_arguments(parser)  # with --bootstrap
 
