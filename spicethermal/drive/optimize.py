@@ -35,8 +35,9 @@ For a linear model the junction constraint is **exact**: the greedy tracks the s
 state period by period in closed form (modal coordinates; at constant duty the period map is
 affine) and checks the junction at the end of sampled on-phases of every step; the whole
 schedule is then checked on every on-phase (:func:`.dynamics.switched_peaks`), and any
-excess (from merged steps or periods between samples) tightens the limit for a new pass. The node, whose
-temperature is the period average, follows the averaged-power dynamics (exact for the mean).
+excess (from merged steps or periods between samples) tightens the limit for a new pass. The
+node, whose temperature is the period average, follows the averaged-power dynamics (exact for
+the mean).
 With device effects (temperature coefficient, phase change) the drive is decided on the
 averaged power, one step at a time on the network frozen at the current state and advanced
 by the stiff nonlinear integration, with the closed-form periodic ripple of
