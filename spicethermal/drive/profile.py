@@ -50,9 +50,9 @@ def greedy(dyn: Dynamics, node: int, lim_k: float, tgt_k: float, hold_duty: floa
     Parameters
     ----------
     dyn : Dynamics
-        The network.
+        Advances the averaged state step by step (exact switched map when linear).
     node : int
-        The actuation node.
+        The node brought to the target without overshoot.
     lim_k, tgt_k : float
         Junction-peak limit and node target, K over the ambient.
     hold_duty : float

@@ -62,16 +62,17 @@ class Release(JsonDocument):
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Release:
-        """The release :meth:`to_dict` described.
+        """Rebuild the release from its :meth:`to_dict` document.
 
         Parameters
         ----------
         data : dict
-            As written by :meth:`to_dict`.
+            ``release_c``, ``keep_warm_duty`` and ``time_s``.
 
         Returns
         -------
         Release
+            Equal to the one that wrote ``data``.
         """
         return cls(float(data["release_c"]), float(data["keep_warm_duty"]),
                    float(data["time_s"]))
@@ -91,9 +92,9 @@ def find_release(dyn: Dynamics, node: int, x_hold: NDArray, release_c: float,
     Parameters
     ----------
     dyn : Dynamics
-        The network (its ``tref`` is the ambient).
+        Simulates the cool-down (its ``tref`` is the ambient).
     node : int
-        The actuation node.
+        The node that must fall below ``release_c``.
     x_hold : NDArray
         Node rises of the steady hold, K.
     release_c : float

@@ -287,10 +287,9 @@ class DriveResult(JsonDocument):
 
         Examples
         --------
-        >>> from spicethermal.core.ladder import Foster
-        >>> from spicethermal.drive.optimize import optimize_drive
-        >>> r = optimize_drive(ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])),
-        ...                    70.0, 55.0, p_max_w=1.0)
+        >>> import spicethermal as st
+        >>> ladder = st.Foster.from_tau([30.0, 70.0], [0.01, 1.0])
+        >>> r = st.optimize_drive(st.ThermalModel(ladder), 70.0, 55.0, p_max_w=1.0)
         >>> bool(r.switched_state(0.0)[0] == 0.0)
         True
         """

@@ -94,11 +94,11 @@ def predict(dyn: Dynamics, node: int, schedule: DutySchedule, t: NDArray
     Parameters
     ----------
     dyn : Dynamics
-        The network.
+        Simulates the averaged power and gives the ripple.
     node : int
-        The actuation node.
+        Whose rise comes first in the result.
     schedule : tuple of (float, float)
-        The duty schedule.
+        The duties to simulate.
     t : NDArray
         Times, s.
 
@@ -128,11 +128,11 @@ def junction_peak(dyn: Dynamics, intervals: Steps, hold_duty: float, horizon: fl
     Parameters
     ----------
     dyn : Dynamics
-        The network.
+        Linear: the exact period map; else the averaged simulation and ripple.
     intervals : list of (int, int, float)
-        The profile's steps; the hold follows.
+        Steps ``(first_period, periods, duty)`` before the hold.
     hold_duty : float
-        The hold duty.
+        What follows them forever.
     horizon : float
         How long to follow the hold, s.
 
@@ -201,9 +201,9 @@ def settle_time(dyn: Dynamics, node: int, schedule: DutySchedule, t: NDArray, y:
     Parameters
     ----------
     dyn : Dynamics
-        The network.
+        Its model's exact response refines the time (linear model).
     node : int
-        The actuation node.
+        The node ``y`` belongs to.
     schedule : tuple of (float, float)
         The duty schedule that gave ``y``.
     t, y : NDArray

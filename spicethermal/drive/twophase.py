@@ -65,16 +65,17 @@ class TwoPhase(JsonDocument):
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TwoPhase:
-        """The two-phase drive :meth:`to_dict` described.
+        """Rebuild the two-phase drive from its :meth:`to_dict` document.
 
         Parameters
         ----------
         data : dict
-            As written by :meth:`to_dict`.
+            ``boost_s``, ``boost_duty``, ``time_to_target_s`` and ``peak_junction_c``.
 
         Returns
         -------
         TwoPhase
+            Equal to the one that wrote ``data``.
         """
         return cls(float(data["boost_s"]), float(data["boost_duty"]),
                    float(data["time_to_target_s"]), float(data["peak_junction_c"]))
@@ -94,9 +95,9 @@ def search_two_phase(dyn: Dynamics, node: int, lim_k: float, tgt_k: float, tol: 
     Parameters
     ----------
     dyn : Dynamics
-        The (linear) network.
+        A linear network (its modes give every candidate in closed form).
     node : int
-        The actuation node.
+        The node to settle in the band.
     lim_k, tgt_k, tol : float
         Junction-peak limit, node target and half-width of its band, K.
     hold_duty : float
