@@ -15,7 +15,8 @@ from scipy.optimize import brentq
 from spicethermal.cli import main as cli
 from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Foster
-from spicethermal.drive.optimize import _Dynamics, _switched_peaks, optimize_drive
+from spicethermal.drive.dynamics import Dynamics, switched_peaks
+from spicethermal.drive.optimize import optimize_drive
 from spicethermal.effects import Effect
 from spicethermal.engines.pwm import envelope, steady_state
 from spicethermal.model import Schedule, ThermalModel
@@ -67,8 +68,8 @@ def test_junction_drive_speedup(demo):
 
 def test_exact_switched_peaks_match_the_cold_start_envelope(demo):
     """The modal period map against pwm.envelope (independent closed form)."""
-    dyn = _Dynamics(demo, AMBIENT, 1.5, 2000.0)
-    t, pk = _switched_peaks(dyn, [(0, 300, 0.4)], 0.4, 0)
+    dyn = Dynamics(demo, AMBIENT, 1.5, 2000.0)
+    t, pk = switched_peaks(dyn, [(0, 300, 0.4)], 0.4, 0)
     ref, _ = envelope(demo.ladder, 1.5, 2000.0, 0.4, np.arange(1, 301))
     np.testing.assert_allclose(t, (np.arange(300) + 0.4) / 2000.0, rtol=1e-12)
     np.testing.assert_allclose(pk, ref, rtol=1e-10, atol=1e-10)
@@ -308,11 +309,11 @@ def test_cli_verify_runs_the_deck(tmp_path, capsys):
 
 
 def test_smoothing_keeps_energy_and_leaves_the_boost():
-    from spicethermal.drive.optimize import _smooth
+    from spicethermal.drive.profile import smooth
 
     steps = [(0, 10, 1.0), (10, 2, 0.9), (12, 2, 0.3), (14, 2, 0.8), (16, 3, 0.4), (19, 3, 0.6),
              (22, 4, 0.5)]
-    out = _smooth(steps, first=1)
+    out = smooth(steps, first=1)
     assert [s[:2] for s in out] == [s[:2] for s in steps]
     energy = sum(n * d for _, n, d in steps)
     assert sum(n * d for _, n, d in out) == pytest.approx(energy, rel=1e-12)

@@ -11,8 +11,9 @@ new data in the place of a listed file. The bundle is then replaced in one atomi
 (:meth:`spicethermal.io.bundle.Bundle.write`). Killed at any moment, the bundle holds every data
 set it held before plus the raw log of the session.
 
-The measurement plan (powers, settling times, the PWM grid) comes from :data:`PLANS`, chosen
-by the board name the device reports; every value can be overridden.
+The measurement plan (powers, settling times, the PWM grid) comes from
+:data:`~spicethermal.bench.plan.PLANS`, chosen by the board name the device reports; every value
+can be overridden. How new data sets join the old ones is :mod:`spicethermal.bench.merge`.
 """
 
 from __future__ import annotations
@@ -23,79 +24,22 @@ import shutil
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.errors import DataFormatError, InstrumentError, SpiceThermalError
+from ..io.bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, PwmTable
 from ..io.files import clean_leftovers, locked
 from . import protocol as p
 from .client import ACTIONS, BenchClient, Run
+from .merge import SECTIONS, add_datasets
+from .plan import PLANS, Plan
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..identify.calibration import Calibration
-    from ..io.bundle import Bundle
-
-#: Data-set sections a procedure adds to, and the stem of their file names.
-SECTIONS = {"calibrate": "calibration", "cooling": "cooling", "pwm": "pwm"}
-
-
-# --------------------------------------------------------------------------- the plan
-@dataclass(frozen=True)
-class Plan:
-    """What to measure and how (SI units). :data:`PLANS` holds one per known board."""
-
-    description: str = "heated device"
-    reference: str = "ambient"
-    calibration_c: tuple[float, ...] = (25.0, 35.0, 45.0, 55.0, 65.0, 75.0)
-    calibration_settle_s: float = 300.0
-    calibration_n: int = 32
-    calibration_interval_s: float = 0.1
-    window_s: float = 1e-4
-    n_readings: int = 16
-    rth_power_w: float = 0.094
-    settle_s: float = 120.0
-    cooling_powers_w: tuple[float, ...] = (0.094, 0.3)
-    cooling_t_first_s: float = 1e-4
-    cooling_t_last_s: float = 60.0
-    per_decade: int = 10
-    pwm_power_w: float = 0.094
-    pwm_freqs_hz: tuple[float, ...] = (500.0, 1000.0, 3000.0, 5000.0, 10000.0, 25000.0)
-    pwm_duties: tuple[float, ...] = (0.2, 0.5, 0.8)
-    pwm_settle_s: float = 90.0
-    pwm_n: int = 8
-    pwm_interval_s: float = 0.1
-
-    def __post_init__(self) -> None:
-        for name in ("calibration_settle_s", "calibration_interval_s", "window_s",
-                     "rth_power_w", "settle_s", "cooling_t_first_s", "cooling_t_last_s",
-                     "pwm_power_w", "pwm_settle_s", "pwm_interval_s"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and np.isfinite(v) and v > 0):
-                raise DataFormatError(f"bench plan: {name} = {v!r} must be a positive number")
-        if not 1e-5 <= self.window_s <= 4e-3:
-            raise DataFormatError(f"bench plan: window_s = {self.window_s!r} must lie in "
-                                  f"10 us .. 4 ms")
-        if any(not 0 < d <= 1 for d in self.pwm_duties):
-            raise DataFormatError(f"bench plan: pwm duties {self.pwm_duties} must lie in (0, 1]")
-        if any(p_ <= 0 for p_ in self.cooling_powers_w + self.pwm_freqs_hz):
-            raise DataFormatError("bench plan: powers and frequencies must be positive")
-        if self.reference not in ("ambient", "case"):
-            raise DataFormatError(f"bench plan: reference {self.reference!r}: ambient or case")
-        if self.cooling_t_last_s <= self.cooling_t_first_s:
-            raise DataFormatError("bench plan: cooling_t_last_s must exceed cooling_t_first_s")
-
-
-PLANS: dict[str, Plan] = {
-    "actuator": Plan(description="thermopneumatic actuator, diode heater (paper, sections 2, 7)"),
-    "mur880e": Plan(description="MUR880E power diode on a heat sink, junction to case "
-                    "(paper, section 5)", reference="case",
-                    calibration_c=(25.0, 35.0, 45.0, 55.0, 65.0, 75.0), rth_power_w=10.0,
-                    cooling_powers_w=(10.0, 20.0), cooling_t_last_s=20.0, pwm_power_w=10.0,
-                    settle_s=300.0, pwm_settle_s=120.0),
-}
 
 
 # --------------------------------------------------------------------------- conversion
@@ -120,84 +64,6 @@ def _mean(samples: Sequence[p.Sample], attr: str) -> float:
     if not samples:
         raise InstrumentError(f"no samples to average for {attr}")
     return float(np.mean([getattr(s, attr) for s in samples]))
-
-
-# --------------------------------------------------------------------------- adding data sets
-def fresh_name(stem: str, taken: set[str]) -> str:
-    """The first free file name for a data set: ``calibration.csv``, ``calibration_2.csv``,
-    ...; cooling curves are numbered from 1 (``cooling_1.csv``). The name is added to
-    ``taken``.
-
-    >>> taken = {"cooling_1.csv", "pwm.csv"}
-    >>> fresh_name("cooling", taken), fresh_name("pwm", taken), fresh_name("pwm", taken)
-    ('cooling_2.csv', 'pwm_2.csv', 'pwm_3.csv')
-    """
-    k = 1
-    while True:
-        name = f"{stem}_{k}.csv" if k > 1 or stem == "cooling" else f"{stem}.csv"
-        if name not in taken:
-            taken.add(name)
-            return name
-        k += 1
-
-
-def add_datasets(bundle: Bundle, new: dict, taken: set[str],
-                 replace_names: Sequence[str] = ()) -> Bundle:
-    """``bundle`` with the data sets of ``new`` added, none of its own dropped.
-
-    Parameters
-    ----------
-    bundle : the bundle as it is on disk.
-    new : section -> new data: ``calibration`` and ``pwm`` a table, ``cooling`` a list of
-        tables, ``rth`` a summary dict (any may be missing).
-    taken : every name in the bundle's directory (new names avoid them; updated).
-    replace_names : listed files whose data sets the new ones of the same section replace
-        (same name, same place); without them a new data set gets a new name and a single
-        section's old entry moves to ``superseded`` (its file stays in the directory).
-
-    Returns
-    -------
-    Bundle
-        The merged bundle (not yet written).
-    """
-    superseded = list(bundle.extra.get("superseded", []))
-    replace_left = list(replace_names)
-    doc = bundle.manifest()
-
-    def take(stem: str, old_name: str | None) -> str:
-        if old_name is not None and old_name in replace_left:
-            replace_left.remove(old_name)
-            return old_name
-        return fresh_name(stem, taken)
-
-    changes: dict = {}
-    for section in ("calibration", "pwm"):
-        table = new.get(section)
-        if table is None:
-            continue
-        old = getattr(bundle, section)
-        name = take(section, old.file if old is not None else None)
-        if old is not None and name != old.file:
-            superseded.append({"section": section, **doc[section]})
-        changes[section] = replace(table, file=name)
-    if new.get("cooling"):
-        cooling = list(bundle.cooling)
-        for table in new["cooling"]:
-            slot = next((i for i, c in enumerate(cooling) if c.file in replace_left), None)
-            if slot is None:
-                cooling.append(replace(table, file=fresh_name("cooling", taken)))
-            else:
-                replace_left.remove(cooling[slot].file)
-                cooling[slot] = replace(table, file=bundle.cooling[slot].file)
-        changes["cooling"] = tuple(cooling)
-    extra = dict(bundle.extra)
-    if new.get("rth") is not None:
-        if "rth" in extra:
-            superseded.append({"section": "rth", **extra["rth"]})
-        extra["rth"] = new["rth"]
-    if superseded:
-        extra["superseded"] = superseded
-    return bundle.with_(extra=extra, **changes)
 
 
 # --------------------------------------------------------------------------- whole runs
@@ -251,8 +117,6 @@ class Session:
                                       f"{kinds[name]} data set")
 
     def run(self, actions: Sequence[str]) -> Path:
-        from ..io.bundle import MANIFEST, Bundle
-
         for a in actions:
             if a not in ACTIONS:
                 raise DataFormatError(f"bench: unknown action {a!r}; expected {', '.join(ACTIONS)}")
@@ -380,8 +244,6 @@ class Session:
         return new
 
     def _calibrate(self, bench: BenchClient, plan: Plan, step):
-        from ..io.bundle import CalibrationTable
-
         temps, volts = [], []
         for t_set in plan.calibration_c:
             step(f"calibration at {t_set:g} degC", plan.calibration_settle_s)
@@ -413,8 +275,6 @@ class Session:
         return out
 
     def _cooling_table(self, run: Run, conv: TspConversion | None, plan: Plan, k: int):
-        from ..io.bundle import CoolingTable
-
         steady, power = run.of_kind(p.KIND_STEADY), run.of_kind(p.KIND_POWER)
         curve = run.of_kind(p.KIND_CURVE)
         if not curve:
@@ -438,8 +298,6 @@ class Session:
 
     def _pwm(self, bench: BenchClient, plan: Plan, conv: TspConversion, step,
              ambient: list[float]):
-        from ..io.bundle import PwmTable
-
         rows = []
         for duty in plan.pwm_duties:
             for freq in plan.pwm_freqs_hz:

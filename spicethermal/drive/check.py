@@ -1,11 +1,11 @@
 """ngspice check of a safe fast drive (``spicethermal drive --verify``), in parallel pieces.
 
 The check simulates the switched schedule (:meth:`DriveResult.spice_bench
-<spicethermal.drive.optimize.DriveResult.spice_bench>`) in ``ngspice -b`` at 1/100 period over the
+<spicethermal.drive.result.DriveResult.spice_bench>`) in ``ngspice -b`` at 1/100 period over the
 verification window (up to 4000 periods) and compares its junction peak with the prediction.
 The window is one long, serial transient; for a linear model it need not be: the switched state
 is known exactly at every period start (:meth:`DriveResult.switched_state
-<spicethermal.drive.optimize.DriveResult.switched_state>`), so the window is cut at period
+<spicethermal.drive.result.DriveResult.switched_state>`), so the window is cut at period
 starts into as many pieces as there are cores (:func:`spicethermal.engines.pwmsim.workers`; a
 boost at constant power is one more, at a step not bound by the period), each started with
 ``.ic`` in that exact state and run in its own ngspice. The pieces are joined by a check, not
@@ -21,9 +21,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.progress import bar
+from ..engines.pwmsim import workers
+from ..spice.ngspice import simulator
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..spice.ngspice import Waveforms
-    from .optimize import DriveResult
+    from .result import DriveResult
 
 
 def pieces(result: DriveResult, n: int) -> list[tuple[float, float, float]]:
@@ -111,10 +115,6 @@ def verify(result: DriveResult, n: int | None = None, *, quiet: bool = True,
         ``ngspice_peak_at_s``, and for a linear model ``predicted_peak_junction_c`` and
         ``join_k`` (0 with one piece).
     """
-    from ..core.progress import bar
-    from ..engines.pwmsim import workers
-    from ..spice.ngspice import simulator
-
     runs = pieces(result, workers() if n is None else n)
     decks = [result.spice_bench(tstop_s=b, tmax_s=tmax, start_s=a) for a, b, tmax in runs]
 

@@ -49,8 +49,31 @@ def _stages(ladder: Foster | Cauer) -> tuple[NDArray, NDArray]:
     return np.asarray(f.r), np.asarray(f.tau)
 
 
-def _stage_peaks(r: NDArray, tau: NDArray, period: float, duty: float) -> NDArray:
-    """Per-stage rise per watt at the end of the on-phase, periodic steady state."""
+def stage_peaks(r: NDArray, tau: NDArray, period: float, duty: NDArray | float) -> NDArray:
+    """Per-stage rise per watt at the end of the on-phase, periodic steady state.
+
+    ``ri (1 - e^{-D T/τi}) / (1 - e^{-T/τi})`` for Foster stages ``r``, ``tau``; arrays
+    broadcast (a column of duties against the stages gives one row per duty).
+
+    Parameters
+    ----------
+    r, tau : NDArray
+        Foster stages: resistances (K/W) and time constants (s).
+    period : float
+        PWM period, s.
+    duty : NDArray or float
+        Duty cycle(s), 0..1.
+
+    Returns
+    -------
+    NDArray
+        Peak rise of each stage per watt of amplitude, K/W.
+
+    Examples
+    --------
+    >>> stage_peaks(np.array([2.0]), np.array([1.0]), 1e-6, 0.25).round(6)  # fast: D·r
+    array([0.5])
+    """
     on = -np.expm1(-duty * period / tau)
     whole = -np.expm1(-period / tau)
     return r * on / whole
@@ -120,7 +143,7 @@ def steady_state(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: f
     check_drive(freq_hz, duty, power_w, window_s)
     r, tau = _stages(ladder)
     period = 1.0 / freq_hz
-    peaks = power_w * _stage_peaks(r, tau, period, duty)
+    peaks = power_w * stage_peaks(r, tau, period, duty)
     return PwmState(
         freq_hz=float(freq_hz), duty=float(duty), power_w=float(power_w), window_s=float(window_s),
         peak_k=float(peaks.sum()),
@@ -146,7 +169,7 @@ def at_phase(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: float
     r, tau = _stages(ladder)
     period = 1.0 / freq_hz
     on = duty * period
-    peaks = _stage_peaks(r, tau, period, duty)
+    peaks = stage_peaks(r, tau, period, duty)
     valleys = peaks * np.exp(-(period - on) / tau)
     ph = np.mod(np.asarray(phase_s, dtype=float), period)[..., None]
     heating = r + (valleys - r) * np.exp(-ph / tau)
@@ -168,7 +191,7 @@ def envelope(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: float
     period = 1.0 / freq_hz
     k = np.asarray(cycles, dtype=float)[..., None]
     build = -np.expm1(-k * period / tau)
-    peaks = power_w * _stage_peaks(r, tau, period, duty) * build
+    peaks = power_w * stage_peaks(r, tau, period, duty) * build
     valleys = peaks * np.exp(-(1 - duty) * period / tau)
     return peaks.sum(axis=-1), valleys.sum(axis=-1)
 

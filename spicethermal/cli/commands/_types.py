@@ -191,3 +191,33 @@ def add_option(parser: argparse.ArgumentParser, *names: str, old: Sequence[str] 
     action.hidden_aliases = tuple(old)  # type: ignore[attr-defined]
     parser.formatter_class = AliasFormatter
     return action
+
+
+# ------------------------------------------------------------------------------ shared options
+#: Help of ``-q/--quiet`` where a command shows a progress bar.
+QUIET_HELP = "no progress bar on stderr (none either when it is not a terminal)"
+
+
+def add_engine_options(parser: argparse.ArgumentParser, choices: Sequence[str],
+                       engine_help: str) -> None:
+    """``--engine`` (one of ``choices``, default ``auto``) and ``-q/--quiet`` (no progress bar).
+
+    Parameters
+    ----------
+    parser : the command's parser.
+    choices : the engines the command accepts.
+    engine_help : what ``--engine`` chooses in this command.
+
+    Returns
+    -------
+    None : the options are added to ``parser``.
+
+    Examples
+    --------
+    >>> p = argparse.ArgumentParser(prog="x")
+    >>> add_engine_options(p, ("auto", "ngspice"), "engine of the check")
+    >>> p.parse_args(["-q"]), p.parse_args(["--engine", "ngspice"]).engine
+    (Namespace(engine='auto', quiet=True), 'ngspice')
+    """
+    parser.add_argument("--engine", choices=choices, default="auto", help=engine_help)
+    parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)

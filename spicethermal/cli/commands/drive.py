@@ -14,16 +14,24 @@ from __future__ import annotations
 import argparse
 
 from ...core.errors import DataFormatError
+from ...drive.check import verify
+from ...drive.optimize import (
+    DEFAULT_DUTY_STEP,
+    DEFAULT_F_PWM_HZ,
+    DEFAULT_TOL_K,
+    optimize_drive,
+)
 from ...engines.interface import NAMES
-from ...io.files import dumps_json
-from ._types import add_option, frequency
+from ...io.files import atomic_write_text, dumps_json
+from ...model import ThermalModel
+from ...viz.plots import fig_drive
+from ._types import add_engine_options, add_option, frequency
 from ._types import index as _node
 from ._types import number as _number
 from ._types import positive as _positive
 
 NAME = "drive"
 HELP = "safe fast drive: the PWM schedule that actuates fastest with the junction peak <= t-max"
-
 
 
 def _duty(text: str) -> float:
@@ -33,11 +41,7 @@ def _duty(text: str) -> float:
     return value
 
 
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from ...drive.optimize import DEFAULT_DUTY_STEP, DEFAULT_F_PWM_HZ, DEFAULT_TOL_K
-
     parser.add_argument("model", metavar="MODEL.json", help="model file (spicethermal-model/1)")
     parser.add_argument("--t-max", type=_number, required=True, metavar="C",
                         help="junction limit in °C; applies to the PWM peak")
@@ -50,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "puts the junction at t-max)")
     add_option(parser, "--freq", old=("--f-pwm",), dest="f_pwm", type=frequency,
                default=DEFAULT_F_PWM_HZ, metavar="HZ",
-                        help=f"PWM frequency (default {DEFAULT_F_PWM_HZ:g})")
+               help=f"PWM frequency (default {DEFAULT_F_PWM_HZ:g})")
     parser.add_argument("--node", type=_node, default=0, metavar="N",
                         help="actuation node: 0 junction (default), N = Cauer node N")
     parser.add_argument("--tol", type=_positive, default=DEFAULT_TOL_K, metavar="K",
@@ -70,19 +74,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write a self-contained ngspice deck reproducing the switched drive")
     parser.add_argument("--verify", action="store_true",
                         help="run the deck in ngspice and compare the junction peak")
-    parser.add_argument("--engine", choices=NAMES, default="auto",
-                        help="engine of --verify: ngspice (ngspice -b, pieces in parallel; "
-                             "auto) or pyspice; the drive itself is computed in closed form")
-    parser.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress bar on stderr (none either when it is not a terminal)")
+    add_engine_options(parser, NAMES, "engine of --verify: ngspice (ngspice -b, pieces in "
+                       "parallel; auto) or pyspice; the drive itself is computed in closed form")
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...drive.check import verify
-    from ...drive.optimize import optimize_drive
-    from ...io.files import atomic_write_text
-    from ...model import ThermalModel
-
     if args.engine == "analytic":  # before anything is computed or written
         raise DataFormatError("--engine analytic: the drive is already computed in closed form; "
                               "--verify runs it in ngspice or pyspice")
@@ -98,12 +94,10 @@ def run(args: argparse.Namespace) -> int:
     if args.spice:
         written.append(str(atomic_write_text(args.spice, result.spice_bench())))
     if args.plot:
-        from ...viz.plots import fig_drive
-
         written.append(str(fig_drive(result, args.plot)))
     check = verify(result, quiet=args.quiet, engine=spice) if args.verify else None
     if args.json:
-        doc = result.as_json()
+        doc = result.to_dict()
         if check is not None:
             doc["ngspice"] = check
         print(dumps_json(doc, indent=2))

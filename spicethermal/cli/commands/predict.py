@@ -10,8 +10,18 @@ from __future__ import annotations
 
 import argparse
 
-from ...analysis.predict import DEFAULT_POINTS, ENGINES
-from ._types import add_option, count, number, positive
+from ...analysis.predict import (
+    DEFAULT_POINTS,
+    ENGINES,
+    PowerProfile,
+    output_times,
+    plot_prediction,
+    predict,
+)
+from ...io.bundle import format_columns
+from ...io.files import atomic_write_text
+from ...model import ThermalModel
+from ._types import add_engine_options, add_option, count, number, positive
 
 NAME = "predict"
 HELP = "junction temperature under a measured power profile (analytic, or ngspice with effects)"
@@ -25,27 +35,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="where to write t_s, power_w, tj_c")
     parser.add_argument("--plot", metavar="TJ.png", help="also draw Tj and power against time")
     add_option(parser, "--ambient", old=("--tref",), dest="tref", type=number, default=25.0,
-               metavar="DEGC",
-                        help="reference (ambient or case) temperature, degC (default 25)")
+               metavar="DEGC", help="reference (ambient or case) temperature, degC (default 25)")
     parser.add_argument("--until", type=positive, metavar="S",
                         help="predict until this time, s (default: the profile's last sample; "
                              "after it the power is held)")
     parser.add_argument("--points", type=count, default=DEFAULT_POINTS, metavar="N",
                         help=f"even output points besides the profile's own times (default "
                              f"{DEFAULT_POINTS})")
-    parser.add_argument("--engine", choices=ENGINES, default="auto",
-                        help="auto (analytic for linear models, ngspice with device effects), "
-                             "analytic, ngspice or pyspice")
-    parser.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress bar on stderr (none either when it is not a terminal)")
+    add_engine_options(parser, ENGINES, "auto (analytic for linear models, ngspice with device "
+                       "effects), analytic, ngspice or pyspice")
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...analysis.predict import PowerProfile, output_times, plot_prediction, predict
-    from ...io.bundle import format_columns
-    from ...io.files import atomic_write_text
-    from ...model import ThermalModel
-
     model = ThermalModel.load(args.model)
     profile = PowerProfile.read(args.power)
     times = output_times(profile, args.until, args.points)

@@ -24,9 +24,15 @@ from __future__ import annotations
 
 import argparse
 
+from ...core.errors import DataFormatError
+from ...fit.bootstrap import fig_structure_band, spectrum_bootstrap
+from ...identify.spectrum import time_constant_spectrum
+from ...identify.structure import SEPARATION_THRESHOLD, StructureFunction, separation
 from ...io.files import dumps_json
+from ...viz.plots import fig_structure
 from ._source import SOURCE_HELP
-from .spectrum import _positive, add_spectrum_arguments, load_curve, spectrum_options
+from ._types import positive
+from .spectrum import add_spectrum_arguments, load_curve, spectrum_options
 
 NAME = "structure"
 HELP = "cumulative and differential structure functions; two sources: where they separate"
@@ -40,18 +46,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "functions, separation marked)")
     parser.add_argument("--json", action="store_true",
                         help="print ΣR and ΣC as JSON (a list of two objects for two sources)")
-    parser.add_argument("--stages-per-decade", type=_positive, default=10.0, metavar="N",
+    parser.add_argument("--stages-per-decade", type=positive, default=10.0, metavar="N",
                         help="Foster stages per decade of τ from the spectrum (default 10)")
-    parser.add_argument("--threshold", type=_positive, default=None, metavar="DECADES",
+    parser.add_argument("--threshold", type=positive, default=None, metavar="DECADES",
                         help="separation threshold on |Δ log10 ΣC| (default 0.05)")
     add_spectrum_arguments(parser)  # with --bootstrap
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...core.errors import DataFormatError
-    from ...identify.spectrum import time_constant_spectrum
-    from ...identify.structure import SEPARATION_THRESHOLD, StructureFunction, separation
-
     if len(args.sources) > 2:
         raise DataFormatError(f"structure takes one or two sources, got {len(args.sources)}")
     functions, bands = [], []
@@ -60,8 +62,6 @@ def run(args: argparse.Namespace) -> int:
         spec = time_constant_spectrum(curve, **spectrum_options(args))
         functions.append(StructureFunction.from_spectrum(spec, args.stages_per_decade))
         if args.bootstrap:
-            from ...fit.bootstrap import spectrum_bootstrap
-
             bands.append(spectrum_bootstrap(curve, spec, args.bootstrap, args.seed,
                                             args.stages_per_decade, quiet=args.quiet,
                                             **spectrum_options(args)).structure)
@@ -70,12 +70,8 @@ def run(args: argparse.Namespace) -> int:
         threshold = SEPARATION_THRESHOLD if args.threshold is None else args.threshold
         sep = separation(functions[0], functions[1], threshold_decades=threshold)
     if args.output and bands:
-        from ...fit.bootstrap import fig_structure_band
-
         fig_structure_band(functions, bands, args.output, sep)
     elif args.output:
-        from ...viz.plots import fig_structure
-
         fig_structure(functions, args.output, sep)
     if args.json:
         docs = [sf.to_dict() for sf in functions]
