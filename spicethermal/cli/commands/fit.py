@@ -18,11 +18,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from ... import __version__
-from ...analysis.diagnose import fit_with_effects
 from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
 from ...effects import spec
 from ...fit.bootstrap import fig_fit_band, fit_bootstrap
+from ...fit.fitters import fit_with_effects
 from ...fit.ladder import fit_model
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
