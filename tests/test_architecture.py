@@ -1,14 +1,19 @@
 """The package's shape: no import cycles, no private names across modules, one template
-environment, modules of a readable size (docs/architecture.md)."""
+environment, modules of a readable size, function-local imports only where they defer a heavy
+dependency (docs/architecture.md)."""
 
 from __future__ import annotations
 
 import ast
+import importlib
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 import spicethermal
+from spicethermal.cli.main import command_help, command_modules
 
 PACKAGE = Path(spicethermal.__file__).resolve().parent
 MAX_LINES = 500
@@ -164,3 +169,129 @@ def test_modules_stay_readable(name: str) -> None:
         assert lines > MAX_LINES, f"{name} has {lines} lines now: remove it from TOO_LONG"
         return
     assert lines <= MAX_LINES, f"{name}: {lines} lines (split it by what it holds)"
+
+
+# --- function-local imports: only for heavy optional dependencies ---------------------------
+
+#: Third-party packages a function may import locally, and why each is worth deferring. numpy
+#: is not among them: every module needs it, ``import spicethermal`` loads it.
+HEAVY = {
+    "matplotlib": "figures only; ~0.3 s to load",
+    "PySpice": "libngspice, only for --engine pyspice",
+    "serial": "pyserial: the bench only",
+    "jinja2": ".lib files, test benches and reports",
+    "scipy": "fits, ODEs and linear algebra; ~0.2 s, not needed by --help or light commands",
+    "mpmath": "exact conversions of small ladders only",
+    "tqdm": "progress bars of long runs",
+    "dask": "optional extra 'batch'",
+    "distributed": "optional extra 'batch'",
+    "pyarrow": "optional extra 'batch-parquet'",
+    "rich": "not a dependency: optional terminal output",
+    "hypothesis": "tests only",
+}
+
+#: Function-local imports of something light, (importer, imported module): the reason they
+#: must stay local. Keep it empty unless the import is truly dynamic.
+LOCAL_IMPORT_EXCEPTIONS: dict[tuple[str, str], str] = {
+    ("spicethermal.effects.catalogue", "importlib"):
+        "third-party effects are plugins found through entry points when the catalogue is "
+        "first read; importlib.metadata (~40 ms: email, zipfile) would load with every command",
+}
+
+
+def parents(name: str) -> list[str]:
+    """The packages Python imports before module ``name`` (``a.b.c``: ``a``, ``a.b``)."""
+    parts = name.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
+
+
+def imported(importer: str, node: ast.Import | ast.ImportFrom) -> set[str]:
+    """The modules an import statement of ``importer`` loads: the package's own modules by
+    name, third-party and standard ones by their top-level package."""
+    if isinstance(node, ast.Import):
+        names = {a.name for a in node.names}
+    else:
+        target = resolve(importer, node)
+        subs = {f"{target}.{a.name}" for a in node.names} & MODULES.keys()
+        names = subs | ({target} if len(subs) < len(node.names) else set())
+    return {n if n in MODULES else n.split(".")[0] for n in names}
+
+
+def heavy_on_load() -> dict[str, set[str]]:
+    """For each module of the package, the heavy packages that importing it loads: by its own
+    module-level imports, its parent packages' and those of every module they import."""
+    direct: dict[str, set[str]] = {}
+    for name, path in MODULES.items():
+        deps = set(parents(name))
+        for node in module_level(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import | ast.ImportFrom):
+                for dep in imported(name, node):
+                    deps.update([dep, *parents(dep)] if dep in MODULES else [dep])
+        direct[name] = deps - {name}
+    heavy = {name: {d for d in deps if d in HEAVY} for name, deps in direct.items()}
+    changed = True
+    while changed:  # the closure over module-level imports: a fixed point
+        changed = False
+        for name, deps in direct.items():
+            more = set().union(*(heavy[d] for d in deps if d in MODULES)) - heavy[name]
+            if more:
+                heavy[name] |= more
+                changed = True
+    return heavy
+
+
+def local_imports(tree: ast.Module):
+    """Import statements inside function and method bodies (module-level ``if``/``try`` and
+    ``TYPE_CHECKING`` blocks are not function bodies)."""
+    def visit(node: ast.AST, in_function: bool):
+        for child in ast.iter_child_nodes(node):
+            if in_function and isinstance(child, ast.Import | ast.ImportFrom):
+                yield child
+            yield from visit(child, in_function or isinstance(
+                child, ast.FunctionDef | ast.AsyncFunctionDef))
+    yield from visit(tree, False)
+
+
+def needless_local_imports() -> set[tuple[str, str]]:
+    """(importer, imported) for every function-local import that defers no heavy package:
+    the imported module loads nothing heavy, or nothing the importer does not load anyway."""
+    heavy = heavy_on_load()
+    found = set()
+    for name, path in MODULES.items():
+        for node in local_imports(ast.parse(path.read_text())):
+            for dep in imported(name, node):
+                deferred = (heavy[dep] if dep in MODULES else {dep} & HEAVY.keys()) - heavy[name]
+                if not deferred:
+                    found.add((name, dep))
+    return found
+
+
+def test_the_heavy_closure_follows_module_level_imports_only() -> None:
+    heavy = heavy_on_load()
+    assert heavy["spicethermal.bench.protocol_sim"] == {"serial"}  # imports pyserial itself
+    assert "scipy" in heavy["spicethermal.validation.network"]
+    assert heavy["spicethermal.core.errors"] == set()
+    assert heavy["spicethermal"] == set()  # the public API is lazy (tests/test_api.py)
+
+
+def test_function_local_imports_only_defer_heavy_dependencies() -> None:
+    found = needless_local_imports()
+    assert not found - LOCAL_IMPORT_EXCEPTIONS.keys(), (
+        "import these at the top of the module (a cycle means a shared piece belongs in a "
+        f"lower module): {sorted(found - LOCAL_IMPORT_EXCEPTIONS.keys())}")
+    assert not LOCAL_IMPORT_EXCEPTIONS.keys() - found, (
+        f"fixed, remove from the exceptions: {sorted(LOCAL_IMPORT_EXCEPTIONS.keys() - found)}")
+
+
+def test_the_command_line_help_stays_light() -> None:
+    code = ("import sys\nfrom spicethermal.cli.main import main\n"
+            "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+            f"print(sorted(m for m in {sorted(HEAVY)!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+
+
+def test_the_light_command_list_says_what_the_command_modules_say() -> None:
+    for name, info in command_modules().items():
+        module = importlib.import_module(f"spicethermal.cli.commands.{info.name}")
+        assert (module.NAME, module.HELP) == (name, command_help(info))

@@ -47,7 +47,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..core.errors import DataFormatError
-from ..engines.pwmsim import resolve_engine
+from ..engines.pwmsim import SpicePwm, resolve_engine, run_parallel
+from ..fit.effectfit import transient_offset, tsp_reading, window_average_k
+from ..model import Schedule
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -216,8 +218,6 @@ def _reading(model: ThermalModel, dataset: str, at: Mapping[str, float], model_c
     """Model temperature → what the bench reads: the model's measurement effects (the one
     measurement model of :mod:`spicethermal.fit.effectfit`, shared with fit and diagnose), then
     the hook. ``power_w`` is the power cut before a cooling reading."""
-    from ..fit.effectfit import transient_offset, tsp_reading
-
     value = float(tsp_reading(model_c, model.effect("tsp-nonlinearity")))
     if "t_s" in at:
         value += float(transient_offset(at["t_s"], model.effect("electrical-transient"),
@@ -272,8 +272,6 @@ def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
     >>> [abs(round(p.residual_k, 3)) for p in pts]
     [0.0, 0.0]
     """
-    from ..engines.pwmsim import SpicePwm, run_parallel
-
     engine = resolve_engine(engine, model)
     window = sample_window_s(model, table, window_s)
     ref_default = DEFAULT_REFERENCE_C if reference_c is None else float(reference_c)
@@ -283,7 +281,6 @@ def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
                     trefs.tolist(), strict=True))
     nodes, weights = _window_nodes(model, window)
     if engine == "analytic" and model.is_linear and len(nodes) > 1:
-        from ..fit.effectfit import window_average_k  # the window average in closed form
 
         rises = [window_average_k(model.ladder, p, f, d, window) for p, f, d, _ in rows]
     else:
@@ -319,8 +316,6 @@ def cooling_rise_k(model: ThermalModel, power_w: float, t_s: ArrayLike,
     >>> cooling_rise_k(ThermalModel(Foster.from_tau([10.0], [1.0])), 2.0, [0.0]).tolist()
     [20.0]
     """
-    from ..model import Schedule
-
     t = np.asarray(t_s, dtype=float)
     if model.is_linear:
         return power_w * model.ladder.cooling(t)

@@ -15,10 +15,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..bench.session import run_bench
 from ..core.errors import SpiceThermalError
 from ..core.progress import enabled
+from ..fit.ladder import fit_model
+from ..identify.curves import ZthCurve
+from ..io.bundle import Bundle
+from ..io.datasheet import mur880e, table1
 from ..io.files import write_json
-from ..spice.lib import DIALECTS, TOPOLOGIES
+from ..report import html as report
+from ..spice.lib import DIALECTS, TOPOLOGIES, export
+from ..viz import plots
+from .compare import compare
+from .diagnose import diagnose
 
 #: The simulated devices. The actuator bench has the real bench's artefacts (electrical
 #: transient after the cut, 100 µs sample window, a slightly nonlinear TSP) and the device hides
@@ -82,17 +91,6 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
 
     Returns a :class:`DemoResult` naming the report, the ``.lib`` files and a summary.
     """
-    from ..bench.session import run_bench
-    from ..fit.ladder import fit_model
-    from ..identify.curves import ZthCurve
-    from ..io.bundle import Bundle
-    from ..io.datasheet import mur880e, table1
-    from ..report import html as report
-    from ..spice.lib import export
-    from ..viz import plots
-    from .compare import compare
-    from .diagnose import diagnose
-
     out = Path(out)
     figs = out / "figures"
     figs.mkdir(parents=True, exist_ok=True)

@@ -56,6 +56,7 @@ from ..fit.effectfit import (
     transient_spans,
 )
 from ..fit.fitters import choose_form, fit_effect_forms, fit_with_effects
+from ..model import ThermalModel
 from ..report.diagnosis import write_report
 from .compare import Comparison
 from .consistency import amplitude_only, device_effect_contradicted
@@ -83,7 +84,6 @@ from .verdict import improvement as improvement_of
 if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Foster
     from ..io.bundle import Bundle
-    from ..model import ThermalModel
 
 __all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", "Diagnosis",
            "Step", "TableAnalysis", "analyse_table", "candidates", "comparison_of", "diagnose",
@@ -295,8 +295,6 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     >>> d.verdict_effect, d.effects, d.best.improvement > 3
     ('sample-window', ['sample-window'], True)
     """
-    from ..model import ThermalModel
-
     t_start = time.perf_counter()
     say = progress or (lambda _text: None)
     data = BundleData.from_bundle(bundle)

@@ -30,8 +30,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError
+from ..core.progress import task
 from ..engines.interface import NAMES
 from ..engines.interface import engine as by_name
+from ..io.bundle import read_columns
+from ..io.files import atomic_open
+from ..model import Network
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -104,8 +108,6 @@ class PowerProfile:
         -------
         PowerProfile
         """
-        from ..io.bundle import read_columns
-
         cols = read_columns(path, ["t_s", "power_w"])
         return cls(cols["t_s"], cols["power_w"], str(path), cols.rows)
 
@@ -193,7 +195,6 @@ def predict(model: ThermalModel, profile: PowerProfile, t_s: ArrayLike | None = 
     if engine == "analytic":
         rise = pwl_response(model, profile, t)
     else:
-        from ..core.progress import task
 
         with task(f"{engine} transient", quiet=quiet):
             rise = chosen.transient(model, list(zip(profile.t_s.tolist(),
@@ -230,7 +231,6 @@ def pwl_response(model: ThermalModel, profile: PowerProfile, t_s: NDArray) -> ND
     """
     from scipy.linalg import eigh
 
-    from ..model import Network
 
     net = Network.of(model.ladder)
     lam, v = eigh(net.conductance(), net.capacitance())
@@ -306,7 +306,6 @@ def plot_prediction(result: Prediction, path: str | os.PathLike, title: str | No
     power.set_ylabel("power (W)", color="C0")
     ax.set_title(title or f"junction temperature ({result.engine}, Tref {result.tref_c:g} °C)")
     if fig is not None:
-        from ..io.files import atomic_open
 
         with atomic_open(path, "wb") as handle:
             fig.savefig(handle, format="png", dpi=120)

@@ -43,7 +43,17 @@ import numpy as np
 from ..core.errors import DataFormatError
 from ..core.ladder import Foster
 from ..effects import Effect
+from ..fit.effectfit import (
+    CurveData,
+    PwmData,
+    cooling_true_c,
+    pwm_true_c,
+    transient_offset,
+    tsp_reading,
+)
 from ..io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
+from ..model import ThermalModel
+from .compare import cooling_rise_k
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -93,9 +103,6 @@ def expected_effect(name: str) -> str | None:
 @functools.lru_cache(maxsize=32)
 def _truth(name: str, exact: bool) -> tuple[tuple[NDArray, ...], NDArray, NDArray]:
     """Noise-free true junction temperatures: cooling curves, steady states, PWM readings."""
-    from ..fit.effectfit import CurveData, PwmData, cooling_true_c, pwm_true_c
-    from ..model import ThermalModel
-
     effect = HIDDEN[name]
     device = [effect] if effect is not None and effect.kind == "device" else []
     window = WINDOW_S
@@ -105,7 +112,6 @@ def _truth(name: str, exact: bool) -> tuple[tuple[NDArray, ...], NDArray, NDArra
     for p in COOLING_POWERS_W:
         tref = np.full(T_COOL_S.size, AMBIENT_C)
         if exact and device:
-            from .compare import cooling_rise_k
 
             tj = AMBIENT_C + cooling_rise_k(model, p, T_COOL_S, AMBIENT_C)
         else:
@@ -137,7 +143,6 @@ def scenario_bundle(name: str, seed: int = 0, *, noise_k: float = 0.02,
         raise DataFormatError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}")
     if not (np.isfinite(noise_k) and noise_k >= 0):
         raise DataFormatError(f"noise_k = {noise_k!r}: must be >= 0")
-    from ..fit.effectfit import transient_offset, tsp_reading
 
     rng = np.random.default_rng(seed)
     effect = HIDDEN[name]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,6 +18,9 @@ import numpy as np
 from ..core.errors import DataFormatError
 from ..core.ladder import Foster
 from ..effects import Effect
+from ..engines.pwm import steady_state
+from ..io.bundle import read_columns
+from ..model import ThermalModel
 from .compare import Comparison, ComparisonPoint
 from .diagnosis import Candidate, Diagnosis, Step
 from .residuals import NOISE_FLOOR_K, localise, rms
@@ -90,8 +93,6 @@ class TableAnalysis:
 
 
 def _read_table(path: Path) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-    from ..io.bundle import read_columns
-
     cols = read_columns(path, ["freq_hz", "duty", "tj_exp_c", "tj_model_c"], ["delta_c"])
     f, d = cols["freq_hz"], cols["duty"]
     for name, arr, ok in (("freq_hz", f, f > 0), ("duty", d, (d > 0) & (d <= 1))):
@@ -106,8 +107,6 @@ def _read_table(path: Path) -> tuple[NDArray, NDArray, NDArray, NDArray]:
 
 def _peak_readings(ladder: Foster, power_w: float, f: NDArray, d: NDArray,
                    window_s: float = 0.0) -> NDArray:
-    from ..engines.pwm import steady_state
-
     return np.array([steady_state(ladder, power_w, fi, di, window_s).reading_k
                      for fi, di in zip(f, d, strict=True)])
 
@@ -254,8 +253,6 @@ def analyse_table(freq_hz: NDArray, duty: NDArray, tj_exp_c: NDArray, tj_model_c
 
 
 def _with_findings(a: TableAnalysis) -> TableAnalysis:
-    from dataclasses import replace
-
     delta = a.delta_k
     out: dict[str, str] = {}
     pos = [(fi, di) for fi, di, x in zip(a.freq_hz, a.duty, delta, strict=True) if x > 0]
@@ -359,8 +356,6 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
     >>> diagnose_table(path("actuator_table2.csv")).verdict_effect is None
     True
     """
-    from ..model import ThermalModel
-
     t0 = time.perf_counter()
     path = Path(path)
     f, d, exp_c, mod_c = _read_table(path)

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..engines.pwm import r_duty_exact
+from ..identify.curves import log_grid
 from ..io.bundle import format_columns
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -73,9 +75,6 @@ def duty_family(ladder: Foster | Cauer, duties: Sequence[float],
     >>> [round(float(fam[k][0]), 6) for k in ("zth_k_per_w_d0", "zth_k_per_w_d0.5")]
     [1.264241, 1.462117]
     """
-    from ..engines.pwm import r_duty_exact
-    from ..identify.curves import log_grid
-
     if t_s is None:
         taus = ladder.time_constants()
         t_s = log_grid(10.0 ** math.floor(math.log10(taus[0]) - 1),

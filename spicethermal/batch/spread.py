@@ -46,7 +46,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.stats import norm
 
 from .. import __version__
 from ..core.errors import DataFormatError
@@ -176,6 +175,8 @@ def path_limit(levels: int) -> float:
     >>> round(path_limit(1), 6) == Z_OUTLIER, round(path_limit(37), 2)
     (True, 4.37)
     """
+    from scipy.stats import norm
+
     return float(norm.isf(norm.sf(Z_OUTLIER) / levels))
 
 

@@ -23,9 +23,11 @@ Two presets, chosen by the ``sim://NAME`` URL:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 from ..core.errors import InstrumentError
 from ..core.ladder import Foster
+from ..core.synthetic import mur880e_foster
 
 #: ADC: 10 bits over 0..5 V (PIC18F4431 high-speed ADC, AVdd reference).
 ADC_BITS = 10
@@ -61,9 +63,6 @@ class Board:
     def conversions(self) -> list[tuple[int, int, int]]:
         """Fixed-point ``(num, off, den)`` of each channel, ``value = (code·num + off)/den``,
         as the firmware's ``st_conv_t`` (TSP µV, Vd µV, Id µA, thermocouples m°C)."""
-
-        from fractions import Fraction
-
         def linear(gain: float, offset_v: float, sign: int = 1) -> tuple[int, int, int]:
             # value = sign·(code·LSB − offset)/gain, gain = p/q in value units per µV
             g = Fraction(gain).limit_denominator(1000)
@@ -131,8 +130,6 @@ def _actuator() -> Preset:
 
 
 def _mur880e() -> Preset:
-    from ..core.synthetic import mur880e_foster
-
     return Preset(
         name="mur880e",
         description="MUR880E power diode on a bulky heat sink, junction to case",

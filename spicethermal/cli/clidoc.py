@@ -13,6 +13,8 @@ import sys
 from collections.abc import Iterator
 from unittest import mock
 
+from .main import build_parser
+
 __all__ = ["cli_markdown", "commands"]
 
 #: Width of the generated help text (independent of the terminal).
@@ -59,8 +61,6 @@ def cli_markdown() -> str:
     >>> text.startswith("# Command-line reference") and "## spicethermal fit" in text
     True
     """
-    from .main import build_parser
-
     with mock.patch.dict(os.environ, {"COLUMNS": str(WIDTH)}):
         pages = [(name, p.format_help()) for name, p in commands(build_parser())]
     out = ["# Command-line reference", "",

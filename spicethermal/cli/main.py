@@ -1,8 +1,11 @@
 """The ``spicethermal`` command line.
 
-Each sub-command lives in its own module under :mod:`spicethermal.cli.commands` and defines
-``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``. They are discovered
-here, so adding a command never touches this file. Errors raised on purpose
+Each sub-command lives in its own module under :mod:`spicethermal.cli.commands`, named for
+the command (``import_.py`` for ``import``), and defines ``NAME``, ``HELP``,
+``add_arguments(parser)`` and ``run(args) -> int``. They are discovered here, so adding a
+command never touches this file. Only the module of the command run is imported (with the
+library it needs); the others are listed by the ``HELP`` read from their source, so
+``spicethermal --help`` stays light. Errors raised on purpose
 (:class:`~spicethermal.core.errors.SpiceThermalError`) become one line on stderr and exit code 2;
 so do numerical failures on absurd input; anything else is a bug, reported in one line with
 exit code 70.
@@ -11,13 +14,16 @@ exit code 70.
 from __future__ import annotations
 
 import argparse
+import ast
 import importlib
 import os
 import pkgutil
 import sys
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 
+from .. import __version__
 from ..core.errors import SpiceThermalError
 from . import commands
 
@@ -38,14 +44,81 @@ def one_line(text: object, limit: int = 600) -> str:
     return out if len(out) <= limit else out[:limit - 3] + "..."
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="spicethermal", description=__doc__.splitlines()[0])
-    from .. import __version__
+def command_modules() -> dict[str, pkgutil.ModuleInfo]:
+    """Every sub-command's module, by command name (the module's name without a trailing
+    ``_``), in the order ``--help`` lists them.
 
+    Returns
+    -------
+    dict of str to pkgutil.ModuleInfo
+
+    Examples
+    --------
+    >>> names = list(command_modules())
+    >>> names[:2], "import" in names
+    (['batch', 'bench'], True)
+    """
+    infos = sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name)
+    return {info.name.rstrip("_"): info for info in infos if not info.name.startswith("_")}
+
+
+def command_help(info: pkgutil.ModuleInfo) -> str:
+    """A sub-command's one-line ``HELP``, read from its source without importing the module
+    (nor the library it imports); imported when the source does not spell it literally.
+
+    Parameters
+    ----------
+    info : pkgutil.ModuleInfo
+        The command's module (:func:`command_modules`).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> command_help(command_modules()["compare"])
+    "measured vs model over every data set of a bundle (the paper's Table 2)"
+    """
+    source = Path(getattr(info.module_finder, "path", "")) / f"{info.name}.py"
+    blocks = source.read_text(encoding="utf-8").split("\n\n") if source.is_file() else []
+    for block in blocks:  # parse only the paragraph that assigns HELP: a few ms in all
+        if block.startswith("HELP = ") or "\nHELP = " in block:
+            try:
+                node = next(n for n in ast.parse(block).body if isinstance(n, ast.Assign)
+                            and getattr(n.targets[0], "id", None) == "HELP")
+                return str(ast.literal_eval(node.value))
+            except (SyntaxError, ValueError, StopIteration):
+                break
+    return importlib.import_module(f"{commands.__name__}.{info.name}").HELP
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``spicethermal`` parser.
+
+    Parameters
+    ----------
+    command : str, optional
+        Build only this sub-command's arguments (importing only its module); the others are
+        listed by name and help. None (the default): every sub-command in full, as the
+        reference (``docs/cli.md``) and the tests read them.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+
+    Examples
+    --------
+    >>> build_parser("pwm").parse_args(["pwm", "m.json", "--freq", "1k", "--duty", "0.5",
+    ...                                 "--power", "1"]).freq
+    1000.0
+    """
+    parser = _Parser(prog="spicethermal", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"spicethermal {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
+    for name, info in command_modules().items():
+        if command is not None and name != command:
+            sub.add_parser(name, help=command_help(info))
             continue
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         p = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
@@ -58,7 +131,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code: 0 done, 2 bad input or a failure the
     message explains (one line on stderr, never a traceback), 70 an internal error (a bug:
     one line too; ``SPICETHERMAL_DEBUG=1`` shows the traceback)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # the first word not an option is the command (the top level has no option with a value)
+    parser = build_parser(next((a for a in argv if not a.startswith("-")), ""))
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()

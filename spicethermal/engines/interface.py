@@ -24,13 +24,17 @@ a model with device effects. :class:`Spice` runs the exported subcircuit in ngsp
 
 from __future__ import annotations
 
+import tempfile
 from collections.abc import Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from ..core.errors import DataFormatError, SimulationError
-from .pwmsim import ENGINES, resolve_engine
+from ..spice.lib import reference_drive, render_bench, render_lib
+from ..spice.ngspice import simulator
+from .pwmsim import ENGINES, SpicePwm, resolve_engine
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -137,11 +141,6 @@ class Spice:
         NDArray
             The junction rise over the reference at ``t_s``.
         """
-        import tempfile
-        from pathlib import Path
-
-        from ..spice.lib import reference_drive, render_bench, render_lib
-
         t = np.asarray(t_s, dtype=float).ravel()
         end = float(t[-1])
         pts = [(float(a), float(p)) for a, p in corners if a <= end]
@@ -174,8 +173,6 @@ class Spice:
 
     def pwm_steady(self, model: ThermalModel, power_w: float, freq_hz: float, duty: float,
                    window_s: float = 0.0, tref_c: float = 25.0) -> PwmState:
-        from .pwmsim import SpicePwm
-
         return SpicePwm(model, self.name, self.dialect, tref_c=tref_c).state(
             power_w, freq_hz, duty, window_s)
 
@@ -243,8 +240,6 @@ def engine(name: str, model: ThermalModel | None = None, dialect: str = "ngspice
     >>> engine("pyspice").name
     'pyspice'
     """
-    from ..spice.ngspice import simulator
-
     if name not in NAMES:
         raise DataFormatError(f"--engine {name!r}: expected one of {', '.join(NAMES)}")
     if model is not None:

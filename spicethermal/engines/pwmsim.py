@@ -49,6 +49,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError, SimulationError
+from ..core.progress import bar
+from ..spice.lib import (
+    DIALECTS,
+    TOPOLOGIES,
+    initial_conditions,
+    reference_drive,
+    render_bench,
+    render_lib,
+)
+from ..spice.ngspice import simulator
 from .pwm import PwmState, check_drive
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -167,8 +177,6 @@ class SpicePwm:
     rel_tol: float = 1e-3
 
     def __post_init__(self) -> None:
-        from ..spice.lib import DIALECTS, TOPOLOGIES
-
         if self.engine not in ("ngspice", "pyspice"):
             raise DataFormatError(f"engine {self.engine!r}: expected ngspice or pyspice")
         if self.dialect not in DIALECTS:
@@ -193,15 +201,11 @@ class SpicePwm:
     @cached_property
     def lib_text(self) -> str:
         """The exported subcircuit (``.SUBCKT DUT TJ TREF``) the runs include."""
-        from ..spice.lib import render_lib
-
         return render_lib(self._model, self.dialect, name=SUBCKT, filename="dut.lib")
 
     def initial_conditions(self, power_w: float, freq_hz: float,
                            duty: float) -> list[tuple[str, float]]:
         """``.ic`` node temperatures (°C) at the start of an on-phase, periodic steady state."""
-        from ..spice.lib import initial_conditions, reference_drive
-
         theta = self._model.pwm_initial_state(power_w, freq_hz, duty, self.tref_c,
                                               tol_k=self.tol_k / 10)  # ample for the check
         return initial_conditions(self._model, theta, reference_drive(self._model,
@@ -210,8 +214,6 @@ class SpicePwm:
     def netlist(self, lib_path: str | Path, power_w: float, freq_hz: float, duty: float,
                 window_s: float = 0.0) -> tuple[str, float]:
         """The test bench for one operating point and its reading time."""
-        from ..spice.lib import reference_drive, render_bench
-
         tau_min = float(self._model.ladder.time_constants()[0])
         pts, t_read = pwm_waveform(power_w, freq_hz, duty, self.periods, window_s,
                                    EDGE_TAU * tau_min)
@@ -229,9 +231,6 @@ class SpicePwm:
     def run(self, power_w: float, freq_hz: float, duty: float,
             window_s: float = 0.0) -> PwmRun:
         """Simulate one operating point; raise :class:`SimulationError` if it is not periodic."""
-        from ..spice.lib import reference_drive
-        from ..spice.ngspice import simulator
-
         check_drive(freq_hz, duty, power_w, window_s)
         with tempfile.TemporaryDirectory(prefix="spicethermal-pwm-") as tmp:
             lib = Path(tmp) / "dut.lib"
@@ -296,8 +295,6 @@ def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]], *,
     >>> run_parallel([])
     []
     """
-    from ..core.progress import bar
-
     n = min(workers(), len(jobs))
     desc = "ngspice PWM points"
     if n < 2 or any(job[0].engine == "pyspice" for job in jobs):

@@ -29,15 +29,27 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..core.errors import DataFormatError
+from ..core.errors import DataFormatError, FitError
 from ..core.progress import bar
+from ..identify.spectrum import time_constant_spectrum
+from ..identify.structure import StructureFunction
+from ..viz.plots import (
+    new_figure,
+    plot_cumulative_structure,
+    plot_differential_structure,
+    plot_fit,
+    plot_residuals,
+    plot_spectrum,
+    plot_spectrum_fit,
+    save_figure,
+)
+from .ladder import fit_foster
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
     from ..identify.curves import ZthCurve
     from ..identify.spectrum import Spectrum
-    from ..identify.structure import StructureFunction
     from .ladder import FitResult
 
 #: Central probability of the bands.
@@ -134,9 +146,6 @@ def fit_bootstrap(result: FitResult, n: int = DEFAULT_N, seed: int = 0) -> FitBo
     -------
     FitBootstrap
     """
-    from ..core.errors import FitError
-    from .ladder import fit_foster
-
     t = np.asarray(result.t_s)
     model = result.foster.zth(t)
     rth = result.rth_k_per_w if result.rth_fixed else None
@@ -192,9 +201,6 @@ def spectrum_bootstrap(curve: ZthCurve, spectrum: Spectrum, n: int = DEFAULT_N, 
     -------
     SpectrumBootstrap
     """
-    from ..identify.spectrum import time_constant_spectrum
-    from ..identify.structure import StructureFunction
-
     model = spectrum.zth(curve.t_s)
     dens, cums = [], []
     base_sf = (StructureFunction.from_spectrum(spectrum, stages_per_decade)
@@ -234,8 +240,6 @@ def shade(ax, band: Band, color: str = "C0", label: str | None = None) -> None:
 
 def fig_fit_band(result: FitResult, fb: FitBootstrap, path, title: str | None = None):
     """The fit (data, ladder, stages) with its bootstrap band, and the residuals. PNG."""
-    from ..viz.plots import new_figure, plot_fit, plot_residuals, save_figure
-
     fig = new_figure(7.0, 6.5)
     ax_a, ax_b = fig.subplots(2, 1, height_ratios=(3, 1.4))
     plot_fit(result, ax_a)
@@ -249,8 +253,6 @@ def fig_fit_band(result: FitResult, fb: FitBootstrap, path, title: str | None = 
 
 def fig_spectrum_band(spectrum: Spectrum, sb: SpectrumBootstrap, path):
     """The spectrum figure (Zth and model, derivative, R(τ)) with the band on R(τ). PNG."""
-    from ..viz.plots import new_figure, plot_spectrum, plot_spectrum_fit, save_figure
-
     fig = new_figure(8.0, 9.0)
     ax_a, ax_b, ax_c = fig.subplots(3, 1)
     plot_spectrum_fit(spectrum, ax_a)
@@ -264,13 +266,6 @@ def fig_spectrum_band(spectrum: Spectrum, sb: SpectrumBootstrap, path):
 def fig_structure_band(functions: Sequence[StructureFunction], bands: Sequence[Band | None],
                        path, separation=None):
     """Cumulative and differential structure functions, bands on the cumulative ones. PNG."""
-    from ..viz.plots import (
-        new_figure,
-        plot_cumulative_structure,
-        plot_differential_structure,
-        save_figure,
-    )
-
     fig = new_figure(7.5, 8.0)
     ax_a, ax_b = fig.subplots(2, 1)
     plot_cumulative_structure(list(functions), ax_a, separation)

@@ -52,7 +52,10 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
+from ..engines.pwm import steady_state
+from ..identify.curves import ZthCurve, detect_transient
 from .budget import TimeLimitError, bounded, check_time, time_limit, unlimited
+from .ladder import fit_foster
 from .measurement import (
     TRANSIENT_RATE,
     BundleData,
@@ -158,8 +161,6 @@ def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
 
 def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect]) -> NDArray:
     """True junction temperature (°C) at the end of the sample window of every PWM row."""
-    from ..engines.pwm import steady_state
-
     fx = effects_map(effects)
     tc, pc, sw = (fx.get(n) for n in ("temperature-coefficient", "phase-change",
                                       "sample-window"))
@@ -190,8 +191,6 @@ def window_average_k(ladder: Foster | Cauer, power_w: float, freq_hz: float, dut
     >>> round(window_average_k(lad, 1.0, 1e6, 0.5, 1e-3), 3) == round(5 * (1 - math.exp(-1)), 3)
     True
     """
-    from ..engines.pwm import steady_state
-
     f = as_foster(ladder)
     total = 0.0
     for r, tau in zip(f.r, f.tau, strict=True):
@@ -235,9 +234,6 @@ def reference_ladder(data: BundleData, order: int | str = "auto",
     corrected first by ``correct(curve) -> (tj_c, tj_steady_c)`` (an inverse measurement
     model). The electrical transient is masked and extrapolated by √t (``mask_s``, see
     :meth:`~spicethermal.identify.curves.ZthCurve.from_cooling`)."""
-    from ..identify.curves import ZthCurve
-    from .ladder import fit_foster
-
     c = data.reference_curve
     tj, steady = (c.tj_c, c.tj_steady_c) if correct is None else correct(c)
     curve = ZthCurve.from_cooling(c.t_s, tj, c.power_w, steady,
@@ -250,8 +246,6 @@ def reference_ladder(data: BundleData, order: int | str = "auto",
 def transient_spans(data: BundleData) -> dict[str, float]:
     """Per cooling curve, the span (s) the electrical transient corrupts, as detected by
     :func:`~spicethermal.identify.curves.detect_transient` (0 when none is seen)."""
-    from ..identify.curves import detect_transient
-
     return {c.name: detect_transient(c.t_s, c.tj_c) for c in data.cooling}
 
 

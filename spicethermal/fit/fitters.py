@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..core.errors import FitError, SimulationError
 from ..effects import Effect, spec
+from ..model import ThermalModel
 from .effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -32,7 +33,6 @@ from .effectfit import (
 if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer, Foster
     from ..io.bundle import Bundle
-    from ..model import ThermalModel
 
 __all__ = ["FORM_BIC_MARGIN", "choose_form", "fit_effect", "fit_effect_forms", "fitter",
            "fit_with_effects"]
@@ -155,8 +155,6 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str], order: int | str = "a
     >>> round(m.effect("sample-window").params["window_s"] * 1e6)
     99
     """
-    from ..model import ThermalModel  # the model imports the fits' forward models
-
     data = BundleData.from_bundle(bundle)
     if base is not None:
         ladder: Foster = as_foster(base.ladder)

@@ -70,6 +70,8 @@ import numpy as np
 
 from ..core.errors import DataFormatError, FitError
 from ..core.ladder import Foster
+from ..effects import known_names
+from ..model import ThermalModel
 from .problem import (
     BINS_PER_DECADE,
     CRITERION,
@@ -99,7 +101,6 @@ from .result import FitResult, OrderTrial
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from ..model import ThermalModel
 
 __all__ = [
     "BINS_PER_DECADE",
@@ -394,14 +395,11 @@ def fit_model(
     >>> res.order, model.provenance["fit"]["order"]
     (2, 2)
     """
-    from ..model import ThermalModel
-
     items = list(curves) if isinstance(curves, Sequence) else [curves]
     if not items:
         raise DataFormatError("no Zth curve to fit")
     names = [str(e) for e in effects]
     if names:
-        from ..effects import known_names
 
         unknown = [e for e in names if e not in known_names()]
         if unknown:

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..effects import CATALOGUE, Effect
+from ..model import Network
 from .effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -85,8 +86,6 @@ def node_fractions(ladder: Foster | Cauer) -> NDArray:
     >>> [round(float(x), 6) for x in node_fractions(Cauer([1.0, 3.0], [1.0, 1.0]))]
     [1.0, 0.75]
     """
-    from ..model import Network  # the model imports the fits' forward models
-
     net = Network.of(ladder)
     b = np.zeros(net.n)
     b[0] = 1.0

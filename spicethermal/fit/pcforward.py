@@ -11,6 +11,7 @@ import numpy as np
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import CATALOGUE, Effect, phase_change
+from ..model import Network
 from .budget import check_time
 from .tcjunction import as_foster, tc_cooling_rise, tc_steady_scale
 
@@ -40,7 +41,6 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     """
     from scipy.integrate import solve_ivp
 
-    from ..model import Network
 
     if tc is not None and tc.form != "junction":
         raise SimulationError(f"phase-change together with temperature-coefficient form "
@@ -125,7 +125,6 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float,
     """
     from scipy.linalg import eigh
 
-    from ..model import Network
 
     net = Network.of(ladder)
     g, cm = net.conductance(), net.capacitance()

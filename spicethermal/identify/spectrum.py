@@ -68,6 +68,8 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from ..core.errors import DataFormatError
+from ..core.ladder import Foster
+from .curves import ZthCurve
 from .deconvolution import (
     bayes,
     bayes_resolution,
@@ -82,8 +84,6 @@ from .deconvolution import (
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from ..core.ladder import Foster
-    from .curves import ZthCurve
 
 __all__ = ["BAYES_ITERATIONS", "POINTS_PER_DECADE", "Spectrum", "kernel",
            "log_derivative", "time_constant_spectrum"]
@@ -223,8 +223,6 @@ class Spectrum:
         >>> [round(x, 2) for x in f.r], bool(np.allclose(f.tau, [1e-3, 1e-1], rtol=0.02))
         ([1.0, 2.0], True)
         """
-        from ..core.ladder import Foster
-
         if not (isinstance(n_per_decade, int | float) and math.isfinite(n_per_decade)
                 and n_per_decade > 0):
             raise DataFormatError(f"n_per_decade = {n_per_decade!r}: must be > 0")
@@ -280,8 +278,6 @@ class Spectrum:
 
 # ----------------------------------------------------------------------------- pipeline
 def _as_curve(source: ZthCurve | ArrayLike, zth_k_per_w: ArrayLike | None) -> ZthCurve:
-    from .curves import ZthCurve
-
     if isinstance(source, ZthCurve):
         if zth_k_per_w is not None:
             raise DataFormatError("give a ZthCurve or (t_s, zth_k_per_w), not both")

@@ -39,12 +39,12 @@ import numpy as np
 
 from ..core.errors import DataFormatError
 from ..core.ladder import Cauer, Foster
+from .curves import ZthCurve
+from .spectrum import Spectrum, time_constant_spectrum
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from .curves import ZthCurve
-    from .spectrum import Spectrum
 
 __all__ = ["SEPARATION_THRESHOLD", "Separation", "StructureFunction",
            "cauer_ladder", "separation", "structure_function"]
@@ -215,9 +215,6 @@ def structure_function(source: ZthCurve | Spectrum | Foster | Cauer, *,
     >>> round(sf.rth_k_per_w, 12), sf.order
     (3.0, 2)
     """
-    from .curves import ZthCurve
-    from .spectrum import Spectrum, time_constant_spectrum
-
     if isinstance(source, Foster | Cauer):
         return StructureFunction.from_ladder(source)
     if isinstance(source, ZthCurve):

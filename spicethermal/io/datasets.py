@@ -11,11 +11,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..core.errors import DataFormatError, where
+from ..identify.calibration import Calibration
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
-
-    from ..identify.calibration import Calibration
 
 from .columns import (
     check_column,
@@ -75,8 +74,6 @@ class CalibrationTable:
         """The :class:`~spicethermal.identify.calibration.Calibration`: fitted to the points
         (``"auto"``: linear unless its linearity test fails, then quadratic), or the given
         polynomial (``degree`` is then ignored)."""
-        from ..identify.calibration import Calibration
-
         if self.coefficients is not None:
             return Calibration.from_coefficients(self.coefficients, self.temp_c, self.v_tsp_v)
         return Calibration.fit(self.temp_c, self.v_tsp_v, degree=degree)

@@ -29,7 +29,7 @@ import numpy as np
 from ..core.errors import DataFormatError, where
 from ..core.ladder import Foster
 from ..identify.curves import ZthCurve
-from .bundle import Bundle
+from .bundle import Bundle, ZthTable
 from .columns import frozen, parse_columns, read_columns
 from .jsondoc import JsonDocument
 
@@ -109,7 +109,6 @@ def read_zth_points(path: str | os.PathLike, rth_k_per_w: float | None = None,
                 i = bad[0]
                 raise DataFormatError(f"{where(str(path), int(cols.rows[i]), col)}"
                                       f"{float(cols[col][i])!r} must be >= 0")
-    from .bundle import ZthTable
 
     table = ZthTable(cols["t_s"], zth_k_per_w=cols.get("zth_k_per_w"), r=cols.get("r"),
                      rth_k_per_w=rth_k_per_w, file=str(path), rows=cols.rows)

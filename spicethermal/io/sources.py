@@ -29,17 +29,17 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..core.errors import DataFormatError
 from ..fit.ladder import BINS_PER_DECADE, DENSE_POINTS, log_bins
 from ..identify.calibration import KFactor
+from ..identify.curves import ZthCurve
 from .bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ZthTable, read_columns
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ..identify.curves import ZthCurve
+from .files import read_text
+from .importers import END_SAMPLES, read_pyrth, read_t3ster
 
 #: Kinds of source (:attr:`Source.kind`).
 KINDS = ("bundle", "zth-csv", "cooling-csv", "pyrth", "t3ster")
@@ -103,8 +103,6 @@ class Source:
         ZthCurve
             Labelled ``name/curve`` for a bundle, the file's stem otherwise.
         """
-        from ..identify.curves import ZthCurve
-
         n_cool = len(self.bundle.cooling)
         if self.n_curves == 0:
             raise DataFormatError(f"{self.path}: no cooling curve and no zth table")
@@ -220,8 +218,6 @@ def read_source(source: str | os.PathLike, *, calibration: str | os.PathLike | N
     -------
     Source
     """
-    from .importers import read_pyrth, read_t3ster
-
     path = Path(source)
     if path.name == MANIFEST and path.is_file():
         path = path.parent
@@ -281,8 +277,6 @@ def csv_header(path: str | os.PathLike) -> list[str]:
     list of str
         Empty for a file without a header.
     """
-    from .files import read_text
-
     for line in read_text(Path(path)).splitlines():
         line = line.split("#", 1)[0].strip()
         if line:
@@ -292,8 +286,6 @@ def csv_header(path: str | os.PathLike) -> list[str]:
 
 def _anchor(cal: KFactor, v_tsp_v: np.ndarray) -> tuple[KFactor, str]:
     """The K-factor anchored at the end of a record (the device back at ``t_ref_c``)."""
-    from .importers import END_SAMPLES
-
     cal = replace(cal, v_ref_v=float(np.mean(v_tsp_v[-END_SAMPLES:])))
     return cal, (f"calibration anchored: {cal.v_ref_v:.6g} V (end of record) = "
                  f"{cal.t_ref_c:g} degC")

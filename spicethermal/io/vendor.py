@@ -24,6 +24,7 @@ from pathlib import Path
 from ..core.errors import DataFormatError
 from ..core.ladder import Cauer, Foster
 from ..model import ThermalModel
+from .datasheet import read_foster_table
 
 _EXPONENT = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "n": -9, "p": -12, "f": -15}
 _NUMBER = re.compile(r"([0-9]+\.?[0-9]*|\.[0-9]+)(e[+-]?[0-9]+)?(meg|mil|[tgkmunpf])?[a-z]*",
@@ -443,8 +444,6 @@ def _foster_or_cauer(r: list[float], c: list[float]) -> Foster | Cauer:
 
 def import_table(path: str | os.PathLike, reference: str = "case") -> ThermalModel:
     """A datasheet Foster table (CSV: ``r_k_per_w`` and ``tau_s`` or ``c_j_per_k``) as a model."""
-    from .datasheet import read_foster_table
-
     foster = read_foster_table(path)
     return ThermalModel(foster, reference=reference,
                         provenance={"source": Path(path).name, "device": Path(path).stem,

@@ -5,6 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..io.files import atomic_write_text
+from ..spice.templates import environment
+from ..viz.plots import diagnosis_figures
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..analysis.diagnosis import Diagnosis
 
@@ -14,10 +18,6 @@ __all__ = ["write_report"]
 def write_report(result: Diagnosis, out_dir: str | Path) -> Path:
     """Write the HTML report of a diagnosis (``index.html``, self-contained but for its PNG
     figures beside it, from ``templates/report/diagnosis.html.j2``) into ``out_dir``."""
-    from ..io.files import atomic_write_text
-    from ..spice.templates import environment
-    from ..viz.plots import diagnosis_figures
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figs = diagnosis_figures(result, out)

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import __version__
 from ..io.files import atomic_write_text
 from ..spice.templates import environment
 
@@ -44,8 +45,6 @@ class Section:
 def render(title: str, subtitle: str, summary: Sequence[str], sections: Sequence[Section],
            elapsed_s: float) -> str:
     """The report page as HTML text."""
-    from .. import __version__
-
     return environment().get_template("report/index.html.j2").render(
         title=title, subtitle=subtitle, summary=list(summary), sections=list(sections),
         elapsed_s=elapsed_s, version=__version__)

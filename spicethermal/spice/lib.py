@@ -18,7 +18,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import __version__
 from ..core.errors import DataFormatError
+from ..core.ladder import Cauer, Foster
 from ..effects.spice import number
 from ..io.files import atomic_write_text
 from .ngspice import (  # the simulators, re-exported: decks rendered here run through them
@@ -32,8 +34,6 @@ from .ngspice import (  # the simulators, re-exported: decks rendered here run t
 from .templates import environment, template_dir
 
 if TYPE_CHECKING:  # pragma: no cover
-
-    from ..core.ladder import Cauer, Foster
     from ..effects import Effect
     from ..model import ThermalModel
 
@@ -177,8 +177,6 @@ def simulator_ready(ladder: Foster | Cauer) -> tuple[Foster | Cauer, list[str]]:
     >>> lad.order, notes[0].startswith("1 stage")
     (2, True)
     """
-    from ..core.ladder import Cauer, Foster
-
     tiny = NEGLIGIBLE * ladder.rth
     r = list(ladder.r)
     merged = 0.0
@@ -365,8 +363,6 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
     >>> ".SUBCKT DUT TJ TREF" in text
     True
     """
-    from .. import __version__
-
     if dialect not in DIALECTS:
         raise DataFormatError(f"dialect {dialect!r}: expected one of {', '.join(DIALECTS)}")
     if topology is not None and topology not in TOPOLOGIES:
@@ -473,7 +469,6 @@ def render_bench(lib_path: str | os.PathLike, name: str, *, power_w: float, tsto
     :func:`reference_drive`).
     """
     rise_s = max(1e-9, 1e-5 * tmax_s) if rise_s is None else rise_s
-    from .. import __version__
 
     check_name(name)
     return environment().get_template("bench/transient.cir.j2").render(

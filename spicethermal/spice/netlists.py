@@ -9,9 +9,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from .. import __version__
 from ..core.ladder import Foster
+from ..data import path as data_path
 from ..effects import Effect
 from ..io.files import atomic_write_text
+from ..io.vendor import import_model
 from ..model import ThermalModel
 from .lib import (
     DIALECTS,
@@ -60,10 +63,7 @@ def _pwm_bench() -> str:
 
 def vendor_model() -> ThermalModel:
     """The README example's vendor network, imported from the shipped excerpt."""
-    from ..data import path
-    from ..io.vendor import import_model
-
-    return import_model(path(VENDOR_EXAMPLE[0]), VENDOR_EXAMPLE[1])
+    return import_model(data_path(VENDOR_EXAMPLE[0]), VENDOR_EXAMPLE[1])
 
 
 def _vendor_lib() -> str:
@@ -72,8 +72,6 @@ def _vendor_lib() -> str:
 
 
 def _heatsink_deck() -> str:
-    from .. import __version__
-
     return environment().get_template("bench/coupled.cir.j2").render(
         name=VENDOR_EXAMPLE[1], lib_path=f"{VENDOR_EXAMPLE[1]}.lib", pins=["Tj", "Tcase"],
         version=__version__, **HEATSINK_EXAMPLE)

@@ -8,11 +8,13 @@ under ngspice's compatibility modes (``set ngbehavior=ps`` / ``lt`` in ``.spicei
 
 from __future__ import annotations
 
+import logging
 import os
 import re
 import shutil
 import subprocess
 import tempfile
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -148,9 +150,6 @@ def _vector(plot, name: str):
 
 @lru_cache(maxsize=1)
 def _shared_ngspice():
-    import logging
-    import warnings
-
     logging.getLogger("PySpice").setLevel(logging.ERROR)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

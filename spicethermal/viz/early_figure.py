@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError
+from ..io.files import atomic_open
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike
@@ -38,7 +39,6 @@ def fig_early_time(t_s: ArrayLike, tj_c: ArrayLike, early: EarlyTimeFix,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..io.files import atomic_open
 
     t = np.asarray(t_s, dtype=float)
     tj = np.asarray(tj_c, dtype=float)

@@ -20,6 +20,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer, Foster
     from ..drive.optimize import DriveResult
 
+from ..core.errors import DataFormatError
+from ..engines.pwm import r_duty_eq3, r_duty_exact
 from .base import axes, eng, new_figure, save_figure
 
 # ------------------------------------------------------------ safe fast drive (drive.py)
@@ -141,8 +143,6 @@ def plot_r_duty(ladder: Foster | Cauer, duties: Sequence[float] = FIG8_DUTIES,
     >>> len(ax.get_lines()), ax.get_xscale(), ax.get_yscale()
     (4, 'log', 'log')
     """
-    from ..engines.pwm import r_duty_eq3, r_duty_exact
-
     ax = axes(ax, 6.4, 4.6)
     if t_s is None:
         taus = ladder.time_constants()
@@ -198,7 +198,6 @@ def _pwm_grid(comparison: Comparison) -> tuple[list[float], list[float], np.ndar
     """Frequencies, duties and the Δ matrix (NaN where a cell has no point) of the pwm set."""
     pts = comparison.dataset("pwm").points
     if not pts:
-        from ..core.errors import DataFormatError
 
         raise DataFormatError("the comparison has no pwm points to plot")
     freqs = sorted({p.at["freq_hz"] for p in pts})

@@ -7,6 +7,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
+from ...io.sources import read_source
 from ._types import AliasFormatter, add_option, count, listed, number, positive
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -69,8 +70,6 @@ def read_source_args(args: argparse.Namespace, source: str | None = None, *,
                      rth: bool = True) -> Source:
     """SOURCE (``args.source`` unless given) read with the shared options; its notes are
     printed on stderr (on stdout they would spoil ``--json``)."""
-    from ...io.sources import read_source
-
     src = read_source(source if source is not None else args.source,
                       calibration=getattr(args, "calibration", None),
                       k_factor_mv_per_k=getattr(args, "k_factor", None),

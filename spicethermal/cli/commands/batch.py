@@ -18,7 +18,13 @@ import sys
 import time
 from pathlib import Path
 
+from ...batch.device import Options
+from ...batch.population import write_population
+from ...batch.runner import check_output, cluster_client, find_sources, run_batch
+from ...batch.summary import summarize
 from ...core.errors import DataFormatError
+from ...effects import spec
+from ...spice.lib import DIALECTS, TOPOLOGIES
 from ._types import count as _count
 from ._types import index as _index
 from ._types import listed as _listed
@@ -30,8 +36,6 @@ HELP = ("characterize many devices at once on Dask: fit, diagnose, export each, 
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from ...spice.lib import DIALECTS, TOPOLOGIES
-
     parser.add_argument("sources", metavar="SOURCES", nargs="*",
                         help="bundle directories, Zth CSV files, or directories holding them")
     parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
@@ -69,11 +73,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...batch.device import Options
-    from ...batch.runner import check_output, cluster_client, find_sources, run_batch
-    from ...batch.summary import summarize
-    from ...effects import spec
-
     t0 = time.perf_counter()
     if any(d > 1 for d in args.duty):
         raise DataFormatError(f"--duty {max(args.duty):g}: a duty cycle is at most 1")
@@ -85,7 +84,6 @@ def run(args: argparse.Namespace) -> int:
         find_sources(sources, exclude=out)  # every source exists, before anything is written
     check_output(out, args.resume)
     if args.simulate:
-        from ...batch.population import write_population
 
         population = out / "population"
         if not (args.resume and (population / "population.json").exists()):

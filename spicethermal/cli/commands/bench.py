@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...bench.session import ACTIONS, run_bench
 from ._types import add_option, frequency, listed, number
 from ._types import positive as _positive
 
@@ -75,8 +76,6 @@ PLAN_KEYS = ("settle_s", "window_s", "calibration_c", "rth_power_w", "cooling_po
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...bench.session import ACTIONS, run_bench
-
     overrides = {k: getattr(args, k) for k in PLAN_KEYS if getattr(args, k, None) is not None}
     actions = ACTIONS if args.action == "run" else (args.action,)
     path = run_bench(args.port, args.out, progress=not args.quiet, actions=actions,

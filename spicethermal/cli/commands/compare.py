@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import argparse
 
-from ...engines.interface import NAMES
+from ...analysis.compare import compare
+from ...engines.interface import NAMES, engine
 from ...io.files import dumps_json
+from ...model import ThermalModel
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import nonnegative as _window
 
@@ -37,10 +39,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...analysis.compare import compare
-    from ...engines.interface import engine
-    from ...model import ThermalModel
-
     model = ThermalModel.load(args.model)
     engine(args.engine, model)  # --engine analytic refuses device effects in one line
     bundle = comparable_source(args, args.bundle)

@@ -12,6 +12,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ...analysis.tables import duty_family
+from ...io.bundle import format_columns
+from ...io.files import atomic_write_text
+from ...model import ThermalModel
+from ...viz.plots import FIG8_DUTIES, fig8
 from ._types import duty as _duty
 
 NAME = "curves"
@@ -30,12 +35,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...analysis.tables import duty_family
-    from ...io.bundle import format_columns
-    from ...io.files import atomic_write_text
-    from ...model import ThermalModel
-    from ...viz.plots import FIG8_DUTIES, fig8
-
     model = ThermalModel.load(args.model)
     duties = tuple(args.duty) if args.duty else FIG8_DUTIES
     path = fig8(model.ladder, args.output, duties, title=args.title)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...analysis.demo import run_demo
 from ._types import add_option
 
 NAME = "demo"
@@ -21,8 +22,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...analysis.demo import run_demo
-
     result = run_demo(args.out, seed=args.seed, quiet=args.quiet)
     total = sum(result.timings.values())
     print(f"report:    {result.report}")

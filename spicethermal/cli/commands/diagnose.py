@@ -18,9 +18,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ...analysis.diagnose import diagnose, diagnose_table, write_report
 from ...core.errors import DataFormatError
+from ...effects import spec
 from ...io.files import dumps_json
 from ...io.sources import csv_header
+from ...model import ThermalModel
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import number as _number
 from ._types import positive as _positive
@@ -65,11 +68,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...analysis.diagnose import diagnose, write_report
-
     source = Path(args.source)
     if source.is_file() and "tj_exp_c" in csv_header(source):
-        from ...analysis.diagnose import diagnose_table
 
         if args.model:
             raise DataFormatError("--model applies to a bundle, not to a table of readings")
@@ -77,13 +77,11 @@ def run(args: argparse.Namespace) -> int:
                                 window_s=args.window,
                                 ambient_c=25.0 if args.tref is None else args.tref)
     else:
-        from ...effects import spec
 
         for name in args.effect or ():
             spec(name)
         model = None
         if args.model:
-            from ...model import ThermalModel
 
             model = ThermalModel.load(args.model)
         bundle = comparable_source(args, args.source, rth=False)

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import argparse
 
+from ...model import ThermalModel
+from ...spice.lib import DIALECTS, TEMPERATURES, TOPOLOGIES, Pins, check_name, default_name, export
+
 NAME = "export"
 HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and temperature "
         "convention as you choose) for ngspice, PSPICE or LTspice")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from ...spice.lib import DIALECTS, TEMPERATURES, TOPOLOGIES
-
     parser.add_argument("model", metavar="MODEL.json", help="spicethermal-model/2 (or /1) file")
     parser.add_argument("--dialect", choices=DIALECTS, default="ngspice")
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
@@ -32,9 +33,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...model import ThermalModel
-    from ...spice.lib import Pins, check_name, default_name, export
-
     pins = Pins.parse(args.pins)  # before reading anything: bad options write nothing
     if args.name is not None:
         check_name(args.name)

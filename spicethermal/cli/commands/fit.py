@@ -17,7 +17,18 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from ... import __version__
+from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
+from ...effects import spec
+from ...fit.bootstrap import fig_fit_band, fit_bootstrap
+from ...fit.fitters import fit_with_effects
+from ...fit.ladder import fit_model
+from ...io.bundle import Bundle
+from ...io.files import atomic_write_text
+from ...io.sources import early_time_json
+from ...viz.early_figure import fig_early_time
+from ...viz.plots import fig7
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 
@@ -72,11 +83,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     """``--effect``: the ladder and the named effects fitted to every data set of a bundle
     (:func:`spicethermal.analysis.diagnose.fit_with_effects`)."""
-    from ... import __version__
-    from ...analysis.diagnose import fit_with_effects
-    from ...effects import spec
-    from ...io.bundle import Bundle
-
     for name in args.effect:
         spec(name)
     if not source.is_dir():
@@ -99,8 +105,6 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
 
 def _early_plot(src, args: argparse.Namespace, curve) -> Path:
     """The √t figure of cooling curve ``--curve`` of the source (the record as read)."""
-    from ...viz.early_figure import fig_early_time
-
     if curve.early is None or args.curve >= len(src.bundle.cooling):
         raise DataFormatError(f"--early-plot: {curve.label} has no early-time correction (a "
                               f"cooling curve with Tj at the cut given, or a Zth table)")
@@ -110,10 +114,6 @@ def _early_plot(src, args: argparse.Namespace, curve) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ... import __version__
-    from ...fit.ladder import fit_model
-    from ...io.sources import early_time_json
-
     source = Path(args.source)
     if args.effect:
         return _run_with_effects(args, source)
@@ -128,7 +128,6 @@ def run(args: argparse.Namespace) -> int:
                     "curve": curve.label or str(source), "early_time": early_time_json(curve)})
     fb = None
     if args.bootstrap:
-        from ...fit.bootstrap import fit_bootstrap
 
         fb = fit_bootstrap(result, args.bootstrap, args.seed)
         prov = dict(model.provenance)
@@ -142,16 +141,12 @@ def run(args: argparse.Namespace) -> int:
     out = model.save(args.output)
     written = [str(out)]
     if args.plot and fb is not None:
-        from ...fit.bootstrap import fig_fit_band
 
         written.append(str(fig_fit_band(result, fb, args.plot, title=curve.label)))
     elif args.plot:
-        from ...viz.plots import fig7
 
         written.append(str(fig7(result, args.plot, title=curve.label or source.name)))
     if args.foster_table:
-        from ...analysis.tables import foster_table_csv
-        from ...io.files import atomic_write_text
 
         written.append(str(atomic_write_text(args.foster_table, foster_table_csv(
             result.foster, result.u_r_k_per_w, result.u_tau_s))))

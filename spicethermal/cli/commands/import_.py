@@ -7,6 +7,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ...core.errors import DataFormatError
+from ...io.vendor import import_model, import_subckt, read_library
+
 NAME = "import"
 HELP = ("read a vendor's thermal subcircuit (.lib) or datasheet Foster table (.csv) into a "
         "model file, exactly (no refit)")
@@ -27,9 +30,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...core.errors import DataFormatError
-    from ...io.vendor import import_model, import_subckt, read_library
-
     if args.subckt is None and not args.source.lower().endswith(".csv"):
         lib = read_library(args.source)
         if len(lib.subckts) > 1:

@@ -12,7 +12,9 @@ from __future__ import annotations
 import argparse
 
 from ...engines.interface import NAMES
+from ...engines.pwmsim import pwm_state
 from ...io.files import dumps_json
+from ...model import ThermalModel
 from ._types import add_option, duty, frequency, nonnegative, number
 
 NAME = "pwm"
@@ -42,9 +44,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...engines.pwmsim import pwm_state
-    from ...model import ThermalModel
-
     model = ThermalModel.load(args.model)
     state = pwm_state(model, args.power, args.freq, args.duty, args.window,
                       engine=args.engine, tref_c=args.tref)

@@ -26,7 +26,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ... import __version__
+from ...fit.bootstrap import fig_spectrum_band, spectrum_bootstrap
+from ...identify.spectrum import time_constant_spectrum
 from ...io.files import dumps_json
+from ...io.sources import early_time_json
+from ...model import ThermalModel
+from ...viz.plots import fig_spectrum
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import add_option
 from ._types import count as _count
@@ -93,8 +99,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...identify.spectrum import time_constant_spectrum
-
     curve = load_curve(args, args.source)
     spec = time_constant_spectrum(curve, **spectrum_options(args))
     foster = spec.to_foster(args.stages_per_decade, order=args.order)
@@ -106,28 +110,22 @@ def run(args: argparse.Namespace) -> int:
             model_path = path
     sb = None
     if args.bootstrap:
-        from ...fit.bootstrap import spectrum_bootstrap
 
         sb = spectrum_bootstrap(curve, spec, args.bootstrap, args.seed, quiet=args.quiet,
                                 **spectrum_options(args))
     if args.plot and sb is not None:
-        from ...fit.bootstrap import fig_spectrum_band
 
         fig_spectrum_band(spec, sb, args.plot)
     elif args.plot:
-        from ...viz.plots import fig_spectrum
 
         fig_spectrum(spec, args.plot)
     if model_path:
-        from ... import __version__
-        from ...model import ThermalModel
 
         ThermalModel(foster, reference="ambient", provenance={
             "tool": f"spicethermal {__version__} spectrum", "source": str(args.source),
             "method": spec.method, "resolution_decades": spec.resolution_decades}
         ).save(model_path)
     if args.json:
-        from ...io.sources import early_time_json
 
         out = spec.to_dict()
         out["early_time"] = early_time_json(curve)

@@ -15,7 +15,9 @@ import argparse
 from pathlib import Path
 
 from ...core.errors import DataFormatError
+from ...io.datasheet import Datasheet, mur880e, read_zth_points, table1
 from ...io.files import dumps_json
+from ...io.sources import early_time_json
 from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import add_option
 from ._types import number as _number
@@ -62,9 +64,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ...io.datasheet import Datasheet, mur880e, read_zth_points, table1
-    from ...io.sources import early_time_json
-
     if args.datasheet is None:
         raise DataFormatError("give --datasheet CSV (t_s, r, with --rth) or --datasheet mur880e "
                               "(the paper's MUR880E): no device is assumed")
