@@ -12,7 +12,9 @@ ladder, :mod:`spicethermal.validation.detect`) are not counted.
 
 Plain script (not a test)::
 
-    .venv/bin/python bench/bench_validation_random.py [N] [--seed S] [--workers 2]
+    .venv/bin/python bench/bench_validation_random.py [N] [--seed S] [--workers 2] [--only KIND]
+
+``--only pair`` (or ``effect``, ``clean``, ``uncatalogued``) draws ``N`` cases of that kind.
 """
 
 from __future__ import annotations

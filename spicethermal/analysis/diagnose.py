@@ -259,7 +259,7 @@ def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
                    improvement=before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf,
                    explained=explained_fraction(before, cmp, noise),
                    evidence=evidence(fit, data, before, cmp, noise),
-                   gain=improvement_of(before, cmp, noise)), refitted
+                   noise_gain=improvement_of(before, cmp, noise)), refitted
 
 
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,

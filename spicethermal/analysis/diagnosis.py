@@ -47,9 +47,9 @@ class Candidate:
     #: The fit's facts behind the evidence sentence (see
     #: :class:`~spicethermal.fit.effectfit.EffectFit`).
     facts: Mapping[str, Any] = field(default_factory=dict)
-    #: The improvement the decision weighs: ``improvement`` or, when larger, the
-    #: noise-weighted one (:func:`~spicethermal.analysis.verdict.improvement`).
-    gain: float = 1.0
+    #: The noise-weighted improvement (:func:`~spicethermal.analysis.verdict.improvement`;
+    #: ``None``: not measured).
+    noise_gain: float | None = None
     #: Every effect of the model with this candidate, when they were refitted jointly with it
     #: (empty: the model's effects as they were, and this one).
     model_effects: tuple[Effect, ...] = ()
@@ -57,6 +57,12 @@ class Candidate:
     @property
     def rms_k(self) -> float:
         return self.comparison.rms_k
+
+    @property
+    def gain(self) -> float:
+        """The improvement the decision weighs: ``improvement`` or, when larger, the
+        noise-weighted one."""
+        return max(self.improvement, self.noise_gain or self.improvement)
 
     def to_json(self) -> dict[str, Any]:
         return {"effect": self.effect.name, "form": self.effect.form,
