@@ -112,6 +112,9 @@ LATER_BUDGET_S = 8.0
 #: CPU time (s) allowed to the joint refit of every effect found and the ladder after each
 #: later step (:func:`refit_step`).
 REFIT_BUDGET_S = 8.0
+#: CPU time (s) allowed to all the steps of one diagnosis together (the candidates' own budgets
+#: stop at it too): no bundle keeps the diagnosis busy for longer, whatever its fits do.
+DIAGNOSIS_BUDGET_S = 50.0
 #: Several effects that leave a structured residual whose noise-weighted ``χ²/N`` is above
 #: this (an RMS above 3× the noise) are not named (:func:`unexplained`).
 MAX_LEFT_CHI2 = 9.0
@@ -180,7 +183,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 contradicted = device_effect_contradicted(data, ladder, fit.effect,
                                                           fit.n_params, [x[1] for x in scored],
                                                           amplitude)
-            except (FitError, *NUMERICAL_ERRORS):  # no alternative: nothing contradicts
+            except (FitError, SimulationError, *NUMERICAL_ERRORS):  # nothing contradicts
                 contradicted = ""
         improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
         cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
@@ -327,33 +330,48 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     cur_ladder, cur_effects, cur, cur_bic = ladder, list(model.effects), base, bic0
     k_total = 0
     contradicted = ""
-    while len(steps) < MAX_STEPS and not at_noise(cur, noise):
-        # the first step's candidates and skips are the report's; later ones are its steps'
-        cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
-                           skipped if not steps else {},
-                           CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S, quiet,
-                           len(steps) + 1)
-        if not steps:
-            first = cands
-        winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
-        if not winners:
-            break
-        chosen = winners[0]
-        contradicted = chosen.contradicted
-        if contradicted:
-            break
-        k_total += chosen.n_params
-        model_effects = list(chosen.model_effects) or [*cur_effects, chosen.effect]
-        if steps and not chosen.model_effects:
-            # the effects found before held their one-at-a-time fits: refit all
-            chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
-        steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
-        cur_ladder, cur_effects, cur = chosen.ladder, model_effects, chosen.comparison
-        cur_bic = criterion(cur, noise, k_total)
+    # one budget for every step: a step that finds its time spent stops the diagnosis
+    deadline = time.process_time() + DIAGNOSIS_BUDGET_S
+    with time_limit(DIAGNOSIS_BUDGET_S):
+        while len(steps) < MAX_STEPS and not at_noise(cur, noise) and \
+                time.process_time() < deadline:
+            # the first step's candidates and skips are the report's; later ones are its steps'
+            cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
+                               skipped if not steps else {},
+                               CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S, quiet,
+                               len(steps) + 1)
+            if not steps:
+                first = cands
+            winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
+            if not winners:
+                break
+            chosen = winners[0]
+            contradicted = chosen.contradicted
+            if contradicted:
+                break
+            k_total += chosen.n_params
+            model_effects = list(chosen.model_effects) or [*cur_effects, chosen.effect]
+            if steps and not chosen.model_effects:
+                # the effects found before held their one-at-a-time fits: refit all
+                chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
+            steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
+            cur_ladder, cur_effects, cur = chosen.ladder, model_effects, chosen.comparison
+            cur_bic = criterion(cur, noise, k_total)
     where = tuple(localise(base, noise))
+
+    def partial_after(k: int) -> bool:  # the first k effects leave physics they do not explain
+        c = steps[k - 1].chosen.comparison
+        return bool(structured(c, noise)) and (
+            explained_fraction(base, c, noise) < MIN_TOTAL_EXPLAINED or unexplained(c, noise, k))
+
+    partial = bool(steps) and partial_after(len(steps))
+    # a later effect that only mops up the misfit of an approximate first one leaves the
+    # fewer effects that hold on their own
+    kept = next((k for k in range(len(steps) - 1, 0, -1) if not partial_after(k)), 0)
+    if partial and kept and not contradicted:
+        steps = steps[:kept]
+        cur, partial = steps[-1].chosen.comparison, False
     total = explained_fraction(base, cur, noise)
-    partial = bool(steps) and bool(structured(cur, noise)) and (
-        total < MIN_TOTAL_EXPLAINED or unexplained(cur, noise, len(steps)))
     if contradicted:
         located = localise(cur, noise) or localise(cur)
         done = "".join(f"{st.chosen.effect.name} explains part of the misfit; then "
