@@ -17,9 +17,9 @@ misfits cancel in the differences; the largest 10 % are trimmed, see
 ``N`` the number of points. An effect is *found* when the best candidate (lowest BIC)
 
 1. lowers the BIC by at least :data:`MIN_BIC_DROP` (strong evidence on Kass & Raftery's scale),
-2. lowers the pooled RMS by at least :data:`MIN_IMPROVEMENT` ×, and
-3. explains the misfit: every data set's RMS with the effect is within
-   :data:`EXPLAINED_RATIO` × its noise estimate.
+2. lowers the pooled (or the noise-weighted) RMS by at least :data:`MIN_IMPROVEMENT` ×, and
+3. explains at least :data:`MIN_EXPLAINED` of the misfit beyond the noise
+   (:func:`~spicethermal.analysis.verdict.explained_fraction`).
 
 Clean data fail (1) and (2): an effect fitted to noise gains little. An effect outside the
 catalogue fails (2) or (3): the verdict is then null and the reason says where the misfit is.
@@ -75,6 +75,7 @@ from .verdict import (
     criterion,
     decisive,
     explained_fraction,
+    passes,
     runs_z,
     structured,
     verdict_reason,
@@ -173,7 +174,8 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             continue
         fit, cmp, bic = best
         model_effects: tuple[Effect, ...] = ()
-        if effects and not decisive_fit(before, cmp, bic, bic_before, noise):
+        if effects and not passes(bic_before - bic, improvement_of(before, cmp, noise),
+                                  explained_fraction(before, cmp, noise)):
             fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise)
         contradicted = ""
         if fit.effect.kind == DEVICE and len(data.cooling) > 1:
@@ -204,13 +206,20 @@ def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> 
     return n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2
 
 
-def decisive_fit(before: Comparison, cmp: Comparison, bic: float, bic_before: float,
-                 noise: Mapping[str, float]) -> bool:
-    """Whether a fit whose comparison is ``cmp`` (criterion ``bic``) would be decisive
-    against ``before`` (criterion ``bic_before``)."""
-    gain = improvement_of(before, cmp, noise)
-    return (bic_before - bic >= MIN_BIC_DROP and gain >= MIN_IMPROVEMENT
-            and explained_fraction(before, cmp, noise) >= MIN_EXPLAINED)
+def joint_refit(data: BundleData, ladder: Foster, effects: Sequence[Effect], budget_s: float,
+                than: Comparison, noise: Mapping[str, float]
+                ) -> tuple[Foster, list[Effect], Comparison] | None:
+    """Every effect of ``effects`` and ``ladder`` refitted jointly
+    (:func:`~spicethermal.fit.backfit.refit_effects`, within ``budget_s`` of CPU time) with
+    its comparison; ``None`` when it fails or does not lower the noise-weighted squared error
+    of ``than``."""
+    try:
+        with time_limit(budget_s):
+            lad, refitted = refit_effects(data, ladder, effects)
+        cmp = comparison_of(data, lad, refitted)
+    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+        return None
+    return (lad, refitted, cmp) if chi2(cmp, noise) < chi2(than, noise) else None
 
 
 def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: Comparison,
@@ -229,14 +238,11 @@ def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: 
     if not any(chi2(was[n], {n: noise[n]}) - chi2(sub, {n: noise[n]}) >= MIN_BIC_DROP
                for n, sub in tried_cmp.by_dataset().items() if n in was):
         return fit, cmp, bic, ()
-    try:
-        with time_limit(RESCUE_BUDGET_S):
-            ladder, refitted = refit_effects(data, tried.ladder, [*effects, tried.effect])
-        new = comparison_of(data, ladder, refitted)
-    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+    joint = joint_refit(data, tried.ladder, [*effects, tried.effect], RESCUE_BUDGET_S, cmp,
+                        noise)
+    if joint is None:
         return fit, cmp, bic, ()
-    if not chi2(new, noise) < chi2(cmp, noise):
-        return fit, cmp, bic, ()
+    ladder, refitted, new = joint
     facts = {k: v for k, v in fit.facts.items() if k not in ("no_gain", "tried")}
     return (EffectFit(refitted[-1], ladder, fit.n_params, facts), new,
             criterion(new, noise, fit.n_params), tuple(refitted))
@@ -248,14 +254,10 @@ def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
     (:func:`~spicethermal.fit.backfit.refit_effects`, within :data:`REFIT_BUDGET_S`), with its
     figures against ``before``; unchanged when the refit does not lower the noise-weighted
     squared error."""
-    try:
-        with time_limit(REFIT_BUDGET_S):
-            ladder, refitted = refit_effects(data, chosen.ladder, effects)
-        cmp = comparison_of(data, ladder, refitted)
-    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+    joint = joint_refit(data, chosen.ladder, effects, REFIT_BUDGET_S, chosen.comparison, noise)
+    if joint is None:
         return chosen, effects
-    if not chi2(cmp, noise) < chi2(chosen.comparison, noise):
-        return chosen, effects
+    ladder, refitted, cmp = joint
     fit = EffectFit(refitted[-1], ladder, chosen.n_params, chosen.facts)
     return replace(chosen, effect=refitted[-1], ladder=ladder, comparison=cmp,
                    bic=criterion(cmp, noise, chosen.n_params),

@@ -24,8 +24,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["AT_NOISE_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
            "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "bic_drop", "can_be_decisive", "chi2",
-           "criterion", "decisive", "explained_fraction", "improvement", "runs_z", "structured",
-           "verdict_reason"]
+           "criterion", "decisive", "explained_fraction", "improvement", "passes", "runs_z",
+           "structured", "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
 MIN_IMPROVEMENT = 1.15
@@ -166,14 +166,24 @@ def improvement(before: Comparison, after: Comparison,
     return max(pooled, weighted)
 
 
+def passes(bic_drop: float, gain: float, explained: float,
+           min_improvement: float = MIN_IMPROVEMENT, min_explained: float = MIN_EXPLAINED) -> bool:
+    """The decision rule: a BIC drop of :data:`MIN_BIC_DROP`, an improvement of
+    ``min_improvement`` and an explained fraction of ``min_explained``.
+
+    >>> passes(12.0, 1.2, 0.5), passes(12.0, 1.1, 0.5)
+    (True, False)
+    """
+    return bic_drop >= MIN_BIC_DROP and gain >= min_improvement and explained >= min_explained
+
+
 def decisive(cand: Any, bic_before: float, min_improvement: float = MIN_IMPROVEMENT,
              min_explained: float = MIN_EXPLAINED) -> bool:
     """True when candidate ``cand`` is decisively better than a model of BIC ``bic_before``
-    (its ``gain``, :func:`improvement` with the noise, when it has one, else its
-    ``improvement``)."""
-    gain = getattr(cand, "gain", cand.improvement)
-    return (bic_before - cand.bic >= MIN_BIC_DROP and gain >= min_improvement
-            and cand.explained >= min_explained)
+    (:func:`passes`, on its ``gain``, :func:`improvement` with the noise, when it has one, else
+    its ``improvement``)."""
+    return passes(bic_before - cand.bic, getattr(cand, "gain", cand.improvement),
+                  cand.explained, min_improvement, min_explained)
 
 
 def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, float],
