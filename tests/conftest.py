@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.metadata
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,26 @@ ACTUATOR_TAU = (1e-4, 5e-3, 0.4, 30.0)
 @pytest.fixture
 def actuator() -> Foster:
     return Foster.from_tau(ACTUATOR_R, ACTUATOR_TAU)
+
+
+@pytest.fixture
+def register_plugin(monkeypatch):
+    """``register_plugin(spec)``: ``spec`` offered through the ``spicethermal.effects``
+    entry-point group, as an installed third-party package would, for the test's duration
+    (the catalogue reloads its plugins; the built-in registry is restored afterwards)."""
+    from spicethermal.effects import ENTRY_POINT_GROUP, catalogue
+
+    def register(spec) -> None:
+        class EntryPoint:
+            def load(self):
+                return spec
+
+        monkeypatch.setattr(catalogue, "_PLUGINS_LOADED", False)
+        monkeypatch.setattr(catalogue, "_REGISTRY", dict(catalogue._REGISTRY))
+        monkeypatch.setattr(importlib.metadata, "entry_points",
+                            lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
+
+    return register
 
 
 def ramp_response(ladder, t, rise_s: float) -> np.ndarray:

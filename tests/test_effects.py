@@ -15,7 +15,6 @@ from spicethermal.core.ladder import Foster
 from spicethermal.effects import (
     CATALOGUE,
     DEVICE,
-    ENTRY_POINT_GROUP,
     MEASUREMENT,
     Effect,
     EffectSpec,
@@ -261,24 +260,14 @@ def test_extra_capacitance_is_finite_far_from_the_band():
 
 
 # ----------------------------------------------------------------------------- registry
-def test_a_plugin_effect_registers_and_is_listed(monkeypatch, capsys, tmp_path):
+def test_a_plugin_effect_registers_and_is_listed(register_plugin, capsys, tmp_path):
     """A toy effect from outside the package, through the entry-point group."""
-    import importlib.metadata
-
     from spicethermal.cli.main import main
-    from spicethermal.effects import catalogue
 
     toy = EffectSpec.create("toy-gain", MEASUREMENT, "a toy reading gain",
                             gain=Param("", 1.0, 0.0, 2.0))
 
-    class EntryPoint:
-        def load(self):
-            return toy
-
-    monkeypatch.setattr(catalogue, "_PLUGINS_LOADED", False)
-    monkeypatch.setattr(catalogue, "_REGISTRY", dict(catalogue._REGISTRY))
-    monkeypatch.setattr(importlib.metadata, "entry_points",
-                        lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
+    register_plugin(toy)
     assert "toy-gain" in known_names()
     assert Effect.create("toy-gain", gain=1.5).params["gain"] == 1.5
     bundle = scenario_bundle("sample-window", seed=0)

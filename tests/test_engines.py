@@ -141,14 +141,13 @@ def test_drive_refuses_the_analytic_engine_before_writing(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------------- plugin effects
-def test_a_plugin_device_effect_is_simulated_by_every_engine_and_exported(monkeypatch, tmp_path):
+def test_a_plugin_device_effect_is_simulated_by_every_engine_and_exported(register_plugin,
+                                                                           tmp_path):
     """A toy device effect registered from outside the package (issue #13): the first layer's
     resistance falls with the junction temperature, ``R0 (1 − g (Tj − 25))``. The package
     knows it only through its hooks: the Python integration, ngspice -b and ngspice in
     process agree, and its exported .lib holds its own expression."""
-    import importlib.metadata
-
-    from spicethermal.effects import DEVICE, ENTRY_POINT_GROUP, EffectSpec, Param, catalogue
+    from spicethermal.effects import DEVICE, EffectSpec, Param
     from spicethermal.effects.spice import number
     from spicethermal.spice.lib import render_lib
 
@@ -164,14 +163,7 @@ def test_a_plugin_device_effect_is_simulated_by_every_engine_and_exported(monkey
                      {"g_per_k": Param("1/K", 0.0, 0.0, 0.01)}, ("standard",),
                      resistance_scale=scale, spice_resistance_scale=spice_scale)
 
-    class EntryPoint:
-        def load(self):
-            return toy
-
-    monkeypatch.setattr(catalogue, "_PLUGINS_LOADED", False)
-    monkeypatch.setattr(catalogue, "_REGISTRY", dict(catalogue._REGISTRY))
-    monkeypatch.setattr(importlib.metadata, "entry_points",
-                        lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
+    register_plugin(toy)
     model = ThermalModel(LADDER, (Effect.create("toy-sink", g_per_k=0.008),))
     assert not model.is_linear
     with pytest.raises(DataFormatError):
