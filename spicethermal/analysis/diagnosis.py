@@ -47,8 +47,9 @@ class Candidate:
     #: The fit's facts behind the evidence sentence (see
     #: :class:`~spicethermal.fit.effectfit.EffectFit`).
     facts: Mapping[str, Any] = field(default_factory=dict)
-    #: The noise-weighted improvement (:func:`~spicethermal.analysis.verdict.improvement`;
-    #: ``None``: not measured).
+    #: The improvement with the noise (:func:`~spicethermal.analysis.verdict.improvement`
+    #: given the noise estimates: ``improvement`` or, when larger, the noise-weighted ratio;
+    #: ``None``: not measured, as for a Table-2 candidate).
     noise_gain: float | None = None
     #: Every effect of the model with this candidate, when they were refitted jointly with it
     #: (empty: the model's effects as they were, and this one).
@@ -60,9 +61,9 @@ class Candidate:
 
     @property
     def gain(self) -> float:
-        """The improvement the decision weighs: ``improvement`` or, when larger, the
-        noise-weighted one."""
-        return max(self.improvement, self.noise_gain or self.improvement)
+        """The improvement the decision weighs: ``noise_gain`` when measured, else
+        ``improvement``."""
+        return self.improvement if self.noise_gain is None else self.noise_gain
 
     def to_json(self) -> dict[str, Any]:
         return {"effect": self.effect.name, "form": self.effect.form,
