@@ -68,3 +68,23 @@ def test_refit_with_nothing_free_is_the_start(tsp_fit):
     ladder, effects = refit_effects(data, fit.ladder, [neutral])
     assert effects == [neutral] and ladder.rth == pytest.approx(fit.ladder.rth)
     assert refit_effects(replace(data), fit.ladder, [])[1] == []
+
+
+def test_a_ladder_fit_keeps_every_stage_where_the_readings_see_it():
+    """A stage parked far below the first reading (τ → 0) or a dead one (R → 0) gets no
+    gradient back: the joint fit bounds τ at a tenth of the first reading's time and drops
+    stages whose R is nothing (``Foster.pruned``)."""
+    from spicethermal.core.ladder import Foster
+    from spicethermal.fit.effectfit import joint_fit
+
+    data = BundleData.from_bundle(scenario_bundle("clean", seed=0))
+    truth = baseline_ladder(data)
+    names = [c.name for c in data.cooling]
+    first = min(float(c.t_s[0]) for c in data.cooling)
+    parked = Foster.from_tau([*truth.r[:-1], truth.r[-1]], [1e-300, *truth.tau[1:]])
+    lad, _, _ = joint_fit(data, names, parked, True, [], [], [], lambda x: [])
+    assert min(lad.tau) >= 0.1 * first * (1 - 1e-9)
+    assert sse(data, lad, []) < 2 * sse(data, truth, [])
+    dead = Foster.from_tau([*truth.r, 1e-200 * truth.rth], [*truth.tau, 3 * max(truth.tau)])
+    lad, _, _ = joint_fit(data, names, dead, True, [], [], [], lambda x: [])
+    assert lad.order == truth.order

@@ -46,6 +46,7 @@ from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
 from ..effects import CATALOGUE, DEVICE, Effect
 from ..fit.backfit import refit_effects
+from ..fit.budget import cpu_time
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -275,7 +276,10 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     Each step fits every catalogued effect the model lacks (each of its forms) on top of the
     model so far and adds the best when it is decisively better (:data:`MIN_BIC_DROP`,
     :data:`MIN_IMPROVEMENT`, :data:`MIN_EXPLAINED`); the steps stop when the residual is at
-    the noise, nothing is decisive, or after :data:`MAX_STEPS`.
+    the noise, nothing is decisive, two different effects are decisive at a later step and
+    the data cannot tell them apart (their criteria within :data:`MIN_BIC_DROP`: what they gain
+    alike comes from refitting the model, not from either effect), or after
+    :data:`MAX_STEPS`.
 
     Parameters
     ----------
@@ -333,10 +337,10 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     k_total = 0
     contradicted = ""
     # one budget for every step: a step that finds its time spent stops the diagnosis
-    deadline = time.process_time() + DIAGNOSIS_BUDGET_S
+    deadline = cpu_time() + DIAGNOSIS_BUDGET_S
     with time_limit(DIAGNOSIS_BUDGET_S):
         while len(steps) < MAX_STEPS and not at_noise(cur, noise) and \
-                time.process_time() < deadline:
+                cpu_time() < deadline:
             # the first step's candidates and skips are the report's; later ones are its steps'
             cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
                                skipped if not steps else {},
@@ -348,6 +352,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             if not winners:
                 break
             chosen = winners[0]
+            if steps and len(winners) > 1 and winners[1].bic - chosen.bic < MIN_BIC_DROP:
+                break  # two effects gain alike on top of the model: the gain is neither's
             contradicted = chosen.contradicted
             if contradicted:
                 break

@@ -39,6 +39,8 @@ RATIONAL_MAX_ORDER = 12
 ROUND_TRIP_RTOL = 1e-9
 #: Largest order converted in extended precision when double precision is not enough.
 EXTENDED_MAX_ORDER = 100
+#: A Foster stage whose R is below this fraction of the median R is dead (:meth:`Foster.pruned`).
+DEAD_STAGE = 1e-9
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -168,6 +170,19 @@ class Foster(_Ladder):
 
     def _foster(self) -> Foster:
         return self
+
+    def pruned(self, rel: float = DEAD_STAGE) -> Foster:
+        """This ladder without its dead stages, those whose R is below ``rel`` × the median R
+        (a fit can drive a stage's R to nothing: the responses hardly change, but its Cauer
+        form becomes ill-conditioned); itself when none is dead.
+
+        >>> Foster.from_tau([1.0, 1e-300, 2.0], [1.0, 9.0, 3.0]).pruned().order
+        2
+        """
+        r = np.asarray(self.r)
+        live = r >= rel * float(np.median(r))
+        return self if live.all() or not live.any() else \
+            Foster(np.asarray(self.r)[live], np.asarray(self.c)[live])
 
     def to_cauer(self, method: str = "auto") -> Cauer:
         """Exact Foster -> Cauer conversion.

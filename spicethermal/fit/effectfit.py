@@ -81,7 +81,9 @@ __all__ = [
     "CalData",
     "CurveData",
     "EffectFit",
+    "FASTEST_STAGE",
     "FIT_TOL",
+    "LARGEST_STAGE",
     "MAX_BASELINE_ORDER",
     "MAX_NFEV",
     "NUMERICAL_ERRORS",
@@ -308,6 +310,13 @@ class EffectFit:
     facts: Mapping[str, Any] = field(default_factory=dict)
 
 
+#: A fitted ladder's stages keep time constants of at least this fraction of the first cooling
+#: reading's time ...
+FASTEST_STAGE = 0.1
+#: ... and resistances of at most this many times the start ladder's Rth.
+LARGEST_STAGE = 100.0
+
+
 def subset(data: BundleData, names: Sequence[str]) -> BundleData:
     """The data sets ``names`` of ``data`` only."""
     return BundleData(tuple(c for c in data.cooling if c.name in names),
@@ -384,10 +393,12 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
               tol: float = FIT_TOL) -> tuple[Foster, list[Effect], Any]:
     """Least squares of the readings of data sets ``names`` over the effect parameters
     ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
-    ``log R`` and ``log τ`` (same order). Cooling points before ``exclude[name]`` s are left
-    out, and so are those at or after ``keep_before[name]`` s. When the ladder is fitted,
-    each curve's steady reading just before the cut is a data
-    point too (it pins Rth). ``diff_step`` is the relative finite-difference step (larger than
+    ``log R`` and ``log τ`` (same order; τ at least :data:`FASTEST_STAGE` × the first cooling
+    reading's time, R at most :data:`LARGEST_STAGE` × the start's Rth, dead stages dropped,
+    :meth:`~spicethermal.core.ladder.Foster.pruned`). Cooling points before ``exclude[name]``
+    s are left out, and so are those at or after ``keep_before[name]`` s. When the ladder is
+    fitted, each curve's steady reading just before the cut is a data point too (it pins
+    Rth). ``diff_step`` is the relative finite-difference step (larger than
     the default for forward models solved by an adaptive integrator). Returns the ladder, the
     effects and scipy's result."""
     f = as_foster(ladder)
@@ -419,14 +430,22 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         return np.concatenate(parts)
 
     start = np.concatenate([np.log(f.r), np.log(f.tau)]) if m else np.zeros(0)
-    big = np.full(2 * m, np.inf)
+    # a stage far faster than the first reading, or far larger than the whole ladder, is
+    # invisible to the readings: left free, a fit can park it where no gradient brings it back
+    first = min((float(c.t_s[0]) for c in sub.cooling), default=0.0)
+    tau_lo = math.log(FASTEST_STAGE * first) if first > 0 else -np.inf
+    r_hi = math.log(LARGEST_STAGE * f.rth)
+    start[m:] = np.maximum(start[m:], tau_lo)
+    start[:m] = np.minimum(start[:m], r_hi)
+    lo_l = np.concatenate([np.full(m, -np.inf), np.full(m, tau_lo)])
+    hi_l = np.concatenate([np.full(m, r_hi), np.full(m, np.inf)])
     res = robust_lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
-               np.concatenate([-big, np.asarray(lo, float)]),
-               np.concatenate([big, np.asarray(hi, float)]),
+               np.concatenate([lo_l, np.asarray(lo, float)]),
+               np.concatenate([hi_l, np.asarray(hi, float)]),
                **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step,
                ftol=tol, xtol=tol, gtol=tol)
     lad, xe = split(res.x)
-    return lad, build(xe), res
+    return lad.pruned(), build(xe), res
 
 
 def others(effects: Sequence[Effect], name: str) -> list[Effect]:

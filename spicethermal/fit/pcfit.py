@@ -14,7 +14,6 @@ junction's temperatures.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -23,6 +22,7 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..effects import CATALOGUE, Effect
 from ..model import Network
+from .budget import cpu_time
 from .effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -220,9 +220,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         first.append(pts[len(levels) // 2])
         rest += [p for p in pts if p is not pts[len(levels) // 2]]
     grid = []
-    stop = time.process_time() + PC_GRID_S
+    stop = cpu_time() + PC_GRID_S
     for node, x0 in first + rest:  # noqa: B007 (build reads node)
-        if len(grid) >= len(first) and time.process_time() > stop:
+        if len(grid) >= len(first) and cpu_time() > stop:
             break
         grid.append((cost(x0), node, x0))
     no_band = sse(sub, ref, base)

@@ -33,11 +33,12 @@ from .network import LatentHeat, Network, ResistanceLaw
 __all__ = ["DEVICES", "FAST", "FORMS", "STRENGTHS", "Case", "Device", "case", "catalogue"]
 
 STRENGTHS = ("weak", "medium", "strong")
-#: A fast subset (seconds to simulate): a clean bundle and one strong case per effect that
-#: the diagnosis names today (tests/test_validation.py runs it).
+#: A fast subset (seconds to simulate): a clean bundle, one strong case per effect and two that
+#: once got a spurious second name (tests/test_validation.py runs it).
 FAST = ("clean/mosfet-2", "temperature-coefficient/local-linear/strong",
         "phase-change/gaussian-junction/strong", "electrical-transient/fixed/strong",
         "tsp-nonlinearity/quadratic/strong", "sample-window/average/strong",
+        "electrical-transient/fixed/medium", "tsp-nonlinearity/cubic/strong",
         "pair/temperature-coefficient+tsp-nonlinearity", "uncatalogued/convection-switch")
 
 
