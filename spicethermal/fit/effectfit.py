@@ -314,7 +314,7 @@ class EffectFit:
 #: reading's time ...
 FASTEST_STAGE = 0.1
 #: ... and resistances of at most this many times the start ladder's Rth.
-LARGEST_STAGE = 100.0
+LARGEST_STAGE = 1e6
 
 
 def subset(data: BundleData, names: Sequence[str]) -> BundleData:
