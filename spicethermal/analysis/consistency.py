@@ -15,12 +15,18 @@ amplitude change that its own dynamics contradict: the physics at work is not th
 one (:func:`device_effect_contradicted`). On a weak effect whose dynamics are within the noise
 both fit alike and the effect keeps its name; when the amplitudes alone leave a misfit, the
 test says nothing (an effect of another form may be at work).
+
+An electrical transient is an error of the first readings after the cut: before it is added,
+those readings (within its fitted span) must stand out of their curves, their noise-weighted
+``χ²`` per point at least :data:`EARLY_FACTOR` × the noise's and × the rest of the curves'
+(:func:`transient_hidden`). A transient fitted to readings that do not stand out only reshapes
+a misfit spread over the whole curve (an approximate form of another effect) and is not named.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -34,7 +40,11 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer
     from .compare import Comparison
 
-__all__ = ["amplitude_only", "device_effect_contradicted"]
+__all__ = ["EARLY_FACTOR", "amplitude_only", "device_effect_contradicted", "transient_hidden"]
+
+#: The readings within an electrical transient's span must show a noise-weighted χ² per point
+#: at least this many times the noise's (1) and the rest of the curves'.
+EARLY_FACTOR = 3.0
 
 
 def _kept(data: BundleData) -> dict[str, np.ndarray]:
@@ -145,3 +155,42 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
             f"linear ladder's shape scaled per curve, at the noise (a power that is not the "
             f"recorded one; χ² {chi2_amp:.0f} on {n} points against {chi2_effect:.0f} with the "
             f"effect: BIC {gap:.0f} lower)")
+
+
+def transient_hidden(before: Comparison, effect: Effect, noise: Mapping[str, float]) -> str:
+    """Why the electrical transient ``effect`` is not seen in the first readings of the model
+    it would extend (``before``) ("" when it is): within its span (``masked_s`` after the
+    cut) the cooling readings' noise-weighted ``χ²`` per point is below :data:`EARLY_FACTOR` ×
+    the larger of 1 and the rest of the curves' (module docstring).
+
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> def cmp(res):
+    ...     return Comparison(tuple(ComparisonPoint("cooling_1", {"t_s": 10.0 ** (k - 6)}, r,
+    ...                                             0.0) for k, r in enumerate(res)))
+    >>> tr = Effect.create("electrical-transient", "fixed", amplitude_k=-1.0, masked_s=2e-5)
+    >>> transient_hidden(cmp([-1.0, -0.4, 0.02, -0.01, 0.01]), tr, {"cooling_1": 0.02})
+    ''
+    >>> transient_hidden(cmp([-0.03, 0.02, 0.04, -0.03, 0.03]), tr, {"cooling_1": 0.02})
+    ... # doctest: +NORMALIZE_WHITESPACE
+    'the readings within 20 µs of the cut do not stand out of their curves (χ²/n 1.62 against
+    2.83 after it)'
+    """
+    span = float(effect.params["masked_s"])
+    early = late = 0.0
+    n_early = n_late = 0
+    for name, sub in before.by_dataset().items():
+        if not name.startswith("cooling"):
+            continue
+        t = np.array([p.at["t_s"] for p in sub.points])
+        z2 = sub.residuals_k ** 2 / noise[name] ** 2
+        early += float(np.sum(z2[t < span]))
+        late += float(np.sum(z2[t >= span]))
+        n_early += int(np.sum(t < span))
+        n_late += int(np.sum(t >= span))
+    if not n_early:
+        return f"no reading within {span * 1e6:.3g} µs of the cut"
+    per_early, per_late = early / n_early, late / max(n_late, 1)
+    if per_early >= EARLY_FACTOR * max(1.0, per_late):
+        return ""
+    return (f"the readings within {span * 1e6:.3g} µs of the cut do not stand out of their "
+            f"curves (χ²/n {per_early:.3g} against {per_late:.3g} after it)")

@@ -60,7 +60,7 @@ from ..fit.fitters import choose_form, fit_effect_forms, fit_with_effects
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
 from .compare import Comparison
-from .consistency import amplitude_only, device_effect_contradicted
+from .consistency import amplitude_only, device_effect_contradicted, transient_hidden
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
 from .residuals import comparison_of, localise, noise_estimates
@@ -188,6 +188,11 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                                           amplitude)
             except (FitError, SimulationError, *NUMERICAL_ERRORS):  # nothing contradicts
                 contradicted = ""
+        if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
+            why = transient_hidden(before, fit.effect, noise)
+            if why:
+                skipped[name] = f"not seen: {why}"
+                continue
         improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
         cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
                                evidence(fit, data, before, cmp, noise),
