@@ -180,9 +180,8 @@ class Foster(_Ladder):
         2
         """
         r = np.asarray(self.r)
-        live = r >= rel * float(np.median(r))
-        return self if live.all() or not live.any() else \
-            Foster(np.asarray(self.r)[live], np.asarray(self.c)[live])
+        live = r >= rel * float(np.median(r))  # the median stage always lives
+        return self if live.all() else Foster(r[live], np.asarray(self.c)[live])
 
     def to_cauer(self, method: str = "auto") -> Cauer:
         """Exact Foster -> Cauer conversion.
