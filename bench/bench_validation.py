@@ -16,8 +16,8 @@ failures. The summary
 goes to ``OUT/summary.json``.
 
 Scoring: an effect case is right when the verdict's first effect is the expected one (only
-detectable cases count); a pair when both effects are named; a clean or uncatalogued bundle
-when nothing is named.
+detectable cases count); a pair when both effects are named (only pairs whose truth is
+detectable as a whole count); a clean or uncatalogued bundle when nothing is named.
 """
 
 from __future__ import annotations
@@ -202,6 +202,10 @@ def score(meta: dict[str, dict], results: dict[str, dict]) -> dict:
         elif fam == "pair":
             row["right"] = set(m["expected"]) <= set(named)
             row["one"] = bool(set(m["expected"]) & set(named))
+            if not m["detectable"]:  # neither effect leaves a trace the linear ladder misses
+                undetectable.append(row)
+                rows.append(row)
+                continue
             pairs.append(row)
         else:
             row["right"] = not named and pred == "none"
