@@ -164,6 +164,33 @@ def test_detectability_separates_clean_from_a_strong_effect():
     assert strong.detectable and strong.max_gain > 10
 
 
+def test_phase_change_fit_finds_a_band_that_every_curve_crosses():
+    """A plateau at the MOSFET's cavity node centred at 0.3 of its rise: the lowest-power curve
+    crosses it too, so its own ladder holds part of the band (the search below that curve's
+    temperatures runs on the ladder of every curve)."""
+    from dataclasses import replace
+
+    from spicethermal.analysis.residuals import comparison_of, noise_estimates
+    from spicethermal.analysis.verdict import criterion
+    from spicethermal.fit.effectfit import BundleData, baseline_ladder
+    from spicethermal.fit.pcfit import fit_phase_change
+
+    c = case("phase-change/plateau-crossed/weak")
+    data = BundleData.from_bundle(c.record().bundle)
+    ladder = baseline_ladder(data)
+    base = comparison_of(data, ladder, [])
+    noise = noise_estimates(base)
+    data = replace(data, scales=noise)
+    fits = fit_phase_change(data, ladder)
+    bics = [criterion(comparison_of(data, f.ladder, [f.effect]), noise, f.n_params)
+            for f in fits]
+    best = fits[int(np.argmin(bics))].effect
+    assert best.form == "plateau"
+    assert best.params["t_c"] == pytest.approx(c.truth["t_c"], abs=1.0)
+    assert best.params["width_k"] == pytest.approx(c.truth["width_k"], rel=0.3)
+    assert criterion(base, noise, 0) - min(bics) > 100
+
+
 # -- the fast subset through the diagnosis ------------------------------------------------------
 @pytest.mark.parametrize("name", FAST)
 def test_diagnosis_on_fast_validation_subset(name, monkeypatch):

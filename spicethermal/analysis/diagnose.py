@@ -206,9 +206,13 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
 
 
 def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
-    """Whether several effects (``n_steps`` > 1) leave a misfit too large to call them the
-    diagnosis: noise-weighted ``χ²/N`` above :data:`MAX_LEFT_CHI2` (a structured residual that
-    large after two or three catalogued effects is physics they only approximate together)."""
+    """Whether several effects leave a misfit too large to call them the diagnosis (the caller
+    asks only when the residual is structured): after two, a noise-weighted ``χ²/N`` above
+    :data:`MAX_LEFT_CHI2`; after three, any (a structured residual that three catalogued
+    effects leave is physics they only approximate together: a convection that switches
+    passes for a temperature coefficient, a sample window and a latent heat)."""
+    if n_steps >= MAX_STEPS:
+        return True
     return n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2
 
 
@@ -403,6 +407,9 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         why = (f"would explain only {100 * total:.0f} % of it (needs "
                f"{100 * MIN_TOTAL_EXPLAINED:.0f} % when a structured residual remains)"
                if total < MIN_TOTAL_EXPLAINED else
+               f"together would still leave a structured residual of "
+               f"{math.sqrt(chi2(cur, noise) / len(cur.points)):.3g}× the noise (after "
+               f"{len(steps)} effects, none is allowed)" if len(steps) >= MAX_STEPS else
                f"together would still leave {math.sqrt(chi2(cur, noise) / len(cur.points)):.3g}× "
                f"the noise (more than {math.sqrt(MAX_LEFT_CHI2):g}× after several effects)")
         reason = (f"no catalogued effect explains the misfit: {tried} {why} and leave "

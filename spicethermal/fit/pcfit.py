@@ -4,11 +4,17 @@ capacity, is :func:`spicethermal.fit.effectfit.pc_cooling_rise`).
 
 The band sits at one node of the ladder, and each node runs at its own temperatures: in the
 steady state before the cut node ``k`` is at ``Tref + f_k (Tj − Tref)`` with ``f_k`` the
-fraction of the junction's rise across the layers beyond it. A band is sought, at each node,
-between that node's hottest temperature on the lowest-power curve (a band that curve crossed
-would be in its ladder) and its hottest on the hottest curve, so a latent heat in an outer
-layer (an actuator's cavity fluid, a solder that melts) is found where it is, not at the
-junction's temperatures.
+fraction of the junction's rise across the layers beyond it, so a latent heat in an outer
+layer (an actuator's cavity fluid, a solder that melts) is sought at that node's
+temperatures, not at the junction's. Two searches cover a node's range:
+
+* between its hottest temperature on the lowest-power curve and on the hottest curve, with the
+  lowest-power curve's own ladder held: that curve never crossed such a band, so its ladder
+  is the linear device and the band shows whole in the hotter curves;
+* below that, down to :data:`BAND_FLOOR` of its rise on the hottest curve, with the ladder
+  fitted jointly to every curve held: every curve crossed such a band (a fluid that boils at
+  every test power), the lowest-power curve's ladder has absorbed part of it, and only the
+  band's different timing in each curve tells it from a linear ladder.
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ from .effectfit import (
     cooling_true_c,
     joint_fit,
     others,
+    predict,
     reference_ladder,
     sse,
     subset,
@@ -53,8 +60,18 @@ PC_FIT_TOL = 1e-5
 #: CPU time (s) allowed to one evaluation of the phase-change grid (a band that makes the
 #: integration crawl is not the start point).
 PC_EVAL_S = 0.3
-#: CPU time (s) allowed to the whole grid (one point per node comes first).
+#: CPU time (s) allowed to the whole grid (one point per node and search comes first).
 PC_GRID_S = 2.0
+#: Band centres screened per node and search ...
+GRID_CENTRES = 6
+#: The best projection of each node is checked with its latent heat, then with it times or
+#: divided by ``e`` to this power (≈ 3×) while that lowers the error, at most
+#: :data:`LATENT_WALK` times.
+LATENT_STEP = 1.1
+LATENT_WALK = 3
+#: Bands are sought down to this fraction of a node's rise on the hottest curve (a band nearer
+#: the reference temperature holds too little of any curve's cooling to tell).
+BAND_FLOOR = 0.2
 #: Iterations allowed to the band's own fit (3 parameters, the ladder held; each also evaluates
 #: the forward model 3 times for its Jacobian).
 PC_NFEV = 15
@@ -125,12 +142,17 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     shapes from that fit: one :class:`~spicethermal.fit.effectfit.EffectFit` per form (logistic,
     gaussian, plateau).
 
-    The ladder of the lowest-power curve is held for the search: at every node the band is
-    sought between the node's hottest temperature on that curve and on the hottest curve
-    (module docstring). Start: the best point of a grid of nodes × latent heats × centres
-    (where the hottest curve's residual grows fastest in log time, the catalogue's 64.7 °C for
-    methanol when it lies in range, and three across it); least squares from the best point at
-    the junction and the best elsewhere; then the ladder jointly with the band. When no band
+    Two searches, each with its ladder held (module docstring): above the lowest-power curve's
+    temperatures on that curve's own ladder, below them on ``ladder``. Each screens nodes ×
+    centres (:data:`GRID_CENTRES` across the node's range; for the first search also where the
+    hottest curve's residual grows fastest in log time and the catalogue's 64.7 °C for
+    methanol when it lies in range) with one small band each, its latent heat set by least
+    squares on the change that band makes; each node's best is then checked with the band
+    itself, its latent heat walked up or down (:data:`LATENT_STEP`). Least squares start
+    from the best point and, when it gains at least half as much, the other search's best or
+    the junction's. The band is fitted to the cooling curves and the PWM grid (a band the PWM
+    cycles cross is one at the junction); then the ladder jointly with the band, on the
+    cooling curves, when the band gains :data:`SHAPE_GAIN` with its ladder held. When no band
     fits better than ``ladder`` without one, the result has no latent heat and keeps
     ``ladder``.
 
@@ -150,7 +172,10 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     """
     if not data.cooling:
         raise FitError("phase-change needs cooling curves")
-    names = [c.name for c in data.cooling]
+    # the PWM grid too: it tells a band that its cycles cross (at the junction) from one
+    # at a node they keep away from, which the cooling curves alone may not
+    cooling = [c.name for c in data.cooling]
+    names = cooling + (["pwm"] if data.pwm is not None else [])
     base = others(effects, "phase-change")
     refs = [as_foster(ladder)]
     try:
@@ -164,22 +189,31 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         with unlimited():
             refs.sort(key=lambda r: sse(cold_only, r, base))
     ref = refs[0]
+    joint = as_foster(ladder)
     hot = max(data.cooling, key=lambda c: float(np.max(c.tj_c)))
     cold = data.reference_curve
-    fractions = node_fractions(ref)
     t_hi = float(np.max(hot.tj_c))
     t_lo = float(np.max(cold.tj_c)) if len(data.cooling) > 1 else float(np.min(hot.tj_c))
     if t_hi - t_lo < 1.0:
         raise FitError("phase-change: no curve reaches temperatures the lowest-power curve "
                        "does not")
 
-    def node_range(k: int) -> tuple[float, float]:
-        f = float(fractions[k])
-        lo_ref = cold.tref_steady_c if len(data.cooling) > 1 else hot.tref_steady_c
-        return (lo_ref + f * (t_lo - lo_ref), hot.tref_steady_c + f * (t_hi - hot.tref_steady_c))
+    def node_temp(lad: Foster | Cauer, k: int, share: float) -> float:
+        """Node ``k``'s steady temperature before the cut (°C) at ``share`` of the hottest
+        curve's rise."""
+        f = float(node_fractions(lad)[k])
+        return hot.tref_steady_c + f * share * (t_hi - hot.tref_steady_c)
 
-    ranges = [node_range(k) for k in range(ref.order)]
-    ranges = [(a, b) for a, b in ranges if b - a >= 0.5] or ranges[:1]
+    # the two searches (module docstring): (ladder held, range of every node)
+    share_lo = (t_lo - hot.tref_steady_c) / (t_hi - hot.tref_steady_c)
+    searches = [(ref, [(node_temp(ref, k, share_lo), node_temp(ref, k, 1.0))
+                       for k in range(ref.order)])]
+    if len(data.cooling) > 1 and share_lo > BAND_FLOOR:
+        searches.append((joint, [(node_temp(joint, k, BAND_FLOOR), node_temp(joint, k, share_lo))
+                                 for k in range(joint.order)]))
+    # a band's centre may lie anywhere over both
+    ranges = [(min(r[k][0] for _, r in searches), max(r[k][1] for _, r in searches))
+              for k in range(ref.order)]
     c_scale = float(max(ref.c))
     start = band_start(data, ref, base)
     default = CATALOGUE["phase-change"].params["t_c"].default
@@ -194,65 +228,142 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         a, b = ranges[k]
         return [math.log(1e-6), a, 0.2], [math.log(100.0), b, max(0.3, (b - a) / 4)]
 
-    def cost(x: Sequence[float]) -> float:
+    def residual(lad: Foster, effects: list[Effect]) -> NDArray | None:
+        """Noise-scaled residuals of ``sub`` (None when the forward model fails)."""
         try:
-            return bounded(lambda: sse(sub, ref, build(np.asarray(x, dtype=float))),
-                           PC_EVAL_S, math.inf)
+            pred = bounded(lambda: predict(sub, lad, effects), PC_EVAL_S, None)
         except TimeLimitError:
             raise
         except (SimulationError, *NUMERICAL_ERRORS):
-            return math.inf
+            return None
+        if pred is None:
+            return None
+        with np.errstate(over="ignore", invalid="ignore"):
+            r = np.concatenate([(pred[n] - sub.measured(n)) / sub.scale(n) for n in names])
+        return r if np.all(np.isfinite(r)) else None
 
-    # coarse grid over (node, centre, latent heat): first one point per node (the mapped start
-    # centre), then the rest; least squares from the best points
-    first, rest = [], []
-    for k, (a, b) in enumerate(ranges):
-        span = b - a
-        f = float(fractions[k])
-        mapped = hot.tref_steady_c + f * (start - hot.tref_steady_c)
-        centres = [float(np.clip(mapped, a + 0.02 * span, b - 0.02 * span))]
-        if k == 0 and a < default < b:
-            centres.append(default)
-        centres += list(np.linspace(a + 0.15 * span, b - 0.15 * span, 3))
-        levels = (1e-3, 1e-2, 1e-1, 1.0) if k == 0 else (0.1, 1.0, 10.0)
-        width0 = float(np.clip(1.5 * f, bounds(k)[0][2] * 1.01, bounds(k)[1][2] * 0.99))
-        pts = [(k, [math.log(fr), tc, width0]) for tc in centres for fr in levels]
-        first.append(pts[len(levels) // 2])
-        rest += [p for p in pts if p is not pts[len(levels) // 2]]
+    # screening over (search, node, centre): one small band per point, its latent heat
+    # scaled by least squares on the change it makes (the band's effect is nearly linear
+    # in a small latent heat); points in round-robin over the nodes, so a budget cut leaves
+    # every node its share. Least squares from the best points follow.
+    rows = []
+    no_band = {}
+    for lad, node_ranges in searches:
+        r0 = residual(lad, list(base))
+        if r0 is None:
+            continue
+        no_band[id(lad)] = float(r0 @ r0)
+        fractions = node_fractions(lad)
+        c_node = as_foster(lad).to_cauer().c
+        for k, (a, b) in enumerate(node_ranges):
+            span = b - a
+            if span < 0.5:
+                continue
+            f = float(fractions[k])
+            centres = list(a + span * (np.arange(GRID_CENTRES) + 0.5) / GRID_CENTRES)
+            if lad is ref:  # where the hottest curve's misfit grows fastest, mapped to node k
+                mapped = hot.tref_steady_c + f * (start - hot.tref_steady_c)
+                centres.insert(0, float(np.clip(mapped, a + 0.02 * span, b - 0.02 * span)))
+                if k == 0 and a < default < b:
+                    centres.insert(1, default)
+            width0 = float(np.clip(max(1.5 * f, span / GRID_CENTRES / 2),
+                                   bounds(k)[0][2] * 1.01, bounds(k)[1][2] * 0.99))
+            # a probe that adds a third of the node's heat capacity over the band
+            probe = 0.3 * float(c_node[k]) * width0
+            rows.append([(lad, r0, k, tc, width0, probe) for tc in centres])
+    if not rows:
+        raise FitError("phase-change: no node's temperatures span a band")
+    order = [r[i] for i in range(max(len(r) for r in rows)) for r in rows if i < len(r)]
     grid = []
     stop = cpu_time() + PC_GRID_S
-    for node, x0 in first + rest:  # noqa: B007 (build reads node)
-        if len(grid) >= len(first) and cpu_time() > stop:
+    for i, (lad, r0, node, tc, width0, probe) in enumerate(order):  # noqa: B007 (build)
+        if i >= len(rows) and cpu_time() > stop:
             break
-        grid.append((cost(x0), node, x0))
-    no_band = sse(sub, ref, base)
-    if min(g[0] for g in grid) >= no_band:  # no band anywhere helps: nothing to refine
+        r1 = residual(lad, build(np.array([math.log(probe / c_scale), tc, width0])))
+        if r1 is None:
+            continue
+        d = (r1 - r0) / probe
+        dd = float(d @ d)
+        latent = -float(r0 @ d) / dd if dd > 0 else 0.0
+        if latent <= 0:
+            continue
+        latent = float(np.clip(latent, probe / 30, probe * 300))
+        x0 = [float(np.clip(math.log(latent / c_scale), bounds(node)[0][0], bounds(node)[1][0])),
+              tc, width0]
+        grid.append((float(r0 @ r0) - float(r0 @ d) ** 2 / dd, lad, node, x0))
+    # each node's best projection checked with the band itself: its latent heat, then steps
+    # of ``e**LATENT_STEP`` up or down while the error falls (a strong band is far from the
+    # linear projection)
+    best: dict[tuple[int, int], tuple] = {}
+    for g in grid:
+        key = (id(g[1]), g[2])
+        if key not in best or g[0] < best[key][0]:
+            best[key] = g
+    grid = []
+    for _, lad, node, x0 in best.values():  # noqa: B007 (build reads node)
+        lo_x, hi_x = bounds(node)[0][0], bounds(node)[1][0]
+
+        def tried(x_lat: float, x0: list = x0, lad: Foster = lad) -> float:
+            r = residual(lad, build(np.array([x_lat, *x0[1:]])))
+            return float(r @ r) if r is not None else math.inf
+
+        here = tried(x0[0])
+        x_best, c_best = x0[0], here
+        for step in (LATENT_STEP, -LATENT_STEP):
+            x = x0[0]
+            for _ in range(LATENT_WALK):
+                x = float(np.clip(x + step, lo_x, hi_x))
+                c = tried(x)
+                if not c < c_best:
+                    break
+                x_best, c_best = x, c
+            if x_best != x0[0]:
+                break  # the walk up went downhill: no need to walk down
+        if math.isfinite(c_best):
+            grid.append((c_best, lad, node, [x_best, *x0[1:]]))
+    gaining = [g for g in grid if g[0] < no_band[id(g[1])]]
+    if not gaining:  # no band anywhere helps: nothing to refine
         return [EffectFit(switched_off("phase-change", "logistic", data), as_foster(ladder), 4,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
-    junction = min((g for g in grid if g[1] == 0), key=lambda g: g[0])
-    outer = min(grid, key=lambda g: g[0])
-    # the junction's best point is refined too unless it gains less than half the best's
-    starts = [outer] + ([junction] if outer[1] != 0
-                        and no_band - junction[0] >= 0.5 * (no_band - outer[0]) else [])
+    # least squares from the best point of each search and the junction's best (a band at
+    # the junction fits the curves alike), ranked by the share of their own ladder's error
+    # they remove; a second start only when it removes at least half the best's share
+    def share(g: tuple) -> float:
+        return 1.0 - g[0] / no_band[id(g[1])]
+
+    picks = [max((g for g in gaining if g[1] is lad), key=share)
+             for lad, _ in searches if any(g[1] is lad for g in gaining)]
+    at_junction = [g for g in gaining if g[2] == 0]
+    if at_junction:
+        picks.append(max(at_junction, key=share))
+    picks.sort(key=share, reverse=True)
+    starts = picks[:1] + [g for g in picks[1:] if (g[1], g[2]) != (picks[0][1], picks[0][2])
+                          and share(g) >= 0.5 * share(picks[0])][:1]
     fits = []
-    for _, node, x0 in starts:  # noqa: B007 (build reads node)
+    for _, lad, node, x0 in starts:  # noqa: B007 (build reads node)
         lo, hi = bounds(node)
-        fits.append(joint_fit(data, names, ref, False, x0, lo, hi, build, diff_step=1e-3,
+        fits.append(joint_fit(data, names, lad, False, x0, lo, hi, build, diff_step=1e-3,
                               tol=PC_FIT_TOL, max_nfev=PC_NFEV) + (node,))
     lad, effs, res, node = min(fits, key=lambda r: r[2].cost)
-    # then the ladder with the band, jointly (the reference curve alone fixes it poorly)
-    lo, hi = bounds(node)
-    try:
-        with time_limit(PC_JOINT_BUDGET_S):
-            lad2, effs2, _ = joint_fit(data, names, lad, True, res.x, lo, hi, build,
-                                       diff_step=1e-3, tol=PC_FIT_TOL)
-        with unlimited():
-            if sse(data, lad2, effs2) < sse(data, lad, effs):
-                lad, effs = lad2, effs2
-    except (FitError, TimeLimitError):
-        pass
     with unlimited():
-        gain = sse(sub, ladder, base) - sse(sub, lad, [*base, effs[-1]])
+        plain = sse(sub, joint, base)
+    # then the ladder with the band, jointly (the reference curve alone fixes it poorly), on
+    # the cooling curves: a ladder refitted to the PWM grid would gain there for any band.
+    # A band that, its ladder held, does not beat the given ladder without one by
+    # :data:`SHAPE_GAIN` is not there to refine (what the joint fit would gain is the ladder's)
+    lo, hi = bounds(node)
+    if plain - 2.0 * float(res.cost) >= SHAPE_GAIN:
+        try:
+            with time_limit(PC_JOINT_BUDGET_S):
+                lad2, effs2, _ = joint_fit(data, cooling, lad, True, res.x, lo, hi, build,
+                                           diff_step=1e-3, tol=PC_FIT_TOL)
+            with unlimited():
+                if sse(data, lad2, effs2) < sse(data, lad, effs):
+                    lad, effs = lad2, effs2
+        except (FitError, TimeLimitError):
+            pass
+    with unlimited():
+        gain = plain - sse(sub, lad, [*base, effs[-1]])
     if gain <= 0:  # no band does better than the given ladder without one
         p = effs[-1].params
         return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
@@ -261,7 +372,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     facts = {"t_range_c": ranges[node]}
     out = [EffectFit(effs[-1], lad, 4, facts)]
     with unlimited():
-        left = sse(sub, lad, [*base, effs[-1]]) - sum(c.t_s.size for c in sub.cooling)
+        left = sse(sub, lad, [*base, effs[-1]]) - sum(sub.measured(n).size for n in names)
     # a band this weak does not show its shape, nor can another shape gain on a fit at the noise
     if gain < SHAPE_GAIN or left < SHAPE_GAIN:
         return out
