@@ -79,7 +79,7 @@ PC_NFEV = 15
 #: evaluation integrates the curves that cross the band); past it the best point so far is kept.
 PC_JOINT_BUDGET_S = 1.5
 #: CPU time (s) allowed to the fit of each other band shape (started from the logistic fit).
-PC_FORM_BUDGET_S = 1.0
+PC_FORM_BUDGET_S = 0.6
 #: The other shapes are fitted only when the logistic band lowers the noise-weighted squared
 #: error this much (twice the decision's BIC drop: a band that is not clearly there has no
 #: shape to tell).
