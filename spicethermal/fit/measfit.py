@@ -40,6 +40,11 @@ __all__ = ["fit_electrical_transient", "fit_sample_window", "fit_tsp_nonlinearit
 #: Evaluations allowed to each start of the transient's fit on the early points (ladder held;
 #: 2-3 parameters): the starts are many, a start that has not converged by then is a poor one.
 HELD_NFEV = 60
+#: The longest span (s) an electrical transient may mask: the sense current and the device's
+#: capacitances settle within microseconds to about a millisecond after the cut (JESD51-14
+#: masks 10–100 µs for discrete packages). A "transient" fitted over tens of milliseconds is a
+#: thermal misfit of the first layers (a temperature coefficient of the die or the solder).
+LONGEST_TRANSIENT_S = 3e-3
 #: A calibration with at least this many points beyond its line (2) and the form's parameters
 #: fixes the TSP's nonlinearity by itself (a residual scatter can then be told from a bow).
 CAL_SPARE = 3
@@ -86,14 +91,15 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
     spans = [s for s in transient_spans(data).values() if s > 0]
     span0 = max(float(np.median(spans)) if spans else 1e-4, 10 * first)
     lspan = math.log10(span0)
-    lo_s, hi_s = math.log10(first) - 1, 0.0
+    lo_s = math.log10(first) - 1
+    hi_s = max(math.log10(LONGEST_TRANSIENT_S), lo_s + 1)
     forms = {  # form: (starts, lower, upper, parameters from x)
         "fixed": ([[amp0, lspan]], [-1e3, lo_s], [1e3, hi_s],
                   lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1]}),
         "power": ([[per_w0, lspan]], [-1e4, lo_s], [1e4, hi_s],
                   lambda x: {"k_per_w": x[0], "masked_s": 10 ** x[1]}),
         "ringing": ([[amp0, ls, lf] for ls in (lspan, lspan + 0.5)
-                     for lf in (-0.3, 0.3, 0.9)],
+                     for lf in (-0.3, 0.3, 0.9, 1.5)],
                     [-1e3, lo_s, -1.0], [1e3, hi_s, 1.5],
                     lambda x: {"amplitude_k": x[0], "masked_s": 10 ** x[1],
                                "ring_hz": 10 ** (x[2] - x[1])}),
@@ -114,8 +120,9 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
             return [*base, Effect.create("electrical-transient", form,
                                          **{k: float(v) for k, v in params(x).items()})]
 
-        res = min((joint_fit(head, early_names, ladder, False, x0, lo, hi, build,
-                             max_nfev=HELD_NFEV)[2] for x0 in starts), key=lambda r: r.cost)
+        res = min((joint_fit(head, early_names, ladder, False, np.clip(x0, lo, hi), lo, hi,
+                             build, max_nfev=HELD_NFEV)[2] for x0 in starts),
+                  key=lambda r: r.cost)
         held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
     # the ladder is refitted with the default form and with the best other form when the
     # early points prefer it decisively

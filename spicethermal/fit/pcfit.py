@@ -64,7 +64,9 @@ PC_EVAL_S = 0.3
 PC_GRID_S = 2.0
 #: Band centres screened per node and search ...
 GRID_CENTRES = 6
-#: The best projection of each node is checked with its latent heat, then with it times or
+#: The best projections of this many nodes (of both searches) are checked with the band ...
+CHECKED = 4
+#: ... The best projection of each node is checked with its latent heat, then with it times or
 #: divided by ``e`` to this power (≈ 3×) while that lowers the error, at most
 #: :data:`LATENT_WALK` times.
 LATENT_STEP = 1.1
@@ -291,16 +293,17 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         x0 = [float(np.clip(math.log(latent / c_scale), bounds(node)[0][0], bounds(node)[1][0])),
               tc, width0]
         grid.append((float(r0 @ r0) - float(r0 @ d) ** 2 / dd, lad, node, x0))
-    # each node's best projection checked with the band itself: its latent heat, then steps
-    # of ``e**LATENT_STEP`` up or down while the error falls (a strong band is far from the
-    # linear projection)
+    # the best projections of the :data:`CHECKED` most promising nodes checked with the band
+    # itself: its latent heat, then steps of ``e**LATENT_STEP`` up or down while the error
+    # falls (a strong band is far from the linear projection)
     best: dict[tuple[int, int], tuple] = {}
     for g in grid:
         key = (id(g[1]), g[2])
         if key not in best or g[0] < best[key][0]:
             best[key] = g
     grid = []
-    for _, lad, node, x0 in best.values():  # noqa: B007 (build reads node)
+    ranked = sorted(best.values(), key=lambda g: g[0] / no_band[id(g[1])])[:CHECKED]
+    for _, lad, node, x0 in ranked:  # noqa: B007 (build reads node)
         lo_x, hi_x = bounds(node)[0][0], bounds(node)[1][0]
 
         def tried(x_lat: float, x0: list = x0, lad: Foster = lad) -> float:

@@ -40,7 +40,7 @@ FAST = ("clean/mosfet-2", "temperature-coefficient/local-linear/strong",
         "tsp-nonlinearity/quadratic/strong", "sample-window/average/strong",
         "electrical-transient/fixed/medium", "tsp-nonlinearity/cubic/strong",
         "pair/temperature-coefficient+tsp-nonlinearity", "uncatalogued/convection-switch",
-        "phase-change/plateau-crossed/weak")
+        "phase-change/plateau-crossed/weak", "temperature-coefficient/inner-layers/medium")
 
 
 @dataclass(frozen=True)
@@ -156,6 +156,14 @@ def _tc_outer(dev: Device, s: int) -> tuple[dict, dict, dict]:
              "control": "local"})
 
 
+def _tc_inner(dev: Device, s: int) -> tuple[dict, dict, dict]:
+    """The die and its attach (the first two layers) on their own temperatures: silicon's
+    conductivity falls as it warms (k ∝ T^-1.3 is +4e-3 /K of resistance near 300 K)."""
+    alpha = (6e-4, 3e-3, 8e-3)[s]
+    return ({"laws": _laws(dev, ResistanceLaw("linear", alpha), range(0, 2))}, {},
+            {"alpha_per_k": alpha, "t0_c": 25.0, "layers": "0..1", "control": "local"})
+
+
 def _latent(shape: str, where: str, share: float = 0.6) -> Form:
     """A latent heat at the junction, the inner node or the cavity node, centred at ``share``
     of that node's rise on the hottest curve (0.6: above what the lowest-power curve reaches;
@@ -207,12 +215,14 @@ def _tsp(order: str) -> Form:
 
 #: Forms added after the set was first published: their cases come after every other form's,
 #: so that each earlier case keeps its seed, device and bench variant.
-ADDED: tuple[tuple[str, str], ...] = (("phase-change", "plateau-crossed"),)
+ADDED: tuple[tuple[str, str], ...] = (("phase-change", "plateau-crossed"),
+                                      ("temperature-coefficient", "inner-layers"))
 
 #: effect -> form -> builder.
 FORMS: dict[str, dict[str, Form]] = {
     "temperature-coefficient": {"junction-linear": _tc_junction, "local-linear": _tc_local,
-                                "power-law": _tc_power, "outer-layers": _tc_outer},
+                                "power-law": _tc_power, "outer-layers": _tc_outer,
+                                "inner-layers": _tc_inner},
     "phase-change": {"gaussian-junction": _latent("gaussian", "junction"),
                      "gaussian-outer": _latent("gaussian", "outer"),
                      "logistic-inner": _latent("logistic", "inner"),
