@@ -213,3 +213,21 @@ def test_runs_test_separates_structure_from_noise():
     rng = np.random.default_rng(0)
     assert abs(runs_z(rng.normal(size=400))) < 3
     assert runs_z(np.sin(np.linspace(0, 6, 400)) + 0.1 * rng.normal(size=400)) < -10
+
+
+def test_quiet_where_judges_only_the_named_data_sets():
+    """A candidate that leaves the cooling curves at their noise makes a latent heat (whose
+    signature is there) unnecessary, whatever the PWM grid still shows."""
+    from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    from spicethermal.analysis.diagnose import quiet_where
+
+    rng = np.random.default_rng(3)
+    cooling = [ComparisonPoint("cooling_1", {"t_s": 1e-4 * (i + 1)}, float(x), 0.0)
+               for i, x in enumerate(0.01 * rng.normal(size=40))]
+    pwm = [ComparisonPoint("pwm", {"freq_hz": 10.0 * (i + 1), "duty": 0.5}, 0.3, 0.0)
+           for i in range(20)]
+    noise = {"cooling_1": 0.01, "pwm": 0.01}
+    both = Comparison(tuple(cooling + pwm))
+    assert quiet_where(both, noise, "cooling")
+    assert not quiet_where(both, noise, "pwm")
+    assert not quiet_where(Comparison(tuple(pwm)), noise, "cooling")  # none to judge

@@ -145,6 +145,15 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         if settled and name in FITTED_LAST:
             skipped[name] = f"not needed: {settled} brings every data set to its noise"
             continue
+        if name in FITTED_LAST and name in SIGNATURE:
+            where = SIGNATURE[name][0]
+            done = next((c.effect.name for c in cands if not c.contradicted
+                         and decisive(c, bic_before)
+                         and quiet_where(c.comparison, noise, where)), "")
+            if done:
+                skipped[name] = (f"not needed: {done} brings the {where} data sets (where it "
+                                 f"acts) to their noise")
+                continue
         why = needs(name, data)
         if why:
             skipped[name] = why
@@ -203,6 +212,14 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             settled = settled or name
     cands.sort(key=lambda c: c.bic)
     return cands
+
+
+def quiet_where(comparison: Comparison, noise: Mapping[str, float], prefix: str) -> bool:
+    """Whether the data sets of ``comparison`` whose name starts with ``prefix`` (there is one
+    at least) are at their noise (:func:`~spicethermal.analysis.verdict.at_noise`)."""
+    sub = Comparison(tuple(p for p in comparison.points if p.dataset.startswith(prefix)),
+                     comparison.engine)
+    return bool(sub.points) and at_noise(sub, noise)
 
 
 def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
