@@ -135,25 +135,16 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
     present = {e.name for e in effects}
     amplitude = None  # the power-per-curve alternative of the device effects, fitted once
     cands: list[Candidate] = []
-    settled = ""
     bic_before = criterion(before, noise, 0)
     order = sorted(names, key=lambda n: n in FITTED_LAST)
     for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
         if name in present:
             skipped.setdefault(name, "already in the model")
             continue
-        if settled and name in FITTED_LAST:
-            skipped[name] = f"not needed: {settled} brings every data set to its noise"
+        why = not_needed(name, cands, bic_before, noise) if name in FITTED_LAST else ""
+        if why:
+            skipped[name] = f"not needed: {why}"
             continue
-        if name in FITTED_LAST and name in SIGNATURE:
-            where = SIGNATURE[name][0]
-            done = next((c.effect.name for c in cands if not c.contradicted
-                         and decisive(c, bic_before)
-                         and quiet_where(c.comparison, noise, where)), "")
-            if done:
-                skipped[name] = (f"not needed: {done} brings the {where} data sets (where it "
-                                 f"acts) to their noise")
-                continue
         why = needs(name, data)
         if why:
             skipped[name] = why
@@ -208,10 +199,24 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                explained_fraction(before, cmp, noise),
                                time.perf_counter() - t0, contradicted, fit.facts,
                                improvement_of(before, cmp, noise), model_effects))
-        if not contradicted and decisive(cands[-1], bic_before) and at_noise(cmp, noise):
-            settled = settled or name
     cands.sort(key=lambda c: c.bic)
     return cands
+
+
+def not_needed(name: str, cands: Sequence[Candidate], bic_before: float,
+               noise: Mapping[str, float]) -> str:
+    """Why the costly fit of ``name`` is not needed ("" when it is): a decisive candidate
+    fitted before it (not contradicted) already brings every data set to its noise, or the
+    data sets where ``name`` acts (:data:`SIGNATURE`)."""
+    held = [c for c in cands if not c.contradicted and decisive(c, bic_before)]
+    done = next((c for c in held if at_noise(c.comparison, noise)), None)
+    if done is not None:
+        return f"{done.effect.name} brings every data set to its noise"
+    where = SIGNATURE[name][0] if name in SIGNATURE else ""
+    done = next((c for c in held if where and quiet_where(c.comparison, noise, where)), None)
+    if done is not None:
+        return f"{done.effect.name} brings the {where} data sets (where it acts) to their noise"
+    return ""
 
 
 def quiet_where(comparison: Comparison, noise: Mapping[str, float], prefix: str) -> bool:

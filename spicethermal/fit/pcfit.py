@@ -310,8 +310,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
             r = residual(lad, build(np.array([x_lat, *x0[1:]])))
             return float(r @ r) if r is not None else math.inf
 
-        here = tried(x0[0])
-        x_best, c_best = x0[0], here
+        x_best, c_best = x0[0], tried(x0[0])
         for step in (LATENT_STEP, -LATENT_STEP):
             x = x0[0]
             for _ in range(LATENT_WALK):
