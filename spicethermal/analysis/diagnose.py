@@ -99,9 +99,10 @@ SIGNATURE = {"phase-change": ("cooling", 4), "electrical-transient": ("cooling",
              "sample-window": ("pwm", 1)}
 #: ... of which these act on the cooling curves beyond their electrical transient.
 AFTER_TRANSIENT = ("phase-change",)
-#: Costly fits (an integration per evaluation) come last and are skipped when a cheaper
-#: candidate already brings every data set to its noise without structure.
-FITTED_LAST = ("phase-change",)
+#: Costly fits (an integration per evaluation), in this order, come last and are skipped when a
+#: cheaper candidate already brings every data set to its noise without structure
+#: (:func:`not_needed`).
+FITTED_LAST = ("temperature-coefficient", "phase-change")
 #: Effects added at most, one per step.
 MAX_STEPS = 3
 #: Time budget (s of CPU time, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
@@ -134,9 +135,18 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
     ``budget_s`` of CPU time; failures go to ``skipped``."""
     present = {e.name for e in effects}
     amplitude = None  # the power-per-curve alternative of the device effects, fitted once
+    # the model so far refitted jointly (what a rescue must beat), fitted once when asked
+    refitted: list[float] = []
+
+    def held_bic() -> float:
+        if not refitted:
+            joint = joint_refit(data, ladder, effects, RESCUE_BUDGET_S, before, noise)
+            refitted.append(criterion(joint[2] if joint else before, noise, 0))
+        return refitted[0]
+
     cands: list[Candidate] = []
     bic_before = criterion(before, noise, 0)
-    order = sorted(names, key=lambda n: n in FITTED_LAST)
+    order = sorted(names, key=lambda n: FITTED_LAST.index(n) + 1 if n in FITTED_LAST else 0)
     for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
         if name in present:
             skipped.setdefault(name, "already in the model")
@@ -177,7 +187,8 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         model_effects: tuple[Effect, ...] = ()
         if effects and not passes(bic_before - bic, improvement_of(before, cmp, noise),
                                   explained_fraction(before, cmp, noise)):
-            fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise)
+            fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise,
+                                                  held_bic)
         contradicted = ""
         if fit.effect.kind == DEVICE and len(data.cooling) > 1:
             try:
@@ -255,14 +266,18 @@ def joint_refit(data: BundleData, ladder: Foster, effects: Sequence[Effect], bud
 
 
 def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: Comparison,
-           cmp: Comparison, bic: float, noise: Mapping[str, float]
+           cmp: Comparison, bic: float, noise: Mapping[str, float],
+           held_bic: Callable[[], float]
            ) -> tuple[EffectFit, Comparison, float, tuple[Effect, ...]]:
     """A later step's candidate that is not decisive on top of the effects found so far (their
     parameters held), refitted jointly with them (:func:`~spicethermal.fit.backfit.refit_effects`,
     within :data:`RESCUE_BUDGET_S`) when its own fit shows it somewhere: some data set's
     noise-weighted squared error falls by :data:`MIN_BIC_DROP` (a TSP bow that fits the
-    calibration, which an effect found before had mimicked in the curves). Returns the fit,
-    its comparison, its criterion and the model's refitted effects (empty: unchanged)."""
+    calibration, which an effect found before had mimicked in the curves). The joint refit
+    counts only when its criterion is lower by :data:`MIN_BIC_DROP` than ``held_bic()``, the
+    criterion of the effects found so far refitted jointly without it: what the refit alone
+    gains is no sign of the candidate. Returns the fit, its comparison, its criterion and the
+    model's refitted effects (empty: unchanged)."""
     tried = fit.facts.get("tried", fit)
     tried_cmp = cmp if tried is fit else comparison_of(data, tried.ladder, [*effects,
                                                                             tried.effect])
@@ -275,9 +290,12 @@ def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: 
     if joint is None:
         return fit, cmp, bic, ()
     ladder, refitted, new = joint
+    new_bic = criterion(new, noise, fit.n_params)
+    if held_bic() - new_bic < MIN_BIC_DROP:
+        return fit, cmp, bic, ()
     facts = {k: v for k, v in fit.facts.items() if k not in ("no_gain", "tried")}
-    return (EffectFit(refitted[-1], ladder, fit.n_params, facts), new,
-            criterion(new, noise, fit.n_params), tuple(refitted))
+    return (EffectFit(refitted[-1], ladder, fit.n_params, facts), new, new_bic,
+            tuple(refitted))
 
 
 def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
