@@ -17,7 +17,9 @@ goes to ``OUT/summary.json``.
 
 Scoring: an effect case is right when the verdict's first effect is the expected one (only
 detectable cases count); a pair when both effects are named (only pairs whose truth is
-detectable as a whole count); a clean or uncatalogued bundle when nothing is named.
+detectable as a whole and whose effects are each detectable alone, on the same bench, count:
+an effect that leaves no trace alone cannot be asked for beside another); a clean or
+uncatalogued bundle when nothing is named.
 """
 
 from __future__ import annotations
@@ -58,8 +60,6 @@ def _folder(out: Path, case: Case) -> Path:
 
 
 def _generate(args: tuple[Case, str, bool]) -> tuple[str, dict]:
-    from spicethermal.validation.detect import detectability
-
     case, out, fresh = args
     folder = _folder(Path(out), case)
     meta = folder.parent / (folder.name + ".json")
@@ -68,13 +68,24 @@ def _generate(args: tuple[Case, str, bool]) -> tuple[str, dict]:
         if doc.get("key") == _key(case) and folder.exists():
             return case.name, doc
     t0 = time.perf_counter()
-    record = case.record()
-    det = detectability(record)
-    record.bundle.write(folder)
-    doc = {"key": _key(case), **case.describe(), **det.to_json(),
+    doc = {"key": _key(case), **mark(case, folder),
            "generate_s": round(time.perf_counter() - t0, 2)}
     meta.write_text(json.dumps(doc, indent=1, default=str))
     return case.name, doc
+
+
+def mark(case: Case, folder: Path) -> dict:
+    """Simulate ``case`` into the bundle ``folder``; its description and detectability (a
+    pair's also each effect's alone, ``parts_detectable``)."""
+    from spicethermal.validation.detect import detectability
+
+    record = case.record()
+    det = detectability(record)
+    record.bundle.write(folder)
+    doc = {**case.describe(), **det.to_json()}
+    if case.parts:
+        doc["parts_detectable"] = [detectability(p.record()).detectable for p in case.parts]
+    return doc
 
 
 def _diagnose(folder: str, conn) -> None:
@@ -202,7 +213,8 @@ def score(meta: dict[str, dict], results: dict[str, dict]) -> dict:
         elif fam == "pair":
             row["right"] = set(m["expected"]) <= set(named)
             row["one"] = bool(set(m["expected"]) & set(named))
-            if not m["detectable"]:  # neither effect leaves a trace the linear ladder misses
+            if not m["detectable"] or not all(m.get("parts_detectable", [True])):
+                # the pair, or one of its effects alone, leaves no trace the linear ladder misses
                 undetectable.append(row)
                 rows.append(row)
                 continue

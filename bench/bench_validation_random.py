@@ -33,7 +33,7 @@ from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_validation import report, run_diagnoses, score  # noqa: E402
+from bench_validation import mark, report, run_diagnoses, score  # noqa: E402
 
 from spicethermal.validation.cases import DEVICES, Case, _bench, _laws, _variant  # noqa: E402
 from spicethermal.validation.measure import Transient  # noqa: E402
@@ -156,9 +156,12 @@ def draw(n: int, seed: int, only: str | None = None) -> list[Case]:
             f1, n1, b1, l1 = _draw_effect(rng, e1, dev)
             f2, n2, b2, l2 = _draw_effect(rng, e2, dev)
             variant = {**variant, "n_curves": 2, "steady": True, "volts": False}
+            parts = tuple(Case(f"{i:03d} {e}/{f}/{lab}", "effect", (e,), dev.name,
+                               dev.network(**net), _bench(dev, variant, **b), sid, f, lab, {})
+                          for e, f, net, b, lab in ((e1, f1, n1, b1, l1), (e2, f2, n2, b2, l2)))
             out.append(Case(f"{i:03d} pair/{e1}:{f1}+{e2}:{f2}", "pair", (e1, e2), dev.name,
                             dev.network(**n1, **n2), _bench(dev, variant, **b1, **b2), sid,
-                            f"{f1}+{f2}", f"{l1},{l2}", {}))
+                            f"{f1}+{f2}", f"{l1},{l2}", {}, parts))
         elif u < 0.85:
             out.append(Case(f"{i:03d} clean/{dev.name}", "clean", (), dev.name, dev.network(),
                             _bench(dev, variant), sid, "linear", "", {}))
@@ -171,14 +174,9 @@ def draw(n: int, seed: int, only: str | None = None) -> list[Case]:
 
 
 def _generate(args: tuple[Case, str]) -> tuple[str, dict]:
-    from spicethermal.validation.detect import detectability
-
     case, out = args
     folder = Path(out) / "bundles" / case.name.replace("/", "__").replace(" ", "_")
-    record = case.record()
-    det = detectability(record)
-    record.bundle.write(folder)
-    return case.name, {**case.describe(), **det.to_json(), "folder": str(folder)}
+    return case.name, {**mark(case, folder), "folder": str(folder)}
 
 
 def main(argv: list[str] | None = None) -> int:

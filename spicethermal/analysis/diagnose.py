@@ -99,10 +99,17 @@ SIGNATURE = {"phase-change": ("cooling", 4), "electrical-transient": ("cooling",
              "sample-window": ("pwm", 1)}
 #: ... of which these act on the cooling curves beyond their electrical transient.
 AFTER_TRANSIENT = ("phase-change",)
-#: Costly fits (an integration per evaluation), in this order, come last and are skipped when a
-#: cheaper candidate already brings every data set to its noise without structure
-#: (:func:`not_needed`).
-FITTED_LAST = ("temperature-coefficient", "phase-change")
+#: Costly fits (an integration per evaluation) come last and are skipped when a cheaper
+#: candidate already brings every data set to its noise without structure (:func:`not_needed`).
+FITTED_LAST = ("phase-change",)
+#: Effects whose first form is cheap and whose others cost: they come after the cheap effects,
+#: and when a cheaper candidate already brings every data set to its noise they get a glance
+#: (:data:`GLANCE_S` of CPU time, the cheap form) and their full fit only when the glance beats
+#: that candidate's criterion by :data:`MIN_BIC_DROP` (a TSP bow at the noise can still be
+#: decisively worse than a temperature coefficient).
+GLANCED = ("temperature-coefficient",)
+#: CPU time (s) of a glance.
+GLANCE_S = 1.0
 #: Effects added at most, one per step.
 MAX_STEPS = 3
 #: Time budget (s of CPU time, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
@@ -146,15 +153,18 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
 
     cands: list[Candidate] = []
     bic_before = criterion(before, noise, 0)
-    order = sorted(names, key=lambda n: FITTED_LAST.index(n) + 1 if n in FITTED_LAST else 0)
+    order = sorted(names, key=lambda n: 2 if n in FITTED_LAST else n in GLANCED)
     for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
         if name in present:
             skipped.setdefault(name, "already in the model")
             continue
-        why = not_needed(name, cands, bic_before, noise) if name in FITTED_LAST else ""
-        if why:
+        why = not_needed(name, cands, bic_before, noise) \
+            if name in FITTED_LAST or name in GLANCED else ""
+        if why and name in FITTED_LAST:
             skipped[name] = f"not needed: {why}"
             continue
+        # the criterion a glance must beat: the best candidate so far
+        bar_bic = min(c.bic for c in cands) - MIN_BIC_DROP if why else None
         why = needs(name, data)
         if why:
             skipped[name] = why
@@ -173,12 +183,13 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         say(f"fitting {name}")
         t0 = time.perf_counter()
         try:
-            with time_limit(budget_s):
-                fits = fit_effect_forms(data, ladder, name, effects)
-            scored = []
-            for fit in fits:
-                cmp = comparison_of(data, fit.ladder, [*effects, fit.effect])
-                scored.append((fit, cmp, criterion(cmp, noise, fit.n_params)))
+            scored = scored_forms(data, ladder, name, effects, noise,
+                                  budget_s if bar_bic is None else GLANCE_S)
+            if bar_bic is not None:
+                if min(x[2] for x in scored) > bar_bic:
+                    skipped[name] = f"not needed: {why} (its first form is no better)"
+                    continue
+                scored = scored_forms(data, ladder, name, effects, noise, budget_s)
             best = scored[choose_form([x[2] for x in scored])]
         except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS) as exc:
             skipped[name] = f"fit failed: {exc}"
@@ -212,6 +223,20 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                improvement_of(before, cmp, noise), model_effects))
     cands.sort(key=lambda c: c.bic)
     return cands
+
+
+def scored_forms(data: BundleData, ladder: Foster, name: str, effects: Sequence[Effect],
+                 noise: Mapping[str, float], budget_s: float
+                 ) -> list[tuple[EffectFit, Comparison, float]]:
+    """Every form of ``name`` fitted on top of ``ladder`` and ``effects`` within ``budget_s``
+    of CPU time, each with its comparison and criterion."""
+    with time_limit(budget_s):
+        fits = fit_effect_forms(data, ladder, name, effects)
+    scored = []
+    for fit in fits:
+        cmp = comparison_of(data, fit.ladder, [*effects, fit.effect])
+        scored.append((fit, cmp, criterion(cmp, noise, fit.n_params)))
+    return scored
 
 
 def not_needed(name: str, cands: Sequence[Candidate], bic_before: float,

@@ -22,9 +22,9 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
   curves that stay outside the band (:func:`spicethermal.effects.phase_change.band`) use
   the closed form.
   Under PWM the mean is exact (a heat capacity does not change it) and, when the band is
-  within reach, the ripple is computed with the capacity frozen at the mean temperature
-  (:func:`pc_frozen_ladder`, quasi-static), else in closed form. The band's shape is the
-  catalogue's own (:meth:`~spicethermal.effects.Effect.extra_capacitance`);
+  within reach, the ripple is computed with the capacity frozen at the band's secant over
+  the node's swing (:func:`pc_frozen_ladder`, quasi-static), else in closed form. The band's
+  shape is the catalogue's own (:meth:`~spicethermal.effects.Effect.extra_capacitance`);
 * measurement effects: ``sample-window`` (the PWM reading at the end of the window),
   ``electrical-transient`` (cooling readings off by ``A·e^{−5t/masked_s}``),
   ``tsp-nonlinearity`` (readings ``T + q (T − T_cal)²``; in the calibration data set the
@@ -175,7 +175,7 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
         if tc is not None:
             lad = tc_frozen(ladder, tc, tref, p * d)
         if pc is not None and band_reached(pc, tref, tref + p * as_foster(lad).rth):
-            lad = pc_frozen_ladder(lad, pc, tref, p * d)
+            lad = pc_frozen_ladder(lad, pc, tref, p, f, d)
         if average:
             out[i] = tref + window_average_k(lad, p, f, d, window)
         else:

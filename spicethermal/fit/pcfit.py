@@ -30,11 +30,13 @@ from ..effects import CATALOGUE, Effect
 from ..model import Network
 from .budget import cpu_time
 from .effectfit import (
+    MAX_BASELINE_ORDER,
     NUMERICAL_ERRORS,
     BundleData,
     EffectFit,
     TimeLimitError,
     as_foster,
+    baseline_ladder,
     bounded,
     cooling_true_c,
     joint_fit,
@@ -329,7 +331,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     # least squares from the best point of each search and the junction's best (a band at
     # the junction fits the curves alike), ranked by the share of their own ladder's error
-    # they remove; a second start only when it removes at least half the best's share
+    # they remove; a second start only when it removes at least half the best's share, or
+    # leaves a smaller error (the lowest-power curve's own ladder may fit the others so
+    # poorly that a band halves its error and still leaves more than the other search's)
     def share(g: tuple) -> float:
         return 1.0 - g[0] / no_band[id(g[1])]
 
@@ -340,7 +344,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         picks.append(max(at_junction, key=share))
     picks.sort(key=share, reverse=True)
     starts = picks[:1] + [g for g in picks[1:] if (g[1], g[2]) != (picks[0][1], picks[0][2])
-                          and share(g) >= 0.5 * share(picks[0])][:1]
+                          and (share(g) >= 0.5 * share(picks[0]) or g[0] < picks[0][0])][:1]
     fits = []
     for _, lad, node, x0 in starts:  # noqa: B007 (build reads node)
         lo, hi = bounds(node)
@@ -364,6 +368,8 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                     lad, effs = lad2, effs2
         except (FitError, TimeLimitError):
             pass
+    lad, effs, extra_k = _junction_stage(data, cooling, lad, effs, build, (lo, hi), node,
+                                         c_scale)
     with unlimited():
         gain = plain - sse(sub, lad, [*base, effs[-1]])
     if gain <= 0:  # no band does better than the given ladder without one
@@ -372,7 +378,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                                         width_k=p["width_k"], node=0), as_foster(ladder), 4,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     facts = {"t_range_c": ranges[node]}
-    out = [EffectFit(effs[-1], lad, 4, facts)]
+    out = [EffectFit(effs[-1], lad, 4 + extra_k, facts)]
     with unlimited():
         left = sse(sub, lad, [*base, effs[-1]]) - sum(sub.measured(n).size for n in names)
     # a band this weak does not show its shape, nor can another shape gain on a fit at the noise
@@ -381,8 +387,42 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     for form in ("gaussian", "plateau"):
         fit = _other_shape(data, names, lad, base, effs[-1], form, (lo, hi), c_scale)
         if fit is not None:
-            out.append(EffectFit(fit, lad, 5 if form == "plateau" else 4, facts))
+            out.append(EffectFit(fit, lad, (5 if form == "plateau" else 4) + extra_k, facts))
     return out
+
+
+def _junction_stage(data: BundleData, cooling: list[str], lad: Foster, effs: list[Effect],
+                    build, limits: tuple[list[float], list[float]], node: int,
+                    c_scale: float) -> tuple[Foster, list[Effect], int]:
+    """A band at the junction refitted with its ladder on one more stage, when that lowers the
+    noise-weighted squared error by more than the stage's two parameters cost (BIC); returns
+    the ladder, the effects and the parameters added (0 or 2).
+
+    The linear ladder of curves that all cross a junction band lumps the junction with the
+    next layer (their first milliseconds bend too little to ask for another stage): the band's
+    heat then spreads over too large a capacity, and the cooling curves' first milliseconds
+    stay beyond their noise whatever the band. Tried only while they do
+    (:data:`SHAPE_GAIN` above their number of points), within :data:`PC_JOINT_BUDGET_S`."""
+    n_cool = sum(data.measured(n).size for n in cooling)
+    with unlimited():
+        before = sse(data, lad, effs)
+        left = sse(subset(data, cooling), lad, effs) - n_cool
+    if node != 0 or left < SHAPE_GAIN or lad.order >= MAX_BASELINE_ORDER:
+        return lad, effs, 0
+    p = effs[-1].params
+    x0 = [math.log(p["latent_j"] / c_scale), p["t_c"], p["width_k"]]
+    try:
+        start = baseline_ladder(data, lad.order + 1)
+        with time_limit(PC_JOINT_BUDGET_S):
+            lad2, effs2, _ = joint_fit(data, cooling, start, True, x0, *limits, build,
+                                       diff_step=1e-3, tol=PC_FIT_TOL)
+    except (FitError, DataFormatError, SimulationError, TimeLimitError, *NUMERICAL_ERRORS):
+        return lad, effs, 0
+    n = sum(data.measured(d).size for d in data.datasets)
+    with unlimited():
+        if sse(data, lad2, effs2) + 2 * math.log(n) < before:
+            return lad2, effs2, 2
+    return lad, effs, 0
 
 
 def _other_shape(data: BundleData, names: Sequence[str], ladder: Foster, base: Sequence[Effect],

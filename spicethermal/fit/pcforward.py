@@ -22,6 +22,9 @@ __all__ = ["band_reached", "pc_cooling_rise", "pc_frozen_ladder"]
 
 #: Tolerances of the phase-change cooling integration.
 PC_RTOL, PC_ATOL_K = 1e-7, 1e-6
+#: The PWM model's band capacity (:func:`pc_frozen_ladder`): at most this many secant steps,
+#: stopped at this relative change, and none for a swing below this (K).
+SECANT_STEPS, SECANT_RTOL, SECANT_MIN_SWING_K = 8, 1e-4, 1e-9
 def band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     low, high = phase_change.band(effect)
     return effect.params["latent_j"] > 0 and t_hi_c > low and t_lo_c < high
@@ -114,23 +117,49 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     return out
 
 
-def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float,
-                     mean_power_w: float) -> Foster:
-    """The junction's Foster equivalent of the network with the band's heat capacity frozen
-    at the node's mean temperature under ``mean_power_w``.
+def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
+                     freq_hz: float, duty: float) -> Foster:
+    """The junction's Foster equivalent of the network under a PWM train (``power_w`` on for
+    ``duty`` of each period) with the band's heat capacity frozen at the heat the node's swing
+    in the periodic state exchanges.
 
     A heat capacity does not change a periodic state's mean (the enthalpy returns each
     period), only its ripple; this is what the PWM prediction uses when the ripple reaches
-    the band (a quasi-static approximation, unlike the cooling curves).
+    the band (a quasi-static approximation, unlike the cooling curves). The capacity is the
+    secant ``(H(T_hi) − H(T_lo)) / (T_hi − T_lo)`` of the band's heat ``H`` over the node's
+    swing (its temperatures at the ends of the on and off phases), which this capacity sets in
+    turn: a fixed point from the tangent at the mean temperature, :data:`SECANT_STEPS` at
+    most. The swing takes the heat the band gives and takes back each period; the tangent at
+    the mean is right only for a swing much narrower than the band (it overstates the
+    capacity of a swing across a narrow band and understates one beside it).
     """
     from scipy.linalg import eigh
-
 
     net = Network.of(ladder)
     g, cm = net.conductance(), net.capacitance()
     b = np.zeros(net.n)
-    b[0] = mean_power_w
+    b[0] = power_w * duty
     node = int(effect.params["node"])
-    cm[node, node] += effect.extra_capacitance(node, tref_c + float(np.linalg.solve(g, b)[node]))
+    t_mean = tref_c + float(np.linalg.solve(g, b)[node])
+    extra = effect.extra_capacitance(node, t_mean)
+    period = 1.0 / freq_hz
+    for _ in range(SECANT_STEPS):
+        c = cm.copy()
+        c[node, node] += extra
+        lam, v = eigh(g, c)
+        gain = v[node, :] * v[0, :] / lam * power_w  # each mode's share of the node's rise
+        on = gain * -np.expm1(-lam * duty * period) / -np.expm1(-lam * period) - gain * duty
+        off = on * np.exp(-lam * (1.0 - duty) * period) - gain * duty * \
+            -np.expm1(-lam * (1.0 - duty) * period)
+        ends = t_mean + np.array([on.sum(), off.sum()])
+        lo, hi = float(ends.min()), float(ends.max())
+        if hi - lo <= SECANT_MIN_SWING_K:
+            break
+        secant = (effect.latent_heat(node, hi) - effect.latent_heat(node, lo)) / (hi - lo)
+        done = abs(secant - extra) <= SECANT_RTOL * max(secant, extra, 1e-300)
+        extra = secant
+        if done:
+            break
+    cm[node, node] += extra
     lam, v = eigh(g, cm)
     return Foster.from_tau(v[0, :] ** 2 / lam, 1 / lam)

@@ -84,7 +84,8 @@ class Case:
 
     ``expected`` holds the catalogue names that should be named (empty: none); ``truth``
     the form and parameters; ``family`` is ``"effect"``, ``"pair"``, ``"clean"`` or
-    ``"uncatalogued"``.
+    ``"uncatalogued"``; a pair's ``parts`` are its two effects, each alone on the same device,
+    bench and seed (is each detectable alone?).
     """
 
     name: str
@@ -97,6 +98,7 @@ class Case:
     form: str = ""
     strength: str = ""
     truth: dict[str, Any] = field(default_factory=dict)
+    parts: tuple[Case, ...] = ()
 
     def record(self) -> Record:
         """Simulate the bench (noise seeded by :attr:`seed`). The bundle says nothing of the
@@ -300,9 +302,12 @@ def _pair(k: int) -> Case:
     n1, b1, t1 = FORMS[e1][f1](dev, 2)
     n2, b2, t2 = FORMS[e2][f2](dev, 2)
     variant = {**_variant(k), "n_curves": 2, "steady": True, "volts": False}
+    parts = tuple(Case(f"{e}/{f}/strong", "effect", (e,), dev.name, dev.network(**n),
+                       _bench(dev, variant, **b), 2000 + k, f, "strong", t)
+                  for e, f, n, b, t in ((e1, f1, n1, b1, t1), (e2, f2, n2, b2, t2)))
     return Case(f"pair/{e1}+{e2}", "pair", (e1, e2), dev.name, dev.network(**n1, **n2),
                 _bench(dev, variant, **b1, **b2), 2000 + k, f"{f1}+{f2}", "strong",
-                {e1: {"form": f1, **t1}, e2: {"form": f2, **t2}})
+                {e1: {"form": f1, **t1}, e2: {"form": f2, **t2}}, parts)
 
 
 def catalogue() -> list[Case]:
