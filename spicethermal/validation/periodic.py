@@ -10,7 +10,10 @@ The periodic state is the fixed point of the period map ``Φ`` (node temperature
 of an on-phase → one period later), found by shooting: a chord-Newton iteration
 ``x ← x − (M − I)⁻¹ (Φ(x) − x)`` with ``M`` the period map of the network linearised at the
 steady state under the mean power (``M = e^{J_off t_off} e^{J_on t_on}``), from that steady
-state. A linear network takes the closed form of its Foster stages instead.
+state. When a step does not halve the change (a latent-heat band that the ripple crosses makes
+the period map far from that linearisation), ``M`` becomes the period map's own Jacobian at
+the current point, by finite differences (Newton). A linear network takes the closed form of
+its Foster stages instead.
 
 >>> from spicethermal.validation.network import Network
 >>> net = Network((10.0,), (1e-3,))           # τ = 10 ms
@@ -30,6 +33,8 @@ __all__ = ["foster_reading", "periodic_start", "pwm_reading"]
 #: Shooting stops when one period changes no node by more than this (K).
 SHOOT_TOL_K = 1e-7
 MAX_SHOTS = 30
+#: Finite-difference step (K) of the period map's Jacobian.
+FD_STEP_K = 1e-4
 
 
 def foster_reading(r: np.ndarray, tau: np.ndarray, power_w: float, freq_hz: float,
@@ -75,13 +80,24 @@ def periodic_start(net: Network, power_w: float, freq_hz: float, duty: float,
     x = net.steady(power_w * duty, tref_c)
     m = (expm(net.jacobian(x, 0.0, tref_c) * off) @ expm(net.jacobian(x, power_w, tref_c) * on))
     step = np.linalg.inv(m - np.eye(net.n))
+
+    def period_map(x0: np.ndarray) -> np.ndarray:
+        mid, _ = net.integrate(x0, on, power_w, tref_c)
+        return net.integrate(mid, off, 0.0, tref_c)[0]
+
+    last = np.inf
     for _ in range(MAX_SHOTS):
-        mid, _ = net.integrate(x, on, power_w, tref_c)
-        end, _ = net.integrate(mid, off, 0.0, tref_c)
+        end = period_map(x)
         change = end - x
-        x = x - step @ change
-        if np.max(np.abs(change)) < SHOOT_TOL_K:
+        size = float(np.max(np.abs(change)))
+        if size < SHOOT_TOL_K:
             return x
+        if size > 0.5 * last:  # the chord stalls: Newton on the period map's own Jacobian
+            m = np.column_stack([(period_map(x + FD_STEP_K * e) - end) / FD_STEP_K
+                                 for e in np.eye(net.n)])
+            step = np.linalg.inv(m - np.eye(net.n))
+        last = size
+        x = x - step @ change
     raise ArithmeticError(f"shooting at {freq_hz} Hz, duty {duty}: no periodic state after "
                           f"{MAX_SHOTS} periods (last change {np.max(np.abs(change)):.3g} K)")
 
