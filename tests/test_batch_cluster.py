@@ -92,7 +92,11 @@ def test_an_interrupted_batch_resumes_where_it_stopped(tmp_path):
     out = tmp_path / "out"
     argv = [sys.executable, "-m", "spicethermal.cli.main", "batch", str(tmp_path / "pop"), "-o",
             str(out), "--workers", "1", "--effect", "electrical-transient", "-q"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # the interrupt must reach the batch: a test run started in the background of a
+    # non-interactive shell ignores SIGINT, and a child inherits that (Python then installs no
+    # KeyboardInterrupt handler)
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         _wait_for(lambda: len(list(out.glob("devices/*/result.json"))) >= 2 or
                   proc.poll() is not None, 120, "two finished devices")
