@@ -210,24 +210,21 @@ def test_phase_change_fit_finds_a_band_that_every_curve_crosses():
     assert criterion(base, noise, 0) - min(bics) > 100
 
 
-def test_phase_change_fit_adds_a_stage_for_a_band_at_the_junction():
-    """A diode's junction band (0.07 J, σ 7.9 K at 41 °C) that both curves cross: the linear
-    ladder lumps the junction with its die attach (3 stages for 4 layers), and on that ladder
-    no band brings the first milliseconds to their noise; on one more stage the band does."""
+def _band_fit(device: str, latent: LatentHeat, variant: dict, seed: int):
+    """The phase-change fit on a bundle of ``device`` with ``latent`` (independent generator):
+    the baseline ladder, the noise, and the best form's fit and comparison (by BIC)."""
     from dataclasses import replace
 
     from spicethermal.analysis.residuals import comparison_of, noise_estimates
-    from spicethermal.analysis.verdict import chi2, criterion
-    from spicethermal.fit.effectfit import BundleData, as_foster, baseline_ladder
+    from spicethermal.analysis.verdict import criterion
+    from spicethermal.fit.effectfit import BundleData, baseline_ladder
     from spicethermal.fit.pcfit import fit_phase_change
     from spicethermal.validation.cases import DEVICES, Case, _bench
 
-    dev = DEVICES["diode"]
-    variant = {"noise_k": 0.05, "per_decade": 20, "dense_pwm": True, "steady": True,
-               "volts": False, "n_curves": 2}
-    c = Case("junction band", "effect", ("phase-change",), "diode",
-             dev.network(latent=(LatentHeat(0, 0.07, 41.1, 7.9, "gaussian"),)),
-             _bench(dev, variant), 1100003)
+    dev = DEVICES[device]
+    c = Case("band", "effect", ("phase-change",), device, dev.network(latent=(latent,)),
+             _bench(dev, {"noise_k": 0.05, "dense_pwm": True, "steady": True, "volts": False,
+                          **variant}), seed)
     data = BundleData.from_bundle(c.record().bundle)
     ladder = baseline_ladder(data)
     noise = noise_estimates(comparison_of(data, ladder, []))
@@ -236,15 +233,30 @@ def test_phase_change_fit_adds_a_stage_for_a_band_at_the_junction():
     cmps = [comparison_of(data, f.ladder, [f.effect]) for f in fits]
     k = int(np.argmin([criterion(m, noise, f.n_params) for m, f in zip(cmps, fits,
                                                                        strict=True)]))
-    best = fits[k].effect
-    assert as_foster(fits[k].ladder).order == as_foster(ladder).order + 1
-    assert fits[k].n_params >= 6  # the stage's two parameters are counted
-    for name, sub in cmps[k].by_dataset().items():
-        if name.startswith("cooling"):
-            assert chi2(sub, {name: noise[name]}) / len(sub.points) < 1.5
-    assert int(best.params["node"]) == 0
-    assert best.params["t_c"] == pytest.approx(41.1, abs=1.0)
-    assert best.params["latent_j"] == pytest.approx(0.07, rel=0.15)
+    return ladder, noise, fits[k], cmps[k]
+
+
+def _chi2_per_point(comparison, noise: dict, prefix: str = "") -> dict[str, float]:
+    from spicethermal.analysis.verdict import chi2
+
+    return {name: chi2(sub, {name: noise[name]}) / len(sub.points)
+            for name, sub in comparison.by_dataset().items() if name.startswith(prefix)}
+
+
+def test_phase_change_fit_adds_a_stage_for_a_band_at_the_junction():
+    """A diode's junction band (0.07 J, σ 7.9 K at 41 °C) that both curves cross: the linear
+    ladder lumps the junction with its die attach (3 stages for 4 layers), and on that ladder
+    no band brings the first milliseconds to their noise; on one more stage the band does."""
+    from spicethermal.fit.effectfit import as_foster
+
+    ladder, noise, fit, cmp = _band_fit("diode", LatentHeat(0, 0.07, 41.1, 7.9, "gaussian"),
+                                        {"per_decade": 20, "n_curves": 2}, 1100003)
+    assert as_foster(fit.ladder).order == as_foster(ladder).order + 1
+    assert fit.n_params >= 6  # the stage's two parameters are counted
+    assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
+    assert int(fit.effect.params["node"]) == 0
+    assert fit.effect.params["t_c"] == pytest.approx(41.1, abs=1.0)
+    assert fit.effect.params["latent_j"] == pytest.approx(0.07, rel=0.15)
 
 
 def test_phase_change_fit_starts_where_the_error_left_is_smallest():
@@ -252,32 +264,11 @@ def test_phase_change_fit_starts_where_the_error_left_is_smallest():
     own ladder fits the other curves so poorly that a band at the outer node halves its error
     and still leaves more than a band at the cavity on the ladder of every curve; the search
     must start from both and find the cavity."""
-    from dataclasses import replace
-
-    from spicethermal.analysis.residuals import comparison_of, noise_estimates
-    from spicethermal.analysis.verdict import chi2, criterion
-    from spicethermal.fit.effectfit import BundleData, baseline_ladder
-    from spicethermal.fit.pcfit import fit_phase_change
-    from spicethermal.validation.cases import DEVICES, Case, _bench
-
-    dev = DEVICES["actuator"]
-    variant = {"noise_k": 0.05, "per_decade": 10, "dense_pwm": True, "steady": True,
-               "volts": False, "n_curves": 3}
-    c = Case("cavity plateau", "effect", ("phase-change",), "actuator",
-             dev.network(latent=(LatentHeat(2, 1.15, 41.8, 1.8, "plateau"),)),
-             _bench(dev, variant), 100018)
-    data = BundleData.from_bundle(c.record().bundle)
-    ladder = baseline_ladder(data)
-    noise = noise_estimates(comparison_of(data, ladder, []))
-    data = replace(data, scales=noise)
-    fits = fit_phase_change(data, ladder)
-    cmps = [comparison_of(data, f.ladder, [f.effect]) for f in fits]
-    k = int(np.argmin([criterion(m, noise, f.n_params) for m, f in zip(cmps, fits,
-                                                                       strict=True)]))
-    assert int(fits[k].effect.params["node"]) == 2
-    assert fits[k].effect.params["t_c"] == pytest.approx(41.8, abs=0.5)
-    for name, sub in cmps[k].by_dataset().items():
-        assert chi2(sub, {name: noise[name]}) / len(sub.points) < 1.5
+    _, noise, fit, cmp = _band_fit("actuator", LatentHeat(2, 1.15, 41.8, 1.8, "plateau"),
+                                   {"per_decade": 10, "n_curves": 3}, 100018)
+    assert int(fit.effect.params["node"]) == 2
+    assert fit.effect.params["t_c"] == pytest.approx(41.8, abs=0.5)
+    assert max(_chi2_per_point(cmp, noise).values()) < 1.5
 
 
 def test_a_transient_is_fitted_over_milliseconds_at_most():
