@@ -148,10 +148,9 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float, powe
         c[node, node] += extra
         lam, v = eigh(g, c)
         gain = v[node, :] * v[0, :] / lam * power_w  # each mode's share of the node's rise
-        on = gain * -np.expm1(-lam * duty * period) / -np.expm1(-lam * period) - gain * duty
-        off = on * np.exp(-lam * (1.0 - duty) * period) - gain * duty * \
-            -np.expm1(-lam * (1.0 - duty) * period)
-        ends = t_mean + np.array([on.sum(), off.sum()])
+        peak = gain * -np.expm1(-lam * duty * period) / -np.expm1(-lam * period)
+        trough = peak * np.exp(-lam * (1.0 - duty) * period)
+        ends = t_mean + np.array([peak.sum(), trough.sum()]) - gain.sum() * duty
         lo, hi = float(ends.min()), float(ends.max())
         if hi - lo <= SECANT_MIN_SWING_K:
             break

@@ -99,7 +99,7 @@ def periodic_start(net: Network, power_w: float, freq_hz: float, duty: float,
         last = size
         x = x - step @ change
     raise ArithmeticError(f"shooting at {freq_hz} Hz, duty {duty}: no periodic state after "
-                          f"{MAX_SHOTS} periods (last change {np.max(np.abs(change)):.3g} K)")
+                          f"{MAX_SHOTS} periods (last change {size:.3g} K)")
 
 
 def pwm_reading(net: Network, power_w: float, freq_hz: float, duty: float, tref_c: float,
