@@ -329,20 +329,16 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     if not gaining:  # no band anywhere helps: nothing to refine
         return [EffectFit(switched_off("phase-change", "logistic", data), as_foster(ladder), 4,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
-    # least squares from the best point of each search and the junction's best (a band at
-    # the junction fits the curves alike), ranked by the share of their own ladder's error
-    # they remove; a second start only when it removes at least half the best's share, or
-    # leaves a smaller error (the lowest-power curve's own ladder may fit the others so
-    # poorly that a band halves its error and still leaves more than the other search's)
+    # least squares from the checked point that removes the largest share of its own
+    # ladder's error, then from the next one at another node (or on the other ladder) when it
+    # removes at least half that share or leaves a smaller error (the lowest-power curve's
+    # own ladder may fit the others so poorly that a band halves its error and still leaves
+    # more than the other search's). A strong band one node out is checked with a probe's
+    # width, and its best projection may stay behind a junction band's until both are fitted
     def share(g: tuple) -> float:
         return 1.0 - g[0] / no_band[id(g[1])]
 
-    picks = [max((g for g in gaining if g[1] is lad), key=share)
-             for lad, _ in searches if any(g[1] is lad for g in gaining)]
-    at_junction = [g for g in gaining if g[2] == 0]
-    if at_junction:
-        picks.append(max(at_junction, key=share))
-    picks.sort(key=share, reverse=True)
+    picks = sorted(gaining, key=share, reverse=True)
     starts = picks[:1] + [g for g in picks[1:] if (g[1], g[2]) != (picks[0][1], picks[0][2])
                           and (share(g) >= 0.5 * share(picks[0]) or g[0] < picks[0][0])][:1]
     fits = []
