@@ -271,6 +271,21 @@ def test_phase_change_fit_starts_where_the_error_left_is_smallest():
     assert max(_chi2_per_point(cmp, noise).values()) < 1.5
 
 
+def test_phase_change_fit_tries_the_next_node_too():
+    """A diode's strong plateau one node out (0.59 J over 4.8 K at 51.6 °C, node 1): with a
+    probe's width its best projection stays behind a junction band's, which leaves the PWM
+    readings far beyond their noise once fitted; the second start at the next node must find
+    the band where it is."""
+    variant = {"per_decade": 20, "n_curves": 3, "dense_pwm": False}
+    _, noise, fit, cmp = _band_fit("diode", LatentHeat(1, 0.59, 51.6, 4.8, "plateau"), variant,
+                                   2300007)
+    assert int(fit.effect.params["node"]) == 1
+    assert fit.effect.params["t_c"] == pytest.approx(51.6, abs=1.0)
+    assert fit.effect.params["latent_j"] == pytest.approx(0.59, rel=0.15)
+    assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
+    assert _chi2_per_point(cmp, noise, "pwm")["pwm"] < 4.0
+
+
 def test_a_transient_is_fitted_over_milliseconds_at_most():
     """An inner-layer temperature coefficient changes the first milliseconds of cooling; a
     transient may mimic it only over the span an electrical transient can last."""
