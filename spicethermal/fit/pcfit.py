@@ -153,12 +153,12 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     methanol when it lies in range) with one small band each, its latent heat set by least
     squares on the change that band makes; each node's best is then checked with the band
     itself, its latent heat walked up or down (:data:`LATENT_STEP`). Least squares start
-    from the best point and, when it gains at least half as much, the other search's best or
-    the junction's. The band is fitted to the cooling curves and the PWM grid (a band the PWM
-    cycles cross is one at the junction); then the ladder jointly with the band, on the
-    cooling curves, when the band gains :data:`SHAPE_GAIN` with its ladder held. When no band
-    fits better than ``ladder`` without one, the result has no latent heat and keeps
-    ``ladder``.
+    from the best checked point and, when it gains at least half as much or leaves less
+    error, from the next one at another node or on the other ladder. The band is fitted to
+    the cooling curves and the PWM grid (a band the PWM cycles cross is one at the junction);
+    then the ladder jointly with the band, on the cooling curves, when the band gains
+    :data:`SHAPE_GAIN` with its ladder held. When no band fits better than ``ladder`` without
+    one, the result has no latent heat and keeps ``ladder``.
 
     Parameters
     ----------
