@@ -286,6 +286,39 @@ def test_phase_change_fit_tries_the_next_node_too():
     assert _chi2_per_point(cmp, noise, "pwm")["pwm"] < 4.0
 
 
+@pytest.mark.parametrize("name, layers", [
+    ("temperature-coefficient/inner-layers/strong", {"last_layer": 1.0}),
+    ("temperature-coefficient/outer-layers/strong", {"first_layer": 2.0})])
+def test_a_strong_coefficient_is_fitted_on_its_own_layers(name, layers, monkeypatch):
+    """A strong coefficient on some layers only (an actuator's inner two, α = +8e-3/K; a
+    diode's outer two of four, α = −1e-2/K): the subset form must find those layers and α
+    within 10 %, and bring the cooling curves to their noise. Screened with a held linear
+    ladder, α was pulled to a tenth of its value and the subset was the wrong one."""
+    from dataclasses import replace
+
+    from spicethermal.analysis.residuals import comparison_of, noise_estimates
+    from spicethermal.fit import tcfit
+    from spicethermal.fit.effectfit import BundleData, baseline_ladder, unlimited
+
+    monkeypatch.setattr(tcfit, "SUBSET_JOINT_BUDGET_S", 60.0)  # the fit, not its speed
+    c = case(name)
+    data = BundleData.from_bundle(c.record().bundle)
+    ladder = baseline_ladder(data)
+    noise = noise_estimates(comparison_of(data, ladder, []))
+    data = replace(data, scales=noise)
+    with unlimited():
+        fits = tcfit.fit_temperature_coefficient(data, ladder)
+    subset = [f for f in fits if f.effect.params["first_layer"] > 0
+              or f.effect.params["last_layer"] < 1000]
+    assert subset, [f.effect for f in fits]
+    fit = subset[0]
+    key, value = next(iter(layers.items()))
+    assert fit.effect.params[key] == value
+    assert fit.effect.params["alpha_per_k"] == pytest.approx(c.truth["alpha_per_k"], rel=0.1)
+    cmp = comparison_of(data, fit.ladder, [fit.effect])
+    assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
+
+
 def test_a_transient_is_fitted_over_milliseconds_at_most():
     """An inner-layer temperature coefficient changes the first milliseconds of cooling; a
     transient may mimic it only over the span an electrical transient can last."""

@@ -130,7 +130,7 @@ DIAGNOSIS_BUDGET_S = 50.0
 MAX_LEFT_CHI2 = 9.0
 #: ... and to the joint refit of a later candidate that is not decisive on top of the effects
 #: found so far (:func:`rescue`).
-RESCUE_BUDGET_S = 4.0
+RESCUE_BUDGET_S = 8.0
 
 
 def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],

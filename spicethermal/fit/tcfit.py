@@ -22,7 +22,9 @@ worse than the linear model it extends.
    ladder within
    :data:`JOINT_BUDGET_S` of CPU time: ``local`` (α), ``power-law`` (exponent and capacity
    slope), and the best inner or outer subset of layers (α; the subset is chosen among all of
-   them with the ladder held, within :data:`SUBSET_BUDGET_S`).
+   them within :data:`SUBSET_BUDGET_S`, each with the linear ladder brought back to ``T0``
+   for its α, :func:`_best_subset`, and refitted with the ladder within
+   :data:`SUBSET_JOINT_BUDGET_S`).
 3. The signature against an error of the heating power (a heater whose power sags as it
    warms, recorded at its nominal value: each cooling curve scaled, its shape unchanged) is
    not tested here: the diagnosis's consistency rule (:mod:`spicethermal.analysis.consistency`)
@@ -36,9 +38,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from ..core.errors import FitError, SimulationError
-from ..core.ladder import Foster
+from ..core.ladder import Cauer, Foster
 from ..effects import Effect
 from .effectfit import (
     NUMERICAL_ERRORS,
@@ -47,7 +50,9 @@ from .effectfit import (
     TimeLimitError,
     bounded,
     joint_fit,
+    predict,
     sse,
+    subset,
     transient_spans,
     tsp_true,
 )
@@ -71,6 +76,13 @@ GATE_NOISE_SIGMAS = 3.0
 JOINT_BUDGET_S = 1.0
 #: CPU time (s) allowed to the search of the layer subset (ladder held).
 SUBSET_BUDGET_S = 2.0
+#: ... and to the joint refit of the best subset's α with the ladder (from the screening's
+#: ladder at ``T0``, it needs a few more iterations than the other forms).
+SUBSET_JOINT_BUDGET_S = 3.0
+#: Subsets refined by a scalar search over α after the linearised screening, and the
+#: evaluations of each search (:func:`_best_subset`).
+SUBSET_REFINED = 2
+SUBSET_EVALS = 10
 #: Evaluations allowed to a fit with the ladder held.
 HELD_NFEV = 20
 #: The subsets of layers are searched only when the local form over every layer leaves a
@@ -206,8 +218,8 @@ def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foste
     """The local forms in turn: ``local`` (from the junction α scaled by
     :func:`local_ratio`), ``power-law`` (from the local fit, ``n = α (T0 + 273.15)``, no
     capacity slope), and, when a residual beyond the noise remains, the best subset."""
-    def local(x: NDArray, **subset: float) -> list[Effect]:
-        return [*base, _effect("local", t0, alpha_per_k=float(x[0]) * 1e-3, **subset)]
+    def local(x: NDArray, **layers: float) -> list[Effect]:
+        return [*base, _effect("local", t0, alpha_per_k=float(x[0]) * 1e-3, **layers)]
 
     def power(x: NDArray) -> list[Effect]:
         return [*base, _effect("power-law", t0, exponent=float(x[0]),
@@ -228,52 +240,116 @@ def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foste
     n_points = sum(data.measured(d).size for d in names)
     if sse(data, out[0].ladder, [*base, out[0].effect]) < SUBSET_CHI2 * n_points:
         return out  # every layer at the noise already: no subset to look for
-    subset = _best_subset(data, out[0].ladder, base, t0, a_fit)
-    if subset:
-        def build(x: NDArray, subset: dict = subset) -> list[Effect]:
-            return local(x, **subset)
+    found = _best_subset(data, linear, base, t0, a_fit, exclude)
+    if found:
+        layers, a_sub, lad_sub = found
 
-        fit = _fit_local(data, names, linear, out[0].ladder, [a_fit * 1e3], [-15.0], [15.0],
-                         build, exclude, err_lin)
+        def build(x: NDArray, layers: dict = layers) -> list[Effect]:
+            return local(x, **layers)
+
+        fit = _fit_local(data, names, linear, lad_sub, [a_sub * 1e3], [-15.0], [15.0],
+                         build, exclude, err_lin, SUBSET_JOINT_BUDGET_S)
         if fit is not None:
             out.append(EffectFit(fit[1][-1], fit[0], 2, facts))
     return out
 
 
-def _best_subset(data: BundleData, lad_j: Foster, base: list[Effect], t0: float,
-                 alpha_l: float) -> dict[str, float]:
-    """The inner or outer subset of layers whose α (ladder held) fits best, within
-    :data:`SUBSET_BUDGET_S` (empty when none was fitted)."""
-    n = as_cauer(lad_j).order
+def _best_subset(data: BundleData, linear: Foster, base: list[Effect], t0: float,
+                 alpha: float, exclude) -> tuple[dict[str, float], float, Cauer] | None:
+    """The inner or outer subset of layers whose α fits the cooling curves best, with its α
+    and its ladder at ``T0``, within :data:`SUBSET_BUDGET_S` (``None`` when none was fitted).
+
+    The linear ladder fits the curves at their own temperatures, so a layer whose resistance
+    follows α is ``R(T0) (1 + α ΔT)`` in it, with ``ΔT`` its mean steady temperature above
+    ``T0`` over the curves (:func:`layer_rise`): each trial α comes with its layers'
+    resistances divided by that factor, the ladder at ``T0`` it implies (a held linear ladder
+    pulls α towards zero: a strong α on the inner layers of an actuator is otherwise found at
+    a tenth of its value, and on the wrong layers).
+
+    1. Screening, linearised: one integration per layer with α = ``alpha`` on that layer alone
+       gives each layer's effect on the weighted residuals; every subset's α and squared
+       error then follow in closed form (least squares along the sum of its layers' effects).
+    2. The :data:`SUBSET_REFINED` best subsets: a bounded scalar search over α (with its
+       ladder at ``T0``); the lowest squared error wins.
+    """
+    c = as_cauer(linear)
+    r, cap, n = np.asarray(c.r), np.asarray(c.c), c.order
+    rise = layer_rise(data, c, t0)
+    sub = subset(data, [cv.name for cv in data.cooling])
+    h = alpha if abs(alpha) >= 1e-4 else 1e-3
+
+    def at_t0(s: dict, a: float) -> Cauer:
+        layer = np.arange(n)
+        inside = (layer >= s.get("first_layer", 0)) & (layer <= s.get("last_layer", n))
+        return Cauer(np.where(inside, r / np.maximum(1 + a * rise, 0.05), r), cap)
+
+    def residuals(s: dict, a: float) -> NDArray:
+        pred = predict(sub, at_t0(s, a), [*base, _effect("local", t0, alpha_per_k=a, **s)])
+        keep = {cv.name: cv.t_s >= (exclude or {}).get(cv.name, 0.0) for cv in sub.cooling}
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.concatenate([((pred[m] - sub.measured(m)) / sub.scale(m))[keep[m]]
+                                   for m in keep])
+
     subsets = [{"first_layer": float(n - k)} for k in range(1, n)] + \
-              [{"last_layer": float(k - 1)} for k in range(1, n)]
-    names = [c.name for c in data.cooling]
-    best: tuple[float, dict] | None = None
+               [{"last_layer": float(k - 1)} for k in range(1, n)]
+    best: tuple[float, dict, float, Cauer] | None = None
 
     def search() -> None:
         nonlocal best
-        for subset in subsets:
-            def build(x: NDArray, subset: dict = subset) -> list[Effect]:
-                return [*base, _effect("local", t0, alpha_per_k=float(x[0]) * 1e-3, **subset)]
+        r0 = residuals({}, 0.0)
+        each = [(residuals({"first_layer": float(i), "last_layer": float(i)}, h) - r0) / h
+                for i in range(n)]
+        screened = []
+        for s in subsets:
+            j = np.sum(each[int(s.get("first_layer", 0)):int(s.get("last_layer", n - 1)) + 1],
+                       axis=0)
+            a = float(np.clip(-(j @ r0) / (j @ j), -0.015, 0.015)) if j @ j > 0 else 0.0
+            screened.append((float(np.sum((r0 + a * j) ** 2)), s))
+        for _, s in sorted(screened, key=lambda x: x[0])[:SUBSET_REFINED]:
+            def cost(x: float, s: dict = s) -> float:
+                try:
+                    return float(np.sum(residuals(s, x * 1e-3) ** 2))
+                except (FitError, SimulationError, *NUMERICAL_ERRORS):
+                    return math.inf
+            with np.errstate(invalid="ignore", over="ignore"):  # a failed trial α: inf
+                res = minimize_scalar(cost, bounds=(-15.0, 15.0), method="bounded",
+                                      options={"xatol": 0.2, "maxiter": SUBSET_EVALS})
+            if np.isfinite(res.fun) and (best is None or res.fun < best[0]):
+                a = float(res.x) * 1e-3
+                best = (float(res.fun), s, a, at_t0(s, a))
 
-            try:
-                res = joint_fit(data, names, lad_j, False, [alpha_l * 1e3], [-15.0], [15.0],
-                                build, max_nfev=HELD_NFEV // 2, tol=1e-4)[2]
-            except (FitError, SimulationError, *NUMERICAL_ERRORS):
-                continue
-            if best is None or res.cost < best[0]:
-                best = (res.cost, subset)
+    try:
+        bounded(search, SUBSET_BUDGET_S, None)
+    except (FitError, SimulationError, *NUMERICAL_ERRORS):  # the screening failed
+        pass
+    return None if best is None else best[1:]
 
-    bounded(search, SUBSET_BUDGET_S, None)
-    return {} if best is None else best[1]
+
+def layer_rise(data: BundleData, ladder: Cauer, t0: float) -> NDArray:
+    """Each layer's mean temperature above ``t0`` (K) in the linear steady state, averaged over
+    the cooling curves (the reference's own temperature included).
+
+    >>> from spicethermal.core.ladder import Cauer
+    >>> from spicethermal.io.bundle import Bundle, CoolingTable
+    >>> d = BundleData.from_bundle(Bundle(ambient_c=25.0, cooling=(CoolingTable(
+    ...     t_s=[1e-3, 1e-2], tj_c=[40.0, 30.0], power_w=1.0, tj_steady_c=45.0,
+    ...     tref_steady_c=25.0),)))
+    >>> layer_rise(d, Cauer([10.0, 10.0], [1.0, 1.0]), 25.0).tolist()
+    [15.0, 5.0]
+    """
+    r = np.asarray(ladder.r)
+    node = np.append(np.cumsum(r[::-1])[::-1], 0.0)
+    return np.mean([cv.tref_steady_c - t0 + cv.power_w * 0.5 * (node[:-1] + node[1:])
+                    for cv in data.cooling], axis=0)
 
 
 def _fit_local(data: BundleData, names: list[str], linear: Foster, lad0: Foster,
                x0: list[float], lo: list[float], hi: list[float], build, exclude,
-               err_lin: float) -> tuple[Foster, list[Effect]] | None:
+               err_lin: float, joint_s: float = JOINT_BUDGET_S
+               ) -> tuple[Foster, list[Effect]] | None:
     """A local form: its parameters with ``lad0`` held from ``x0`` (and, when that ends worse
     than the linear ladder, from the effect switched off on ``linear``), then jointly with the
-    ladder within :data:`JOINT_BUDGET_S`; ``None`` when every start fails."""
+    ladder within ``joint_s`` of CPU time; ``None`` when every start fails."""
     held = []
     for lad, x in ((lad0, x0), (linear, [0.0] * len(x0))):
         try:
@@ -292,7 +368,7 @@ def _fit_local(data: BundleData, names: list[str], linear: Foster, lad0: Foster,
                          exclude=exclude)
 
     try:
-        got = bounded(joint, JOINT_BUDGET_S, None)
+        got = bounded(joint, joint_s, None)
     except FitError:
         got = None
     if got is not None and got[2].cost < res.cost:
