@@ -231,3 +231,34 @@ def test_quiet_where_judges_only_the_named_data_sets():
     assert quiet_where(both, noise, "cooling")
     assert not quiet_where(both, noise, "pwm")
     assert not quiet_where(Comparison(tuple(pwm)), noise, "cooling")  # none to judge
+
+
+def test_the_reason_names_a_data_set_left_beyond_its_noise():
+    """Steps that leave no structure but a data set beyond its noise (a calibration's bow
+    no effect took up, alternating about the model) are not said to be at the noise: the
+    reason names that data set and how far it is."""
+    from types import SimpleNamespace
+
+    from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    from spicethermal.analysis.verdict import verdict_reason
+
+    rng = np.random.default_rng(5)
+    curve = [ComparisonPoint("cooling_1", {"t_s": 1e-4 * (i + 1)}, float(x), 0.0)
+             for i, x in enumerate(0.01 * rng.normal(size=60))]
+    cal = [ComparisonPoint("calibration", {"t_c": 25.0 + 5 * i}, 0.05 * (-1) ** i, 0.0)
+           for i in range(11)]
+    noise = {"cooling_1": 0.01, "calibration": 0.015}
+    base = Comparison(tuple(ComparisonPoint(p.dataset, p.at, 10 * p.measured_c, 0.0)
+                            for p in curve + cal))
+    effect = SimpleNamespace(name="temperature-coefficient", form="junction")
+
+    def reason(points):
+        chosen = SimpleNamespace(effect=effect, improvement=2.0, rms_k=0.02, explained=0.9,
+                                 comparison=Comparison(tuple(points)))
+        return verdict_reason(base, chosen.comparison, noise, [chosen],
+                              [SimpleNamespace(chosen=chosen)], {})
+
+    left = reason(curve + cal)
+    assert "calibration stays at 11.1× its noise variance" in left
+    assert "at the noise" not in left and "cooling_1" not in left
+    assert reason(curve).endswith("the residual is at the noise")

@@ -23,9 +23,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 __all__ = ["AT_NOISE_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
-           "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "bic_drop", "can_be_decisive", "chi2",
-           "criterion", "decisive", "explained_fraction", "improvement", "passes", "runs_z",
-           "structured", "verdict_reason"]
+           "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "beyond_noise", "bic_drop",
+           "can_be_decisive", "chi2", "criterion", "decisive", "explained_fraction",
+           "improvement", "passes", "runs_z", "structured", "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
 MIN_IMPROVEMENT = 1.15
@@ -110,12 +110,26 @@ def at_noise(comparison: Comparison, noise: Mapping[str, float]) -> bool:
     three standard deviations of that ratio for white noise (``3 √(2/n_d)``: a small data
     set such as the calibration is judged on its own, not drowned in the curves' points),
     and no structured residual."""
+    return not beyond_noise(comparison, noise) and not structured(comparison, noise)
+
+
+def beyond_noise(comparison: Comparison, noise: Mapping[str, float]) -> dict[str, float]:
+    """The data sets whose ``χ²_d / n_d`` is above :data:`AT_NOISE_CHI2` plus three standard
+    deviations of that ratio for white noise (``3 √(2/n_d)``), with that ratio.
+
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> c = Comparison(tuple(ComparisonPoint(d, {"t_s": i + 1.0}, x, 0.0) for i, (d, x)
+    ...                      in enumerate([("a", 1.0), ("a", -1.0)] * 10 + [("b", 3.0)] * 8)))
+    >>> {k: round(v, 1) for k, v in beyond_noise(c, {"a": 1.0, "b": 1.0}).items()}
+    {'b': 9.0}
+    """
+    over = {}
     for name, sub in comparison.by_dataset().items():
         n = max(len(sub.points), 1)
         ratio = float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2 / n
         if ratio > AT_NOISE_CHI2 + 3 * math.sqrt(2 / n):
-            return False
-    return not structured(comparison, noise)
+            over[name] = ratio
+    return over
 
 
 def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
@@ -204,8 +218,11 @@ def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, floa
         prev = c.comparison
     left = structured(final, noise)
     if steps and not left:
-        tail = ("the residual is at the noise" if at_noise(final, noise)
-                else "what is left has no structure beyond the noise")
+        over = beyond_noise(final, noise)
+        tail = ("the residual is at the noise" if not over else
+                "what is left has no structure, though " + ", ".join(
+                    f"{name} stays at {ratio:.3g}× its noise variance"
+                    for name, ratio in over.items()))
         return "; then ".join(parts) + f"; {tail}"
     if not steps:
         if first:
