@@ -262,3 +262,25 @@ def test_the_reason_names_a_data_set_left_beyond_its_noise():
     assert "calibration stays at 11.1× its noise variance" in left
     assert "at the noise" not in left and "cooling_1" not in left
     assert reason(curve).endswith("the residual is at the noise")
+
+
+def test_far_left_names_only_structured_data_sets_beyond_three_times_their_noise():
+    """The rule that keeps a convection switch (99 % of the misfit taken up by an outer
+    layer's coefficient, the PWM readings left 5× their noise in one smooth bow) from being
+    named: only a data set whose residual is both structured and above 3× its noise."""
+    from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    from spicethermal.analysis.diagnose import unexplained
+    from spicethermal.analysis.verdict import far_left
+
+    def pwm(rms: float, structured: bool) -> list:
+        sign = [1.0] * 9 + [-1.0] * 9 if structured else [1.0, -1.0] * 9
+        return [ComparisonPoint("pwm", {"freq_hz": 10.0 * (i + 1), "duty": 0.5}, rms * s, 0.0)
+                for i, s in enumerate(sign)]
+
+    noise = {"pwm": 0.01}
+    bow = Comparison(tuple(pwm(0.05, True)))
+    assert set(far_left(bow, noise)) == {"pwm"}
+    assert far_left(bow, noise)["pwm"] == pytest.approx(25.0)
+    assert unexplained(bow, noise, 1)
+    assert not far_left(Comparison(tuple(pwm(0.02, True))), noise)  # 2× its noise
+    assert not far_left(Comparison(tuple(pwm(0.05, False))), noise)  # no structure

@@ -66,6 +66,7 @@ from .evidence import evidence
 from .residuals import comparison_of, localise, noise_estimates
 from .table2 import TableAnalysis, analyse_table, diagnose_table
 from .verdict import (
+    MAX_LEFT_CHI2,
     MIN_BIC_DROP,
     MIN_EXPLAINED,
     MIN_IMPROVEMENT,
@@ -76,6 +77,7 @@ from .verdict import (
     criterion,
     decisive,
     explained_fraction,
+    far_left,
     passes,
     runs_z,
     structured,
@@ -125,9 +127,6 @@ REFIT_BUDGET_S = 8.0
 #: CPU time (s) allowed to all the steps of one diagnosis together (the candidates' own budgets
 #: stop at it too): no bundle keeps the diagnosis busy for longer, whatever its fits do.
 DIAGNOSIS_BUDGET_S = 50.0
-#: Several effects that leave a structured residual whose noise-weighted ``χ²/N`` is above
-#: this (an RMS above 3× the noise) are not named (:func:`unexplained`).
-MAX_LEFT_CHI2 = 9.0
 #: ... and to the joint refit of a later candidate that is not decisive on top of the effects
 #: found so far (:func:`rescue`).
 RESCUE_BUDGET_S = 8.0
@@ -264,14 +263,17 @@ def quiet_where(comparison: Comparison, noise: Mapping[str, float], prefix: str)
 
 
 def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
-    """Whether several effects leave a misfit too large to call them the diagnosis (the caller
-    asks only when the residual is structured): after two, a noise-weighted ``χ²/N`` above
+    """Whether the effects leave a misfit too large to call them the diagnosis (the caller
+    asks only when the residual is structured): a data set whose structured residual is
+    above 3× its noise (:func:`far_left`); after two, a noise-weighted ``χ²/N`` above
     :data:`MAX_LEFT_CHI2`; after three, any (a structured residual that three catalogued
     effects leave is physics they only approximate together: a convection that switches
     passes for a temperature coefficient, a sample window and a latent heat)."""
     if n_steps >= MAX_STEPS:
         return True
-    return n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2
+    if n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2:
+        return True
+    return bool(far_left(final, noise))
 
 
 def joint_refit(data: BundleData, ladder: Foster, effects: Sequence[Effect], budget_s: float,
@@ -472,6 +474,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         why = (f"would explain only {100 * total:.0f} % of it (needs "
                f"{100 * MIN_TOTAL_EXPLAINED:.0f} % when a structured residual remains)"
                if total < MIN_TOTAL_EXPLAINED else
+               f"would explain {100 * total:.0f} % of it but leave a structured residual above "
+               f"{math.sqrt(MAX_LEFT_CHI2):g}× the noise" if far_left(cur, noise) else
                f"together would still leave a structured residual of "
                f"{math.sqrt(chi2(cur, noise) / len(cur.points)):.3g}× the noise (after "
                f"{len(steps)} effects, none is allowed)" if len(steps) >= MAX_STEPS else

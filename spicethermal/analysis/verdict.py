@@ -22,9 +22,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .compare import Comparison
 
-__all__ = ["AT_NOISE_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
+__all__ = ["AT_NOISE_CHI2", "MAX_LEFT_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
            "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "beyond_noise", "bic_drop",
-           "can_be_decisive", "chi2", "criterion", "decisive", "explained_fraction",
+           "can_be_decisive", "chi2", "criterion", "decisive", "explained_fraction", "far_left",
            "improvement", "passes", "runs_z", "structured", "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
@@ -40,6 +40,10 @@ MIN_TOTAL_EXPLAINED = 0.97
 #: The residual is at the noise when every data set's ``χ² / n`` is below this (plus its
 #: statistical spread) and none has a structured residual (:func:`runs_z` below :data:`RUNS_Z`).
 AT_NOISE_CHI2 = 1.5
+#: Several effects that leave a structured residual whose noise-weighted ``χ²/N`` is above
+#: this (an RMS above 3× the noise) are not named, nor any that leave a data set's structured
+#: residual above it (:func:`~spicethermal.analysis.diagnose.unexplained`, :func:`far_left`).
+MAX_LEFT_CHI2 = 9.0
 #: A data set's residual is structured when its runs test gives z below this.
 RUNS_Z = -3.0
 
@@ -130,6 +134,17 @@ def beyond_noise(comparison: Comparison, noise: Mapping[str, float]) -> dict[str
         if ratio > AT_NOISE_CHI2 + 3 * math.sqrt(2 / n):
             over[name] = ratio
     return over
+
+
+def far_left(final: Comparison, noise: Mapping[str, float]) -> dict[str, float]:
+    """The data sets whose structured residual stays above 3× their noise (``χ²_d/n_d``
+    above :data:`MAX_LEFT_CHI2`), with that ratio: whatever the effects explain in total,
+    physics they do not hold is at work there (a convection that switches at 34 °C passes
+    for an outer layer's temperature coefficient in the cooling curves, 99 % of the misfit,
+    and leaves the PWM readings at 5× their noise)."""
+    over = beyond_noise(final, noise)
+    return {name: over[name] for name in structured(final, noise)
+            if over.get(name, 0.0) > MAX_LEFT_CHI2}
 
 
 def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
