@@ -183,19 +183,13 @@ def test_phase_change_fit_finds_a_band_that_every_curve_crosses():
     """A plateau at the MOSFET's cavity node centred at 0.3 of its rise: the lowest-power curve
     crosses it too, so its own ladder holds part of the band (the search below that curve's
     temperatures runs on the ladder of every curve)."""
-    from dataclasses import replace
-
-    from spicethermal.analysis.residuals import comparison_of, noise_estimates
+    from spicethermal.analysis.residuals import comparison_of
     from spicethermal.analysis.verdict import criterion
-    from spicethermal.fit.effectfit import BundleData, baseline_ladder
     from spicethermal.fit.pcfit import fit_phase_change
 
     c = case("phase-change/plateau-crossed/weak")
-    data = BundleData.from_bundle(c.record().bundle)
-    ladder = baseline_ladder(data)
+    data, ladder, noise = _weighed(c)
     base = comparison_of(data, ladder, [])
-    noise = noise_estimates(base)
-    data = replace(data, scales=noise)
     fits = fit_phase_change(data, ladder)
     bics = [criterion(comparison_of(data, f.ladder, [f.effect]), noise, f.n_params)
             for f in fits]
@@ -210,25 +204,33 @@ def test_phase_change_fit_finds_a_band_that_every_curve_crosses():
     assert criterion(base, noise, 0) - min(bics) > 100
 
 
-def _band_fit(device: str, latent: LatentHeat, variant: dict, seed: int):
-    """The phase-change fit on a bundle of ``device`` with ``latent`` (independent generator):
-    the baseline ladder, the noise, and the best form's fit and comparison (by BIC)."""
+def _weighed(c):
+    """Case ``c``'s data as the diagnosis sees them: weighed by the noise of its baseline
+    ladder, with that ladder and the noise."""
     from dataclasses import replace
 
     from spicethermal.analysis.residuals import comparison_of, noise_estimates
-    from spicethermal.analysis.verdict import criterion
     from spicethermal.fit.effectfit import BundleData, baseline_ladder
+
+    data = BundleData.from_bundle(c.record().bundle)
+    ladder = baseline_ladder(data)
+    noise = noise_estimates(comparison_of(data, ladder, []))
+    return replace(data, scales=noise), ladder, noise
+
+
+def _band_fit(device: str, latent: LatentHeat, variant: dict, seed: int):
+    """The phase-change fit on a bundle of ``device`` with ``latent`` (independent generator):
+    the baseline ladder, the noise, and the best form's fit and comparison (by BIC)."""
+    from spicethermal.analysis.residuals import comparison_of
+    from spicethermal.analysis.verdict import criterion
     from spicethermal.fit.pcfit import fit_phase_change
     from spicethermal.validation.cases import DEVICES, Case, _bench
 
     dev = DEVICES[device]
-    c = Case("band", "effect", ("phase-change",), device, dev.network(latent=(latent,)),
-             _bench(dev, {"noise_k": 0.05, "dense_pwm": True, "steady": True, "volts": False,
-                          **variant}), seed)
-    data = BundleData.from_bundle(c.record().bundle)
-    ladder = baseline_ladder(data)
-    noise = noise_estimates(comparison_of(data, ladder, []))
-    data = replace(data, scales=noise)
+    data, ladder, noise = _weighed(Case(
+        "band", "effect", ("phase-change",), device, dev.network(latent=(latent,)),
+        _bench(dev, {"noise_k": 0.05, "dense_pwm": True, "steady": True, "volts": False,
+                     **variant}), seed))
     fits = fit_phase_change(data, ladder)
     cmps = [comparison_of(data, f.ladder, [f.effect]) for f in fits]
     k = int(np.argmin([criterion(m, noise, f.n_params) for m, f in zip(cmps, fits,
@@ -294,18 +296,13 @@ def test_a_strong_coefficient_is_fitted_on_its_own_layers(name, layers, monkeypa
     diode's outer two of four, α = −1e-2/K): the subset form must find those layers and α
     within 10 %, and bring the cooling curves to their noise. Screened with a held linear
     ladder, α was pulled to a tenth of its value and the subset was the wrong one."""
-    from dataclasses import replace
-
-    from spicethermal.analysis.residuals import comparison_of, noise_estimates
+    from spicethermal.analysis.residuals import comparison_of
     from spicethermal.fit import tcfit
-    from spicethermal.fit.effectfit import BundleData, baseline_ladder, unlimited
+    from spicethermal.fit.effectfit import unlimited
 
     monkeypatch.setattr(tcfit, "SUBSET_JOINT_BUDGET_S", 60.0)  # the fit, not its speed
     c = case(name)
-    data = BundleData.from_bundle(c.record().bundle)
-    ladder = baseline_ladder(data)
-    noise = noise_estimates(comparison_of(data, ladder, []))
-    data = replace(data, scales=noise)
+    data, ladder, noise = _weighed(c)
     with unlimited():
         fits = tcfit.fit_temperature_coefficient(data, ladder)
     subset = [f for f in fits if f.effect.params["first_layer"] > 0
@@ -322,19 +319,31 @@ def test_a_strong_coefficient_is_fitted_on_its_own_layers(name, layers, monkeypa
 def test_a_transient_is_fitted_over_milliseconds_at_most():
     """An inner-layer temperature coefficient changes the first milliseconds of cooling; a
     transient may mimic it only over the span an electrical transient can last."""
-    from dataclasses import replace
-
-    from spicethermal.analysis.residuals import comparison_of, noise_estimates
-    from spicethermal.fit.effectfit import BundleData, baseline_ladder
     from spicethermal.fit.measfit import LONGEST_TRANSIENT_S, fit_electrical_transient
 
-    data = BundleData.from_bundle(case("temperature-coefficient/inner-layers/medium")
-                                  .record().bundle)
-    ladder = baseline_ladder(data)
-    data = replace(data, scales=noise_estimates(comparison_of(data, ladder, [])))
+    data, ladder, _ = _weighed(case("temperature-coefficient/inner-layers/medium"))
     fits = fit_electrical_transient(data, ladder)
     assert fits and all(0 < f.effect.params["masked_s"] <= LONGEST_TRANSIENT_S * (1 + 1e-9)
                         for f in fits)
+
+
+def test_a_power_transient_is_told_from_a_fast_stage_by_the_readings_it_spares():
+    """A MOSFET's transient proportional to the power cut off (weak: −5.6 mK/W over 0.1 ms)
+    is a fast stage of the ladder fitted to the cooling curves: their first readings do not
+    stand out, and the PWM readings, which the artefact spares, are left at 4× their noise
+    variance. Refitted with the ladder on every data set, the power form takes it (k within
+    25 %) and brings the PWM readings to their noise; refitted on the cooling curves alone,
+    only the fixed form was tried and the misfit was read as a sample window."""
+    from spicethermal.analysis.residuals import comparison_of
+    from spicethermal.fit.measfit import fit_electrical_transient
+
+    c = case("electrical-transient/power/weak")
+    data, ladder, noise = _weighed(c)
+    assert _chi2_per_point(comparison_of(data, ladder, []), noise, "pwm")["pwm"] > 3
+    power = next(f for f in fit_electrical_transient(data, ladder) if f.effect.form == "power")
+    assert power.effect.params["k_per_w"] == pytest.approx(c.truth["k_per_w"], rel=0.25)
+    cmp = comparison_of(data, power.ladder, [power.effect])
+    assert _chi2_per_point(cmp, noise, "pwm")["pwm"] < 1.5
 
 
 # -- the fast subset through the diagnosis ------------------------------------------------------

@@ -16,10 +16,11 @@ one (:func:`device_effect_contradicted`). On a weak effect whose dynamics are wi
 both fit alike and the effect keeps its name; when the amplitudes alone leave a misfit, the
 test says nothing (an effect of another form may be at work).
 
-An electrical transient is an error of the first readings after the cut: before it is added,
-those readings (within its fitted span) must stand out of their curves, their noise-weighted
-``χ²`` per point at least :data:`EARLY_FACTOR` × the noise's and × the rest of the curves'
-(:func:`transient_hidden`). A transient fitted to readings that do not stand out only reshapes
+An electrical transient is an error of the first readings after the cut: those readings
+(within its fitted span) must stand out of their curves, their noise-weighted ``χ²`` per point
+at least :data:`EARLY_FACTOR` × the noise's and × the rest of the curves'
+(:func:`transient_hidden`), in the model it would extend or in the ladder fitted with it (a
+transient proportional to the power cut off passes for a fast stage of the first). A transient fitted to readings that do not stand out only reshapes
 a misfit spread over the whole curve (an approximate form of another effect) and is not named.
 """
 

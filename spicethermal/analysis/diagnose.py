@@ -210,7 +210,10 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             except (FitError, SimulationError, *NUMERICAL_ERRORS):  # nothing contradicts
                 contradicted = ""
         if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
-            why = transient_hidden(before, fit.effect, noise)
+            # the first readings stand out of the model it extends or of its own ladder (a
+            # transient proportional to the power passes for a fast stage of the first)
+            why = transient_hidden(before, fit.effect, noise) and transient_hidden(
+                comparison_of(data, fit.ladder, effects), fit.effect, noise)
             if why:
                 skipped[name] = f"not seen: {why}"
                 continue

@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 __all__ = ["AT_NOISE_CHI2", "MAX_LEFT_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
-           "MIN_TOTAL_EXPLAINED", "RUNS_Z", "at_noise", "beyond_noise", "bic_drop",
+           "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z", "at_noise", "beyond_noise", "bic_drop",
            "can_be_decisive", "chi2", "criterion", "decisive", "explained_fraction", "far_left",
            "improvement", "passes", "runs_z", "structured", "verdict_reason"]
 
@@ -44,8 +44,10 @@ AT_NOISE_CHI2 = 1.5
 #: this (an RMS above 3× the noise) are not named, nor any that leave a data set's structured
 #: residual above it (:func:`~spicethermal.analysis.diagnose.unexplained`, :func:`far_left`).
 MAX_LEFT_CHI2 = 9.0
-#: A data set's residual is structured when its runs test gives z below this.
+#: A data set's residual is structured when its runs test gives z below this ...
 RUNS_Z = -3.0
+#: ... which needs this many residuals (fewer: :func:`structured` judges their size alone).
+RUNS_MIN = 8
 
 
 def criterion(comparison: Comparison, noise: Mapping[str, float], k: int) -> float:
@@ -82,7 +84,7 @@ def explained_fraction(before: Comparison, after: Comparison,
 def runs_z(residuals: NDArray) -> float:
     """Wald–Wolfowitz runs test on the signs of ``residuals`` in data order: z of the number
     of runs (very negative: too few runs, a structured residual; about 0 for white noise;
-    0 for fewer than 8 residuals or one sign only).
+    0 for fewer than :data:`RUNS_MIN` residuals or one sign only).
 
     >>> runs_z(np.array([1.0] * 10 + [-1.0] * 10)) < -3
     True
@@ -93,7 +95,7 @@ def runs_z(residuals: NDArray) -> float:
     r = r[r != 0]
     pos = int(np.sum(r > 0))
     neg = r.size - pos
-    if r.size < 8 or pos == 0 or neg == 0:
+    if r.size < RUNS_MIN or pos == 0 or neg == 0:
         return 0.0
     runs = 1 + int(np.sum(np.diff(np.sign(r)) != 0))
     n = r.size
@@ -104,9 +106,27 @@ def runs_z(residuals: NDArray) -> float:
 
 def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     """Data sets whose residual is beyond their noise (RMS above :data:`EXPLAINED_RATIO` ×)
-    and structured (:func:`runs_z` below :data:`RUNS_Z`)."""
-    return [name for name, sub in comparison.by_dataset().items()
-            if sub.rms_k > EXPLAINED_RATIO * noise[name] and runs_z(sub.residuals_k) < RUNS_Z]
+    and structured (:func:`runs_z` below :data:`RUNS_Z`), and those too short for a runs test
+    (fewer than :data:`RUNS_MIN` readings, such as a PWM grid of six) whose residual is
+    beyond 3× their noise (``χ²/n`` above :data:`MAX_LEFT_CHI2`): their noise comes from the
+    curves read by the same sensor, so such a misfit is no noise, whatever its signs.
+
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> c = Comparison(tuple(ComparisonPoint(d, {"t_s": i + 1.0}, x, 0.0) for i, (d, x)
+    ...                      in enumerate([("a", 1.0)] * 10 + [("a", -1.0)] * 10
+    ...                                   + [("b", 4.0), ("b", -4.0)] * 3)))
+    >>> structured(c, {"a": 0.1, "b": 1.0}), structured(c, {"a": 0.1, "b": 2.0})
+    (['a', 'b'], ['a'])
+    """
+    out = []
+    for name, sub in comparison.by_dataset().items():
+        r = sub.residuals_k
+        if r.size < RUNS_MIN:
+            if float(np.mean(r ** 2)) / noise[name] ** 2 > MAX_LEFT_CHI2:
+                out.append(name)
+        elif sub.rms_k > EXPLAINED_RATIO * noise[name] and runs_z(r) < RUNS_Z:
+            out.append(name)
+    return out
 
 
 def at_noise(comparison: Comparison, noise: Mapping[str, float]) -> bool:

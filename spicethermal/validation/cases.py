@@ -33,14 +33,15 @@ from .network import LatentHeat, Network, ResistanceLaw
 __all__ = ["DEVICES", "FAST", "FORMS", "STRENGTHS", "Case", "Device", "case", "catalogue"]
 
 STRENGTHS = ("weak", "medium", "strong")
-#: A fast subset (seconds to simulate): a clean bundle, one strong case per effect and two that
-#: once got a spurious second name (tests/test_validation.py runs it).
+#: A fast subset (seconds to simulate): a clean bundle, one strong case per effect and some
+#: that once got a wrong name (tests/test_validation.py runs it).
 FAST = ("clean/mosfet-2", "temperature-coefficient/local-linear/strong",
         "phase-change/gaussian-junction/strong", "electrical-transient/fixed/strong",
         "tsp-nonlinearity/quadratic/strong", "sample-window/average/strong",
         "electrical-transient/fixed/medium", "tsp-nonlinearity/cubic/strong",
         "pair/temperature-coefficient+tsp-nonlinearity", "uncatalogued/convection-switch",
-        "phase-change/plateau-crossed/weak", "temperature-coefficient/inner-layers/medium")
+        "phase-change/plateau-crossed/weak", "temperature-coefficient/inner-layers/medium",
+        "electrical-transient/power/weak")
 
 
 @dataclass(frozen=True)
