@@ -20,8 +20,9 @@ An electrical transient is an error of the first readings after the cut: those r
 (within its fitted span) must stand out of their curves, their noise-weighted ``χ²`` per point
 at least :data:`EARLY_FACTOR` × the noise's and × the rest of the curves'
 (:func:`transient_hidden`), in the model it would extend or in the ladder fitted with it (a
-transient proportional to the power cut off passes for a fast stage of the first). A transient fitted to readings that do not stand out only reshapes
-a misfit spread over the whole curve (an approximate form of another effect) and is not named.
+transient proportional to the power cut off passes for a fast stage of the first). A
+transient fitted to readings that do not stand out only reshapes a misfit spread over the whole
+curve (an approximate form of another effect) and is not named.
 """
 
 from __future__ import annotations

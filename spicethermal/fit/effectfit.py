@@ -407,7 +407,6 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     keep = {n: ((sub.curve(n).t_s >= (exclude or {}).get(n, 0.0))
                 & (sub.curve(n).t_s < (keep_before or {}).get(n, math.inf)))
             if n.startswith("cooling") else slice(None) for n in names}
-    meas = {n: data.measured(n)[keep[n]] for n in names}
 
     def split(x: NDArray) -> tuple[Foster, NDArray]:
         if not m:
@@ -420,7 +419,7 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         lad, xe = split(x)
         effects = build(xe)
         pred = predict(sub, lad, effects)
-        parts = [(pred[n][keep[n]] - meas[n]) / data.scale(n) for n in names]
+        parts = [data.weighted(pred, names, keep)]
         tsp = effects_map(effects).get("tsp-nonlinearity")
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))

@@ -242,8 +242,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
             return None
         if pred is None:
             return None
-        with np.errstate(over="ignore", invalid="ignore"):
-            r = np.concatenate([(pred[n] - sub.measured(n)) / sub.scale(n) for n in names])
+        r = sub.weighted(pred, names)
         return r if np.all(np.isfinite(r)) else None
 
     # screening over (search, node, centre): one small band per point, its latent heat

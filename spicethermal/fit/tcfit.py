@@ -286,9 +286,7 @@ def _best_subset(data: BundleData, linear: Foster, base: list[Effect], t0: float
     def residuals(s: dict, a: float) -> NDArray:
         pred = predict(sub, at_t0(s, a), [*base, _effect("local", t0, alpha_per_k=a, **s)])
         keep = {cv.name: cv.t_s >= (exclude or {}).get(cv.name, 0.0) for cv in sub.cooling}
-        with np.errstate(over="ignore", invalid="ignore"):
-            return np.concatenate([((pred[m] - sub.measured(m)) / sub.scale(m))[keep[m]]
-                                   for m in keep])
+        return sub.weighted(pred, keep, keep)
 
     subsets = [{"first_layer": float(n - k)} for k in range(1, n)] + \
                [{"last_layer": float(k - 1)} for k in range(1, n)]
