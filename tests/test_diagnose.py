@@ -284,3 +284,19 @@ def test_far_left_names_only_structured_data_sets_beyond_three_times_their_noise
     assert unexplained(bow, noise, 1)
     assert not far_left(Comparison(tuple(pwm(0.02, True))), noise)  # 2× its noise
     assert not far_left(Comparison(tuple(pwm(0.05, False))), noise)  # no structure
+
+
+def test_a_step_that_the_diagnosis_budget_cuts_is_not_taken(monkeypatch):
+    """The diagnosis's CPU budget can run out anywhere within a step, also in a comparison
+    outside a candidate's own fit (seed 11's remounted contact, at 50 s): the step is not
+    taken, and the diagnosis ends with what it has, never with the budget's exception."""
+    from spicethermal.analysis import diagnose as module
+    from spicethermal.fit.budget import TimeLimitError
+
+    def cut(*args, **kwargs):
+        raise TimeLimitError("time budget exhausted")
+
+    monkeypatch.setattr(module, "candidates", cut)
+    d = module.diagnose(scenario_bundle("sample-window"))
+    assert d.effects == [] and d.verdict_effect is None and not d.candidates
+    assert "could be fitted" in d.verdict_reason

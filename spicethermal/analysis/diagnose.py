@@ -46,7 +46,7 @@ from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
 from ..effects import CATALOGUE, DEVICE, Effect
 from ..fit.backfit import refit_effects
-from ..fit.budget import cpu_time
+from ..fit.budget import TimeLimitError, cpu_time
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -421,10 +421,13 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         while len(steps) < MAX_STEPS and not at_noise(cur, noise) and \
                 cpu_time() < deadline:
             # the first step's candidates and skips are the report's; later ones are its steps'
-            cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
-                               skipped if not steps else {},
-                               CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S, quiet,
-                               len(steps) + 1)
+            try:
+                cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
+                                   skipped if not steps else {},
+                                   CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S,
+                                   quiet, len(steps) + 1)
+            except TimeLimitError:  # the budget ran out within the step: it is not taken
+                break
             if not steps:
                 first = cands
             winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first

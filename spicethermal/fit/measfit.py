@@ -77,11 +77,13 @@ def fit_sample_window(data: BundleData, ladder: Foster | Cauer,
 def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
                              effects: Sequence[Effect] = ()) -> list[EffectFit]:
     """Each form of the transient: its parameters first on the early points of every cooling
-    curve with the ladder held (a multi-start), then jointly with the ladder from every data
-    set (every point of every cooling curve, the early ones included). The artefact is in the
-    cooling readings only: the steady readings and the PWM grid see the true ladder, and they
-    are what tells a transient proportional to the power cut off from a fast stage of the
-    ladder, which shapes every curve alike."""
+    curve with the ladder held (a multi-start), then jointly with the ladder from every point
+    of every cooling curve (the early ones included) and, for the power form (and the fixed
+    one when every curve was cut from one power), from every data set. The artefact is in
+    the cooling readings only: the steady readings and the PWM grid see the true ladder, and
+    they are what tells a transient proportional to the power cut off from a fast stage of
+    the ladder, which shapes every curve alike (a fixed error over curves of several powers,
+    or a ringing, cannot pass for one)."""
     if not data.cooling:
         raise FitError("electrical-transient needs cooling curves")
     names = [c.name for c in data.cooling]
@@ -127,20 +129,27 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
                              build, max_nfev=HELD_NFEV)[2] for x0 in starts),
                   key=lambda r: r.cost)
         held[form] = (2 * res.cost + len(lo) * math.log(max(n_early, 2)), res.x, build)
-    # the ladder is refitted with the default form; with the power form when the curves'
-    # powers differ (the held ladder has taken it as a fast stage of its own: only the
-    # refitted one tells them apart); and with the best other form when the early points
-    # prefer it decisively
-    refine = ["fixed"] + (["power"] if len({c.power_w for c in data.cooling}) > 1 else [])
+    # the ladder is refitted with the default form, with the best other form when the early
+    # points prefer it decisively, and then (last, the first to lose its budget) with the
+    # power form when the curves' powers differ: the held ladder has taken that as a fast
+    # stage of its own, and may show it to the early points as a ringing; only the refitted
+    # ladder tells them apart
+    one_power = len({c.power_w for c in data.cooling}) == 1
+    refine = ["fixed"]
     best = min(held, key=lambda k: held[k][0])
-    if best not in refine and held[best][0] < held["fixed"][0] - 10:
+    if best != "fixed" and held[best][0] < held["fixed"][0] - 10:
         refine.append(best)
+    if "power" not in refine and not one_power:
+        refine.append("power")
     out = []
     for form in refine:
         _, x0, build = held[form]
         lo, hi = forms[form][1], forms[form][2]
-        lad, effs, _ = joint_fit(data, list(data.datasets), ladder, True, list(x0), lo, hi,
-                                 build)
+        # a form that can pass for a fast stage (with one power, the fixed one too) is
+        # refitted on every data set
+        on = list(data.datasets) if form == "power" or (form == "fixed" and one_power) \
+            else names
+        lad, effs, _ = joint_fit(data, on, ladder, True, list(x0), lo, hi, build)
         out.append(EffectFit(effs[-1], lad, len(lo), {}))
     return out
 
