@@ -122,11 +122,16 @@ def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     for name, sub in comparison.by_dataset().items():
         r = sub.residuals_k
         if r.size < RUNS_MIN:
-            if float(np.mean(r ** 2)) / noise[name] ** 2 > MAX_LEFT_CHI2:
+            if _per_point(sub, noise[name]) > MAX_LEFT_CHI2:
                 out.append(name)
         elif sub.rms_k > EXPLAINED_RATIO * noise[name] and runs_z(r) < RUNS_Z:
             out.append(name)
     return out
+
+
+def _per_point(sub: Comparison, sigma: float) -> float:
+    """One data set's noise-weighted ``χ² / n`` (``sub`` holds that data set only)."""
+    return float(np.sum(sub.residuals_k ** 2)) / sigma ** 2 / max(len(sub.points), 1)
 
 
 def at_noise(comparison: Comparison, noise: Mapping[str, float]) -> bool:
@@ -149,9 +154,8 @@ def beyond_noise(comparison: Comparison, noise: Mapping[str, float]) -> dict[str
     """
     over = {}
     for name, sub in comparison.by_dataset().items():
-        n = max(len(sub.points), 1)
-        ratio = float(np.sum(sub.residuals_k ** 2)) / noise[name] ** 2 / n
-        if ratio > AT_NOISE_CHI2 + 3 * math.sqrt(2 / n):
+        ratio = _per_point(sub, noise[name])
+        if ratio > AT_NOISE_CHI2 + 3 * math.sqrt(2 / max(len(sub.points), 1)):
             over[name] = ratio
     return over
 

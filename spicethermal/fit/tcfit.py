@@ -283,9 +283,10 @@ def _best_subset(data: BundleData, linear: Foster, base: list[Effect], t0: float
         inside = (layer >= s.get("first_layer", 0)) & (layer <= s.get("last_layer", n))
         return Cauer(np.where(inside, r / np.maximum(1 + a * rise, 0.05), r), cap)
 
+    keep = {cv.name: cv.t_s >= (exclude or {}).get(cv.name, 0.0) for cv in sub.cooling}
+
     def residuals(s: dict, a: float) -> NDArray:
         pred = predict(sub, at_t0(s, a), [*base, _effect("local", t0, alpha_per_k=a, **s)])
-        keep = {cv.name: cv.t_s >= (exclude or {}).get(cv.name, 0.0) for cv in sub.cooling}
         return sub.weighted(pred, keep, keep)
 
     subsets = [{"first_layer": float(n - k)} for k in range(1, n)] + \
