@@ -21,6 +21,7 @@ from spicethermal.effects import (
     Param,
     known_names,
 )
+from spicethermal.fit.budget import EVALUATION_S
 from spicethermal.fit.effectfit import (
     BundleData,
     CalData,
@@ -337,8 +338,22 @@ def test_numerical_failures_and_the_time_limit_end_a_fit_cleanly():
             pass
         return np.array([math.cosh(x[0]) - math.cosh(2.0), 1e-3 * x[0]])
 
+    # CPU that the budget's costs do not count (a hang): its CPU backstop ends the fit
     with time_limit(0.03):
         res = robust_lsq(busy, [10.0], [-800.0], [800.0], x_scale=1.0)
     assert res.status == -9 and res.cost < 0.5 * (math.cosh(10.0) - math.cosh(2.0)) ** 2
+
+    def counted(x):  # the same residuals, at no cost beyond their evaluation's
+        calls.append(float(x[0]))
+        return np.array([math.cosh(x[0]) - math.cosh(2.0), 1e-3 * x[0]])
+
+    runs = []
+    for _ in range(3):  # the budget is work: it stops the fit at the same point every time
+        calls: list[float] = []
+        with time_limit(12 * EVALUATION_S):
+            res = robust_lsq(counted, [10.0], [-800.0], [800.0], x_scale=1.0)
+        runs.append((res.status, calls))
+    assert runs[0][0] == -9 and 10 <= len(runs[0][1]) <= 12
+    assert runs[1] == runs[0] and runs[2] == runs[0]
     with time_limit(0.0), pytest.raises(TimeLimitError):
         check_time()

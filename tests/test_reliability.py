@@ -439,7 +439,8 @@ def test_a_short_settle_does_not_freeze_the_bench(tmp_path: Path, settle_s: floa
 
 
 def test_a_budget_counts_the_calling_threads_cpu_only():
-    """Another thread's work (a BLAS pool, a batch's other fits) does not eat a fit's budget."""
+    """Another thread's work (a BLAS pool, a batch's other fits) does not eat a fit's budget:
+    neither its work nor, for the budget's CPU backstop, its CPU time."""
     import threading
     import time
 

@@ -46,7 +46,7 @@ from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
 from ..effects import CATALOGUE, DEVICE, Effect
 from ..fit.backfit import refit_effects
-from ..fit.budget import TimeLimitError, cpu_time
+from ..fit.budget import TimeLimitError, spent
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -57,6 +57,7 @@ from ..fit.effectfit import (
     transient_spans,
 )
 from ..fit.fitters import choose_form, fit_effect_forms, fit_with_effects
+from ..fit.tcforward import own_cache
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
 from .compare import Comparison
@@ -106,26 +107,27 @@ AFTER_TRANSIENT = ("phase-change",)
 FITTED_LAST = ("phase-change",)
 #: Effects whose first form is cheap and whose others cost: they come after the cheap effects,
 #: and when a cheaper candidate already brings every data set to its noise they get a glance
-#: (:data:`GLANCE_S` of CPU time, the cheap form) and their full fit only when the glance beats
+#: (:data:`GLANCE_S` of work, the cheap form) and their full fit only when the glance beats
 #: that candidate's criterion by :data:`MIN_BIC_DROP` (a TSP bow at the noise can still be
 #: decisively worse than a temperature coefficient).
 GLANCED = ("temperature-coefficient",)
-#: CPU time (s) of a glance.
+#: Work (s) of a glance.
 GLANCE_S = 1.0
 #: Effects added at most, one per step.
 MAX_STEPS = 3
-#: Time budget (s of CPU time, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
+#: Time budget (s of work, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
 #: candidate's fit at the first step; a fit past it keeps its
 #: best point so far (a fit that cannot start fails).
 CANDIDATE_BUDGET_S = 8.0
 #: ... and at later steps (their forward models carry the effects added so far; a second
 #: effect is often the one that needs an integration).
 LATER_BUDGET_S = 8.0
-#: CPU time (s) allowed to the joint refit of every effect found and the ladder after each
-#: later step (:func:`refit_step`).
+#: Work (s, see :mod:`~spicethermal.fit.budget`) allowed to the joint refit of every effect found
+#: and the ladder after each later step (:func:`refit_step`).
 REFIT_BUDGET_S = 8.0
-#: CPU time (s) allowed to all the steps of one diagnosis together (the candidates' own budgets
-#: stop at it too): no bundle keeps the diagnosis busy for longer, whatever its fits do.
+#: Work (s, see :mod:`~spicethermal.fit.budget`) allowed to all the steps of one diagnosis together
+#: (the candidates' own budgets stop at it too): no bundle keeps the diagnosis busy for longer,
+#: whatever its fits do.
 DIAGNOSIS_BUDGET_S = 50.0
 #: ... and to the joint refit of a later candidate that is not decisive on top of the effects
 #: found so far (:func:`rescue`).
@@ -138,7 +140,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 budget_s: float = 6.0, quiet: bool = True, step: int = 1) -> list[Candidate]:
     """Every effect of ``names`` fitted on top of ``ladder`` and ``effects`` (each form; the
     default form unless another is decisively better, :func:`choose_form`), each within
-    ``budget_s`` of CPU time; failures go to ``skipped``."""
+    ``budget_s`` of work; failures go to ``skipped``."""
     present = {e.name for e in effects}
     amplitude = None  # the power-per-curve alternative of the device effects, fitted once
     # the model so far refitted jointly (what a rescue must beat), fitted once when asked
@@ -231,7 +233,7 @@ def scored_forms(data: BundleData, ladder: Foster, name: str, effects: Sequence[
                  noise: Mapping[str, float], budget_s: float
                  ) -> list[tuple[EffectFit, Comparison, float]]:
     """Every form of ``name`` fitted on top of ``ladder`` and ``effects`` within ``budget_s``
-    of CPU time, each with its comparison and criterion."""
+    of work, each with its comparison and criterion."""
     with time_limit(budget_s):
         fits = fit_effect_forms(data, ladder, name, effects)
     scored = []
@@ -283,7 +285,7 @@ def joint_refit(data: BundleData, ladder: Foster, effects: Sequence[Effect], bud
                 than: Comparison, noise: Mapping[str, float]
                 ) -> tuple[Foster, list[Effect], Comparison] | None:
     """Every effect of ``effects`` and ``ladder`` refitted jointly
-    (:func:`~spicethermal.fit.backfit.refit_effects`, within ``budget_s`` of CPU time) with
+    (:func:`~spicethermal.fit.backfit.refit_effects`, within ``budget_s`` of work) with
     its comparison; ``None`` when it fails or does not lower the noise-weighted squared error
     of ``than``."""
     try:
@@ -347,6 +349,7 @@ def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
                    noise_gain=improvement_of(before, cmp, noise)), refitted
 
 
+@own_cache()  # its fits' work, so where they stop, owes nothing to earlier runs
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,
              effects: Sequence[str] | None = None,
              progress: Callable[[str], None] | None = None, quiet: bool = True) -> Diagnosis:
@@ -416,10 +419,10 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     k_total = 0
     contradicted = ""
     # one budget for every step: a step that finds its time spent stops the diagnosis
-    deadline = cpu_time() + DIAGNOSIS_BUDGET_S
+    deadline = spent() + DIAGNOSIS_BUDGET_S
     with time_limit(DIAGNOSIS_BUDGET_S):
         while len(steps) < MAX_STEPS and not at_noise(cur, noise) and \
-                cpu_time() < deadline:
+                spent() < deadline:
             # the first step's candidates and skips are the report's; later ones are its steps'
             try:
                 cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,

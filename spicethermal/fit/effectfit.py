@@ -54,7 +54,15 @@ from ..core.ladder import Cauer, Foster
 from ..effects import Effect
 from ..engines.pwm import steady_state
 from ..identify.curves import ZthCurve, detect_transient
-from .budget import TimeLimitError, bounded, check_time, time_limit, unlimited
+from .budget import (
+    EVALUATION_S,
+    TC_STEP_S,
+    TimeLimitError,
+    bounded,
+    check_time,
+    time_limit,
+    unlimited,
+)
 from .ladder import fit_foster
 from .measurement import (
     TRANSIENT_RATE,
@@ -146,6 +154,11 @@ def effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
 
 
 
+def _tc_step() -> None:
+    """The budget's check at every right-hand side of an integrated temperature coefficient."""
+    check_time(TC_STEP_S)
+
+
 def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
                    effects: Sequence[Effect]) -> NDArray:
     """True junction temperature (°C) along a cooling curve under the device effects."""
@@ -155,7 +168,7 @@ def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
     if pc is not None:
         rise = pc_cooling_rise(ladder, pc, tref, curve.power_w, curve.t_s, tc)
     elif tc is not None:
-        rise = tc_cooling(ladder, tc, tref, curve.power_w, curve.t_s, check_time)
+        rise = tc_cooling(ladder, tc, tref, curve.power_w, curve.t_s, _tc_step)
     else:
         rise = curve.power_w * ladder.cooling(curve.t_s)
     return curve.tref_c + rise
@@ -344,7 +357,7 @@ def robust_lsq(fun: Callable[[NDArray], NDArray], x0: Sequence[float], lo: Seque
     best = SimpleNamespace(x=x0, cost=math.inf, fun=None, status=-9, nfev=0)
 
     def evaluate(x: NDArray) -> NDArray:
-        check_time()
+        check_time(EVALUATION_S)
         with np.errstate(over="raise", invalid="raise", divide="raise"):
             return np.asarray(fun(x), dtype=float)
 

@@ -28,7 +28,7 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..effects import CATALOGUE, Effect
 from ..model import Network
-from .budget import cpu_time
+from .budget import EVALUATION_S, check_time, spent
 from .effectfit import (
     MAX_BASELINE_ORDER,
     NUMERICAL_ERRORS,
@@ -59,10 +59,10 @@ __all__ = ["PC_FIT_TOL", "band_start", "fit_phase_change", "node_fractions"]
 
 #: The phase-change fit (an integration per evaluation) stops at this looser tolerance.
 PC_FIT_TOL = 1e-5
-#: CPU time (s) allowed to one evaluation of the phase-change grid (a band that makes the
-#: integration crawl is not the start point).
+#: Work (s, :mod:`.budget`) allowed to one evaluation of the phase-change grid (a band that makes
+#: the integration crawl is not the start point).
 PC_EVAL_S = 0.3
-#: CPU time (s) allowed to the whole grid (one point per node and search comes first).
+#: Work (s, :mod:`.budget`) allowed to the whole grid (one point per node and search comes first).
 PC_GRID_S = 2.0
 #: Band centres screened per node and search ...
 GRID_CENTRES = 6
@@ -79,10 +79,11 @@ BAND_FLOOR = 0.2
 #: Iterations allowed to the band's own fit (3 parameters, the ladder held; each also evaluates
 #: the forward model 3 times for its Jacobian).
 PC_NFEV = 15
-#: CPU time (s) allowed to the joint refit of the ladder with a phase-change band (each
+#: Work (s, :mod:`.budget`) allowed to the joint refit of the ladder with a phase-change band (each
 #: evaluation integrates the curves that cross the band); past it the best point so far is kept.
 PC_JOINT_BUDGET_S = 1.5
-#: CPU time (s) allowed to the fit of each other band shape (started from the logistic fit).
+#: Work (s, :mod:`.budget`) allowed to the fit of each other band shape (started from the logistic
+#: fit).
 PC_FORM_BUDGET_S = 0.6
 #: The other shapes are fitted only when the logistic band lowers the noise-weighted squared
 #: error this much (twice the decision's BIC drop: a band that is not clearly there has no
@@ -235,6 +236,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     def residual(lad: Foster, effects: list[Effect]) -> NDArray | None:
         """Noise-scaled residuals of ``sub`` (None when the forward model fails)."""
         try:
+            check_time(EVALUATION_S)
             pred = bounded(lambda: predict(sub, lad, effects), PC_EVAL_S, None)
         except TimeLimitError:
             raise
@@ -278,9 +280,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         raise FitError("phase-change: no node's temperatures span a band")
     order = [r[i] for i in range(max(len(r) for r in rows)) for r in rows if i < len(r)]
     grid = []
-    stop = cpu_time() + PC_GRID_S
+    stop = spent() + PC_GRID_S
     for i, (lad, r0, node, tc, width0, probe) in enumerate(order):  # noqa: B007 (build)
-        if i >= len(rows) and cpu_time() > stop:
+        if i >= len(rows) and spent() > stop:
             break
         r1 = residual(lad, build(np.array([math.log(probe / c_scale), tc, width0])))
         if r1 is None:

@@ -12,7 +12,7 @@ from ..core.errors import SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import CATALOGUE, Effect, phase_change
 from ..model import Network
-from .budget import check_time
+from .budget import PC_STEP_S, check_time
 from .tcjunction import as_foster, tc_cooling_rise, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -79,7 +79,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
         return cy - cx * ce * cy[node] / (1 + cx * ce[node])
 
     def rhs(_t: float, theta: NDArray) -> NDArray:
-        check_time()
+        check_time(PC_STEP_S)
         return minv(theta, -g @ theta / scale(theta))
 
     def jac(_t: float, theta: NDArray) -> NDArray:  # the resistance's own slope left out

@@ -20,7 +20,7 @@ worse than the linear model it extends.
    tell the forms apart (and the stiff integrations would cost every bundle seconds). Each is
    fitted with the junction form's ladder held (one or two parameters), then jointly with the
    ladder within
-   :data:`JOINT_BUDGET_S` of CPU time: ``local`` (α), ``power-law`` (exponent and capacity
+   :data:`JOINT_BUDGET_S` of work: ``local`` (α), ``power-law`` (exponent and capacity
    slope), and the best inner or outer subset of layers (α; the subset is chosen among all of
    them within :data:`SUBSET_BUDGET_S`, each with the linear ladder brought back to ``T0``
    for its α, :func:`_best_subset`, and refitted with the ladder within
@@ -72,9 +72,9 @@ GATE_SSE_RATIO = 1.3
 #: ... and only while the junction form's weighted χ² is more than this many standard
 #: deviations (√(2N)) above the number of points N (not yet at the noise).
 GATE_NOISE_SIGMAS = 3.0
-#: CPU time (s) allowed to each local form's joint refit with the ladder.
+#: Work (s, :mod:`.budget`) allowed to each local form's joint refit with the ladder.
 JOINT_BUDGET_S = 1.0
-#: CPU time (s) allowed to the search of the layer subset (ladder held).
+#: Work (s, :mod:`.budget`) allowed to the search of the layer subset (ladder held).
 SUBSET_BUDGET_S = 2.0
 #: ... and to the joint refit of the best subset's α with the ladder (from the screening's
 #: ladder at ``T0``, it needs a few more iterations than the other forms).
@@ -348,7 +348,7 @@ def _fit_local(data: BundleData, names: list[str], linear: Foster, lad0: Foster,
                ) -> tuple[Foster, list[Effect]] | None:
     """A local form: its parameters with ``lad0`` held from ``x0`` (and, when that ends worse
     than the linear ladder, from the effect switched off on ``linear``), then jointly with the
-    ladder within ``joint_s`` of CPU time; ``None`` when every start fails."""
+    ladder within ``joint_s`` of work; ``None`` when every start fails."""
     held = []
     for lad, x in ((lad0, x0), (linear, [0.0] * len(x0))):
         try:

@@ -22,9 +22,11 @@ subset of layers, capacities rising with T; see
 
 from __future__ import annotations
 
+import contextvars
 import math
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -43,7 +45,9 @@ RTOL, ATOL_K = 1e-6, 1e-5
 #: Integrated cooling curves kept (a fit that holds the ladder and the coefficient, such as
 #: the fits of other effects after this one, asks for the same curves again and again).
 CACHE_SIZE = 64
-_CACHE: dict[tuple, NDArray] = {}
+_SHARED: dict[tuple, NDArray] = {}
+_CACHE: contextvars.ContextVar[dict[tuple, NDArray] | None] = contextvars.ContextVar(
+    "tc_cache", default=None)
 #: Right-hand-side evaluations allowed to one cooling integration (a few hundred are typical):
 #: past it the trial point fails instead of crawling.
 MAX_RHS = 5000
@@ -331,13 +335,32 @@ def tc_cooling(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: f
     f = as_foster(ladder)
     key = (f.r, f.tau, effect.form, tuple(effect.params.values()), float(tref_c),
            float(power_w), t.tobytes())
-    hit = _CACHE.get(key)
+    cache = _CACHE.get()
+    cache = _SHARED if cache is None else cache
+    hit = cache.get(key)
     if hit is None:
         hit = local_cooling_rise(ladder, effect, tref_c, power_w, t, check)
-        if len(_CACHE) >= CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = hit
+        if len(cache) >= CACHE_SIZE:
+            cache.pop(next(iter(cache)))
+        cache[key] = hit
     return hit.copy()
+
+
+@contextmanager
+def own_cache() -> Iterator[None]:
+    """A cache of integrated cooling curves of the block's own, empty at its start (the
+    diagnosis's): what it computes, and so how much of its budget's work each fit spends, does
+    not depend on what ran before it in the process.
+
+    >>> with own_cache():
+    ...     _CACHE.get() == {}
+    True
+    """
+    token = _CACHE.set({})
+    try:
+        yield
+    finally:
+        _CACHE.reset(token)
 
 
 def is_neutral(effect: Effect) -> bool:
