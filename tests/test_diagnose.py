@@ -300,3 +300,32 @@ def test_a_step_that_the_diagnosis_budget_cuts_is_not_taken(monkeypatch):
     d = module.diagnose(scenario_bundle("sample-window"))
     assert d.effects == [] and d.verdict_effect is None and not d.candidates
     assert "could be fitted" in d.verdict_reason
+
+
+def test_budgets_that_cut_the_fits_cut_them_at_the_same_point_every_time(monkeypatch):
+    """Budgets count work, not CPU time: when they cut the candidates' fits (here at a tenth
+    of a second each), the same bundle gets the same diagnosis, number for number, whatever
+    ran before it in the process (another diagnosis in between) and whatever the machine's
+    load. On a CPU-time clock the cut moved with the load, and a verdict near a budget changed
+    from one run to the next."""
+    from spicethermal.analysis import diagnose as module
+    from spicethermal.fit.budget import spent
+
+    monkeypatch.setattr(module, "CANDIDATE_BUDGET_S", 0.1)
+    monkeypatch.setattr(module, "LATER_BUDGET_S", 0.1)
+    bundle = scenario_bundle("temperature-coefficient", seed=3)
+    runs = []
+    for other in ("phase-change", None):
+        w0 = spent()
+        doc = module.diagnose(bundle).to_json()
+        runs.append((json.dumps(doc, sort_keys=True), spent() - w0))
+        if other:
+            module.diagnose(scenario_bundle(other, seed=3))
+    assert runs[0][0] == runs[1][0]
+    assert runs[0][1] == pytest.approx(runs[1][1], rel=1e-12, abs=0)
+    # the budgets did cut: with them lifted the fits run further
+    monkeypatch.setattr(module, "CANDIDATE_BUDGET_S", 8.0)
+    monkeypatch.setattr(module, "LATER_BUDGET_S", 8.0)
+    w0 = spent()
+    module.diagnose(bundle)
+    assert spent() - w0 > runs[0][1]
