@@ -322,7 +322,7 @@ def test_budgets_that_cut_the_fits_cut_them_at_the_same_point_every_time(monkeyp
         if other:
             module.diagnose(scenario_bundle(other, seed=3))
     assert runs[0][0] == runs[1][0]
-    assert runs[0][1] == pytest.approx(runs[1][1], rel=1e-12, abs=0)
+    assert runs[0][1] == runs[1][1]  # work, in ns
     # the budgets did cut: with them lifted the fits run further
     monkeypatch.setattr(module, "CANDIDATE_BUDGET_S", 8.0)
     monkeypatch.setattr(module, "LATER_BUDGET_S", 8.0)

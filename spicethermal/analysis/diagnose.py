@@ -46,7 +46,7 @@ from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
 from ..effects import CATALOGUE, DEVICE, Effect
 from ..fit.backfit import refit_effects
-from ..fit.budget import TimeLimitError, spent
+from ..fit.budget import TimeLimitError, mark, reached
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -419,10 +419,10 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     k_total = 0
     contradicted = ""
     # one budget for every step: a step that finds its time spent stops the diagnosis
-    deadline = spent() + DIAGNOSIS_BUDGET_S
+    end = mark(DIAGNOSIS_BUDGET_S)
     with time_limit(DIAGNOSIS_BUDGET_S):
         while len(steps) < MAX_STEPS and not at_noise(cur, noise) and \
-                spent() < deadline:
+                not reached(end):
             # the first step's candidates and skips are the report's; later ones are its steps'
             try:
                 cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,

@@ -6,14 +6,15 @@ at the same point on every run, with a CPU-time backstop that a numerical hang c
 :class:`TimeLimitError` past the budget; :func:`unlimited` lifts every budget for checks that
 must complete; :func:`bounded` runs a function within a budget and falls back to a default.
 
-The budgets' clock is the thread's **work** (:func:`spent`): the costs passed to
-:func:`check_time` (:data:`EVALUATION_S` per evaluation of a fit's residuals,
-:data:`PC_STEP_S` and :data:`TC_STEP_S` per right-hand side of the integrated forward
-models), in seconds of CPU time of the machine they were calibrated on. Where a fit stops, and
-so which effect a diagnosis names, then depends on the input only, not on the machine's load
-or speed: a CPU-time clock made the same bundle's verdict change from one run to the next
-when a fit ended near its budget. CPU time is only the backstop: past :data:`HANG_FACTOR`
-times a budget in CPU seconds (work the costs do not count), :func:`check_time` raises too.
+The budgets' clock is the thread's **work** (:func:`spent`, summed exactly in integer
+nanoseconds): the costs passed to :func:`check_time` (:data:`EVALUATION_S` per evaluation of a
+fit's residuals, :data:`PC_STEP_S` and :data:`TC_STEP_S` per right-hand side of the integrated
+forward models), in seconds of CPU time of the machine they were calibrated on. Where a fit
+stops, and so which effect a diagnosis names, then depends on the input only, not on the
+machine's load or speed: a CPU-time clock made the same bundle's verdict change from one run
+to the next when a fit ended near its budget. CPU time is only the backstop: past
+:data:`HANG_FACTOR` times a budget in CPU seconds (work the costs do not count),
+:func:`check_time` raises too.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from typing import Any
 from ..core.errors import SimulationError
 
 __all__ = ["EVALUATION_S", "HANG_FACTOR", "PC_STEP_S", "TC_STEP_S", "TimeLimitError", "bounded",
-           "check_time", "cpu_time", "spent", "time_limit", "unlimited"]
+           "check_time", "cpu_time", "mark", "reached", "spent", "time_limit", "unlimited"]
 
 #: Work (s) of one evaluation of a fit's residuals (closed-form forward models and the least
 #: squares' own algebra), of one right-hand side of the phase-change integration, and of one of
@@ -45,19 +46,39 @@ TC_STEP_S = 8.4e-5
 #: seconds of the thread's CPU time (a loop whose work the costs miss cannot hang).
 HANG_FACTOR = 4.0
 
-# (work deadline, CPU deadline) of the innermost budget
+# (work deadline in ns, CPU deadline in s) of the innermost budget
 _DEADLINE: contextvars.ContextVar[tuple[float, float]] = contextvars.ContextVar(
     "deadline", default=(math.inf, math.inf))
-_WORK = threading.local()  # the thread's work so far (s)
+_WORK = threading.local()  # the thread's work so far (ns, an int: sums are exact)
 
 
 class TimeLimitError(SimulationError):
     """The time budget of :func:`time_limit` ran out."""
 
 
-def spent() -> float:
-    """The budgets' clock: the work (s) counted by :func:`check_time` in the calling thread."""
-    return getattr(_WORK, "s", 0.0)
+def spent() -> int:
+    """The budgets' clock: the work counted by :func:`check_time` in the calling thread, in
+    **nanoseconds** (an integer: a sum of floats would round differently from a different
+    start, and a budget would end one evaluation earlier or later)."""
+    return getattr(_WORK, "ns", 0)
+
+
+def _ns(seconds: float) -> int:
+    return round(seconds * 1e9)
+
+
+def mark(seconds: float) -> int:
+    """The clock's reading once ``seconds`` more of work are spent (for :func:`reached`)."""
+    return spent() + _ns(seconds)
+
+
+def reached(end: int) -> bool:
+    """Whether the work spent has reached ``end`` (:func:`mark`).
+
+    >>> end = mark(1e-3); check_time(6e-4); reached(end), check_time(6e-4), reached(end)
+    (False, None, True)
+    """
+    return spent() >= end
 
 
 def cpu_time() -> float:
@@ -80,7 +101,7 @@ def time_limit(seconds: float) -> Iterator[None]:
     spicethermal.fit.budget.TimeLimitError: time budget exhausted
     """
     work, cpu = _DEADLINE.get()
-    token = _DEADLINE.set((min(work, spent() + seconds),
+    token = _DEADLINE.set((min(work, mark(seconds)),
                            min(cpu, cpu_time() + HANG_FACTOR * seconds)))
     try:
         yield
@@ -126,7 +147,7 @@ _CLOCK = threading.local()  # wall time and CPU time of the thread's last readin
 def check_time(cost: float = 0.0) -> None:
     """Count ``cost`` (s of work) and raise :class:`TimeLimitError` when the current
     :func:`time_limit` has run out (of work, or of CPU time past its backstop)."""
-    work = _WORK.s = spent() + cost
+    work = _WORK.ns = spent() + _ns(cost)
     deadline, backstop = _DEADLINE.get()
     if deadline == math.inf:
         return

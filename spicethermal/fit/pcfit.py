@@ -28,7 +28,7 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..effects import CATALOGUE, Effect
 from ..model import Network
-from .budget import EVALUATION_S, check_time, spent
+from .budget import EVALUATION_S, check_time, mark, reached
 from .effectfit import (
     MAX_BASELINE_ORDER,
     NUMERICAL_ERRORS,
@@ -280,9 +280,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         raise FitError("phase-change: no node's temperatures span a band")
     order = [r[i] for i in range(max(len(r) for r in rows)) for r in rows if i < len(r)]
     grid = []
-    stop = spent() + PC_GRID_S
+    stop = mark(PC_GRID_S)
     for i, (lad, r0, node, tc, width0, probe) in enumerate(order):  # noqa: B007 (build)
-        if i >= len(rows) and spent() > stop:
+        if i >= len(rows) and reached(stop):
             break
         r1 = residual(lad, build(np.array([math.log(probe / c_scale), tc, width0])))
         if r1 is None:

@@ -19,12 +19,13 @@ worse than the linear model it extends.
    coefficient that the junction form already shows to first order; otherwise the data cannot
    tell the forms apart (and the stiff integrations would cost every bundle seconds). Each is
    fitted with the junction form's ladder held (one or two parameters), then jointly with the
-   ladder within
-   :data:`JOINT_BUDGET_S` of work: ``local`` (α), ``power-law`` (exponent and capacity
-   slope), and the best inner or outer subset of layers (α; the subset is chosen among all of
-   them within :data:`SUBSET_BUDGET_S`, each with the linear ladder brought back to ``T0``
-   for its α, :func:`_best_subset`, and refitted with the ladder within
-   :data:`SUBSET_JOINT_BUDGET_S`).
+   ladder within :data:`JOINT_BUDGET_S` of work: ``local`` (α; within
+   :data:`JOINT_ITERATIONS` iterations' worth when that is more, for the other forms start from
+   its ladder), ``power-law`` (exponent and capacity slope), and the best inner or outer
+   subset of layers (α; the subset is chosen among all of them within
+   :data:`SUBSET_BUDGET_S`, each with the linear ladder brought back to ``T0`` for its α,
+   :func:`_best_subset`, and refitted with the ladder within :data:`SUBSET_JOINT_BUDGET_S`).
+   When the candidate's budget runs out, the forms fitted so far stand.
 3. The signature against an error of the heating power (a heater whose power sags as it
    warms, recorded at its nominal value: each cooling curve scaled, its shape unchanged) is
    not tested here: the diagnosis's consistency rule (:mod:`spicethermal.analysis.consistency`)
@@ -43,6 +44,7 @@ from scipy.optimize import minimize_scalar
 from ..core.errors import FitError, SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
+from .budget import spent
 from .effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -72,8 +74,12 @@ GATE_SSE_RATIO = 1.3
 #: ... and only while the junction form's weighted χ² is more than this many standard
 #: deviations (√(2N)) above the number of points N (not yet at the noise).
 GATE_NOISE_SIGMAS = 3.0
-#: Work (s, :mod:`.budget`) allowed to each local form's joint refit with the ladder.
+#: Work (s, :mod:`.budget`) allowed to each local form's joint refit with the ladder ...
 JOINT_BUDGET_S = 1.0
+#: ... or this many iterations' worth, when that is more (three cooling curves of a diode
+#: heated by 60 K need about five; one iteration is a Jacobian over every stage, a second of
+#: work there, and a refit cut within its first iteration never moves the ladder).
+JOINT_ITERATIONS = 5
 #: Work (s, :mod:`.budget`) allowed to the search of the layer subset (ladder held).
 SUBSET_BUDGET_S = 2.0
 #: ... and to the joint refit of the best subset's α with the ladder (from the screening's
@@ -205,11 +211,7 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster,
         return out
     alpha_l = float(np.clip(effs_j[-1].params["alpha_per_k"] * local_ratio(lad_j), -0.015,
                             0.015))
-    try:
-        out += _local_fits(data, names, f, lad_j, base, t0, alpha_l, exclude, facts, err_lin)
-    except TimeLimitError:  # the candidate's budget ran out: keep the forms fitted so far
-        pass
-    return out
+    return out + _local_fits(data, names, f, lad_j, base, t0, alpha_l, exclude, facts, err_lin)
 
 
 def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foster,
@@ -217,7 +219,8 @@ def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foste
                 err_lin: float) -> list[EffectFit]:
     """The local forms in turn: ``local`` (from the junction α scaled by
     :func:`local_ratio`), ``power-law`` (from the local fit, ``n = α (T0 + 273.15)``, no
-    capacity slope), and, when a residual beyond the noise remains, the best subset."""
+    capacity slope), and, when a residual beyond the noise remains, the best subset; when the
+    candidate's budget runs out, the forms fitted so far."""
     def local(x: NDArray, **layers: float) -> list[Effect]:
         return [*base, _effect("local", t0, alpha_per_k=float(x[0]) * 1e-3, **layers)]
 
@@ -225,33 +228,36 @@ def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foste
         return [*base, _effect("power-law", t0, exponent=float(x[0]),
                                c_slope_per_k=float(x[1]) * 1e-3)]
 
-    out = []
-    fit = _fit_local(data, names, linear, lad_j, [alpha_l * 1e3], [-15.0], [15.0], local,
-                     exclude, err_lin)
-    if fit is None:
-        return out
-    out.append(EffectFit(fit[1][-1], fit[0], 1, facts))
-    a_fit = fit[1][-1].params["alpha_per_k"]
-    n0 = float(np.clip(a_fit * (t0 + 273.15), -3.9, 5.9))
-    fit = _fit_local(data, names, linear, out[0].ladder, [n0, 0.0], [-4.0, -5.0], [6.0, 10.0],
-                     power, exclude, err_lin)
-    if fit is not None:
-        out.append(EffectFit(fit[1][-1], fit[0], 2, facts))
-    n_points = sum(data.measured(d).size for d in names)
-    if sse(data, out[0].ladder, [*base, out[0].effect]) < SUBSET_CHI2 * n_points:
-        return out  # every layer at the noise already: no subset to look for
-    found = _best_subset(data, linear, base, t0, a_fit, exclude)
-    if found:
-        layers, a_sub, lad_sub = found
-
-        def build(x: NDArray, layers: dict = layers) -> list[Effect]:
-            return local(x, **layers)
-
-        fit = _fit_local(data, names, linear, lad_sub, [a_sub * 1e3], [-15.0], [15.0],
-                         build, exclude, err_lin, SUBSET_JOINT_BUDGET_S)
+    out: list[EffectFit] = []
+    try:
+        fit = _fit_local(data, names, linear, lad_j, [alpha_l * 1e3], [-15.0], [15.0], local,
+                         exclude, err_lin, iterations=JOINT_ITERATIONS)
+        if fit is None:
+            return out
+        out.append(EffectFit(fit[1][-1], fit[0], 1, facts))
+        a_fit = fit[1][-1].params["alpha_per_k"]
+        n0 = float(np.clip(a_fit * (t0 + 273.15), -3.9, 5.9))
+        fit = _fit_local(data, names, linear, out[0].ladder, [n0, 0.0], [-4.0, -5.0],
+                         [6.0, 10.0], power, exclude, err_lin)
         if fit is not None:
             out.append(EffectFit(fit[1][-1], fit[0], 2, facts))
-    return out
+        n_points = sum(data.measured(d).size for d in names)
+        if sse(data, out[0].ladder, [*base, out[0].effect]) < SUBSET_CHI2 * n_points:
+            return out  # every layer at the noise already: no subset to look for
+        found = _best_subset(data, linear, base, t0, a_fit, exclude)
+        if found:
+            layers, a_sub, lad_sub = found
+
+            def build(x: NDArray, layers: dict = layers) -> list[Effect]:
+                return local(x, **layers)
+
+            fit = _fit_local(data, names, linear, lad_sub, [a_sub * 1e3], [-15.0], [15.0],
+                             build, exclude, err_lin, SUBSET_JOINT_BUDGET_S)
+            if fit is not None:
+                out.append(EffectFit(fit[1][-1], fit[0], 2, facts))
+        return out
+    except TimeLimitError:  # the candidate's budget ran out: the forms fitted so far stand
+        return out
 
 
 def _best_subset(data: BundleData, linear: Foster, base: list[Effect], t0: float,
@@ -344,23 +350,31 @@ def layer_rise(data: BundleData, ladder: Cauer, t0: float) -> NDArray:
 
 def _fit_local(data: BundleData, names: list[str], linear: Foster, lad0: Foster,
                x0: list[float], lo: list[float], hi: list[float], build, exclude,
-               err_lin: float, joint_s: float = JOINT_BUDGET_S
+               err_lin: float, joint_s: float = JOINT_BUDGET_S, iterations: int = 0
                ) -> tuple[Foster, list[Effect]] | None:
     """A local form: its parameters with ``lad0`` held from ``x0`` (and, when that ends worse
     than the linear ladder, from the effect switched off on ``linear``), then jointly with the
-    ladder within ``joint_s`` of work; ``None`` when every start fails."""
+    ladder within ``joint_s`` of work, or ``iterations`` iterations' worth when that is more;
+    ``None`` when every start fails."""
     held = []
+    w0, evaluations = spent(), 0
     for lad, x in ((lad0, x0), (linear, [0.0] * len(x0))):
         try:
             held.append(joint_fit(data, names, lad, False, x, lo, hi, build,
                                   max_nfev=HELD_NFEV, tol=1e-5, exclude=exclude))
         except (FitError, SimulationError, *NUMERICAL_ERRORS):
             continue
-        if 2 * held[-1][2].cost < err_lin:
+        res = held[-1][2]
+        evaluations += res.nfev + (getattr(res, "njev", 0) or 0) * len(x)
+        if 2 * res.cost < err_lin:
             break
     if not held:
         return None
     lad, effs, res = min(held, key=lambda r: r[2].cost)
+    # an iteration: a Jacobian over the stages' R and τ and the form's parameters, each
+    # column an evaluation (what the held fits cost one, on average)
+    k = 2 * as_foster(lad).order + len(res.x) + 1
+    joint_s = max(joint_s, iterations * k * (spent() - w0) * 1e-9 / max(evaluations, 1))
 
     def joint() -> tuple:
         return joint_fit(data, names, lad, True, list(res.x), lo, hi, build, tol=1e-5,
