@@ -350,11 +350,12 @@ def layer_rise(data: BundleData, ladder: Cauer, t0: float) -> NDArray:
 
 def _fit_local(data: BundleData, names: list[str], linear: Foster, lad0: Foster,
                x0: list[float], lo: list[float], hi: list[float], build, exclude,
-               err_lin: float, joint_s: float = JOINT_BUDGET_S, iterations: int = 0
+               err_lin: float, joint_s: float | None = None, iterations: int = 0
                ) -> tuple[Foster, list[Effect]] | None:
     """A local form: its parameters with ``lad0`` held from ``x0`` (and, when that ends worse
     than the linear ladder, from the effect switched off on ``linear``), then jointly with the
-    ladder within ``joint_s`` of work, or ``iterations`` iterations' worth when that is more;
+    ladder within ``joint_s`` (default :data:`JOINT_BUDGET_S`) of work, or ``iterations``
+    iterations' worth when that is more;
     ``None`` when every start fails."""
     held = []
     w0, evaluations = spent(), 0
@@ -374,7 +375,8 @@ def _fit_local(data: BundleData, names: list[str], linear: Foster, lad0: Foster,
     # an iteration: a Jacobian over the stages' R and τ and the form's parameters, each
     # column an evaluation (what the held fits cost one, on average)
     k = 2 * as_foster(lad).order + len(res.x) + 1
-    joint_s = max(joint_s, iterations * k * (spent() - w0) * 1e-9 / max(evaluations, 1))
+    joint_s = max(JOINT_BUDGET_S if joint_s is None else joint_s,
+                  iterations * k * (spent() - w0) * 1e-9 / max(evaluations, 1))
 
     def joint() -> tuple:
         return joint_fit(data, names, lad, True, list(res.x), lo, hi, build, tol=1e-5,
