@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import importlib.metadata
+import importlib.util
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -54,3 +56,14 @@ def ramp_response(ladder, t, rise_s: float) -> np.ndarray:
     early = r * (t / rise_s - tau / rise_s * -np.expm1(-t / tau))
     return np.where(t >= rise_s, late, early).sum(axis=1)
 
+
+
+def bench_script(name: str):
+    """The benchmark script ``bench/<name>.py`` as a module, loaded once (the benchmarks'
+    case generators are tested and reused here; bench/ is not a package)."""
+    key = f"_spicethermal_bench_{name}"
+    if key not in sys.modules:
+        spec = importlib.util.spec_from_file_location(key, ROOT / "bench" / f"{name}.py")
+        sys.modules[key] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[key])
+    return sys.modules[key]

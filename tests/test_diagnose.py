@@ -287,7 +287,7 @@ def test_far_left_names_only_structured_data_sets_beyond_three_times_their_noise
 
 
 def test_a_step_that_the_diagnosis_budget_cuts_is_not_taken(monkeypatch):
-    """The diagnosis's CPU budget can run out anywhere within a step, also in a comparison
+    """The diagnosis's budget can run out anywhere within a step, also in a comparison
     outside a candidate's own fit (seed 11's remounted contact, at 50 s): the step is not
     taken, and the diagnosis ends with what it has, never with the budget's exception."""
     from spicethermal.analysis import diagnose as module

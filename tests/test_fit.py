@@ -4,34 +4,19 @@ bad input, and the ``spicethermal fit`` command."""
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import bench_script
 
 from spicethermal.core.errors import DataFormatError, FitError
 from spicethermal.core.ladder import Foster
 from spicethermal.fit.ladder import DENSE_POINTS, FitResult, fit_foster, fit_model
 
-ROOT = Path(__file__).resolve().parent.parent
-
-
-def _bench():
-    """The synthetic-case generator of the benchmark study (bench/bench_fit.py)."""
-    name = "_spicethermal_bench_fit"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, ROOT / "bench" / "bench_fit.py")
-        sys.modules[name] = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(sys.modules[name])
-    module = sys.modules[name]
-    return module
-
-
-bench = _bench()
+#: The synthetic-case generator of the benchmark study (bench/bench_fit.py).
+bench = bench_script("bench_fit")
 
 LADDERS = [
     ([2.0], [1e-2]),

@@ -255,19 +255,11 @@ def test_a_local_coefficient_gets_the_joint_iterations_it_needs():
     its first iteration, it never moved the ladder: the junction form stayed the best and a
     power error per curve explained the curves better, so the diagnosis named nothing. At the
     diagnosis's own budgets it is now found, α within 2 %, the error 60× lower."""
-    import importlib.util
-    import sys
-    from pathlib import Path
+    from conftest import bench_script
 
     from spicethermal.analysis.diagnose import diagnose
 
-    name = "_spicethermal_bench_validation_random"
-    if name not in sys.modules:
-        path = Path(__file__).resolve().parent.parent / "bench" / "bench_validation_random.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        sys.modules[name] = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(sys.modules[name])
-    c = sys.modules[name].draw(24, 23)[23]
+    c = bench_script("bench_validation_random").draw(24, 23)[23]
     assert c.name.startswith("023 temperature-coefficient/local")
     alpha = c.network.laws[0].alpha_per_k
     d = diagnose(c.record().bundle)

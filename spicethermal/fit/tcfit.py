@@ -255,9 +255,9 @@ def _local_fits(data: BundleData, names: list[str], linear: Foster, lad_j: Foste
                              build, exclude, err_lin, SUBSET_JOINT_BUDGET_S)
             if fit is not None:
                 out.append(EffectFit(fit[1][-1], fit[0], 2, facts))
-        return out
     except TimeLimitError:  # the candidate's budget ran out: the forms fitted so far stand
-        return out
+        pass
+    return out
 
 
 def _best_subset(data: BundleData, linear: Foster, base: list[Effect], t0: float,
