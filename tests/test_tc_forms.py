@@ -270,6 +270,54 @@ def test_a_local_coefficient_gets_the_joint_iterations_it_needs():
     assert found.improvement > 30
 
 
+def test_the_held_share_of_an_integrated_coefficient_is_exact_at_its_ladder(tmp_path):
+    """A measurement effect's refit of the ladder on top of an integrated coefficient takes
+    the coefficient as its share of each cooling curve (``held_share``): at the ladder the
+    share was computed on, the readings are the integrated model's, every data set and the
+    steady reading; on a ladder 2 % off they miss by about what the share itself changes
+    (it grows as ``α (P R)²``: 4 %), a small part of the coefficient's share."""
+    from spicethermal.fit.effectfit import held_share, predict
+
+    data, ladder, truth = _data("temperature-coefficient/local-linear/strong", tmp_path)
+    held = [local(alpha_per_k=truth["alpha_per_k"])]
+    effects = [*held, Effect.create("electrical-transient", "power", k_per_w=-0.1,
+                                    masked_s=2e-5)]
+    share = held_share(data, ladder, held)
+    exact, lin = predict(data, ladder, effects), predict(data, ladder, effects, share)
+    assert set(lin) == set(exact)
+    for name in exact:
+        np.testing.assert_allclose(lin[name], exact[name], rtol=0, atol=1e-9)
+    for c in data.cooling:  # just before the cut: the exact steady state
+        steady = local_steady_nodes(ladder, held[0], c.tref_steady_c, c.power_w)[0]
+        assert share[c.name][0] == pytest.approx(steady - c.power_w * ladder.rth, abs=1e-9)
+    near = Foster(tuple(r * 1.02 for r in ladder.r), ladder.c)
+    exact, lin = predict(data, near, effects), predict(data, near, effects, share)
+    for c in data.cooling:
+        own = np.max(np.abs(share[c.name]))
+        assert own > 0.5  # the coefficient matters here
+        assert np.max(np.abs(lin[c.name] - exact[c.name])) < 0.05 * own
+
+
+def test_a_transient_on_top_of_an_integrated_coefficient_is_refitted_within_its_budget():
+    """Draw 010 of ``bench/bench_validation_random.py 40 --seed 1`` (independent generator):
+    a diode's outer layers at α = −1.7e-3/K and a transient proportional to the power cut
+    (−0.12 K/W). The coefficient is found first (power-law form, integrated); the transient's
+    refit of the ladder on top of it integrated both cooling curves at every evaluation, 70 s
+    of work against its 8 s, and failed, so only the coefficient was named. Refitted on the
+    coefficient's held share, it costs about 1 s and both are named (the other effects are
+    left out to keep the test short: the full diagnosis names the same two)."""
+    from conftest import bench_script
+
+    from spicethermal.analysis.diagnose import diagnose
+
+    c = bench_script("bench_validation_random").draw(11, 1)[10]
+    assert c.name == "010 pair/electrical-transient:power+temperature-coefficient:outer"
+    d = diagnose(c.record().bundle, effects=["temperature-coefficient", "electrical-transient"])
+    assert d.effects == ["temperature-coefficient", "electrical-transient"], d.verdict_reason
+    assert d.steps[1].chosen.effect.form == "power"
+    assert d.steps[1].chosen.improvement > 1.3
+
+
 def test_heater_sag_is_an_amplitude_not_a_temperature_coefficient(tmp_path):
     """A heater whose power falls as it warms (the independent generator's uncatalogued case)
     scales each cooling curve without changing its shape: the diagnosis, with every form of

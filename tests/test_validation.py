@@ -355,6 +355,7 @@ def test_a_power_transient_is_told_from_a_fast_stage_by_the_readings_it_spares()
 # -- the fast subset through the diagnosis ------------------------------------------------------
 @pytest.mark.parametrize("name", FAST)
 def test_diagnosis_on_fast_validation_subset(name, monkeypatch):
+    from spicethermal.analysis import candidates as step
     from spicethermal.analysis import diagnose as module
     from spicethermal.analysis.diagnose import diagnose
 
@@ -365,9 +366,10 @@ def test_diagnosis_on_fast_validation_subset(name, monkeypatch):
     # and the candidates' and the rescue's (on a loaded machine the pair's second step lost
     # its TSP bow once more, in a clean-clone run beside a benchmark)
     monkeypatch.setattr(module, "DIAGNOSIS_BUDGET_S", 150.0)
-    for budget in ("REFIT_BUDGET_S", "CANDIDATE_BUDGET_S", "LATER_BUDGET_S"):
+    for budget in ("CANDIDATE_BUDGET_S", "LATER_BUDGET_S"):
         monkeypatch.setattr(module, budget, 30.0)
-    monkeypatch.setattr(module, "RESCUE_BUDGET_S", 15.0)
+    monkeypatch.setattr(step, "REFIT_BUDGET_S", 30.0)
+    monkeypatch.setattr(step, "RESCUE_BUDGET_S", 15.0)
     c = case(name)
     result = diagnose(c.record().bundle)
     if c.family == "pair":  # both, in either order, and nothing else

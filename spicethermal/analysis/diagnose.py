@@ -43,25 +43,20 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from ..core.errors import DataFormatError, FitError, SimulationError
-from ..core.progress import bar
-from ..effects import CATALOGUE, DEVICE, Effect
-from ..fit.backfit import refit_effects
+from ..effects import CATALOGUE
 from ..fit.budget import TimeLimitError, mark, reached
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
-    EffectFit,
     baseline_ladder,
-    needs,
     time_limit,
-    transient_spans,
 )
-from ..fit.fitters import choose_form, fit_effect_forms, fit_with_effects
+from ..fit.fitters import fit_with_effects
 from ..fit.tcforward import own_cache
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
+from .candidates import candidates, refit_step, swap_first
 from .compare import Comparison
-from .consistency import amplitude_only, device_effect_contradicted, transient_hidden
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
 from .residuals import comparison_of, localise, noise_estimates
@@ -73,21 +68,17 @@ from .verdict import (
     MIN_IMPROVEMENT,
     MIN_TOTAL_EXPLAINED,
     at_noise,
-    can_be_decisive,
     chi2,
     criterion,
     decisive,
     explained_fraction,
     far_left,
-    passes,
     runs_z,
     structured,
     verdict_reason,
 )
-from .verdict import improvement as improvement_of
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..core.ladder import Foster
     from ..io.bundle import Bundle
 
 __all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", "Diagnosis",
@@ -95,24 +86,6 @@ __all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", 
            "diagnose_table", "evidence", "explained_fraction", "fit_with_effects", "localise",
            "noise_estimates", "runs_z", "structured", "write_report"]
 
-#: Effects whose only signature is in some data sets (those whose name starts so) and their
-#: least number of parameters: they are not fitted when those data sets leave no room for a
-#: decisive improvement (:func:`~spicethermal.analysis.verdict.can_be_decisive`).
-SIGNATURE = {"phase-change": ("cooling", 4), "electrical-transient": ("cooling", 2),
-             "sample-window": ("pwm", 1)}
-#: ... of which these act on the cooling curves beyond their electrical transient.
-AFTER_TRANSIENT = ("phase-change",)
-#: Costly fits (an integration per evaluation) come last and are skipped when a cheaper
-#: candidate already brings every data set to its noise without structure (:func:`not_needed`).
-FITTED_LAST = ("phase-change",)
-#: Effects whose first form is cheap and whose others cost: they come after the cheap effects,
-#: and when a cheaper candidate already brings every data set to its noise they get a glance
-#: (:data:`GLANCE_S` of work, the cheap form) and their full fit only when the glance beats
-#: that candidate's criterion by :data:`MIN_BIC_DROP` (a TSP bow at the noise can still be
-#: decisively worse than a temperature coefficient).
-GLANCED = ("temperature-coefficient",)
-#: Work (s) of a glance.
-GLANCE_S = 1.0
 #: Effects added at most, one per step.
 MAX_STEPS = 3
 #: Time budget (s of work, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
@@ -122,149 +95,10 @@ CANDIDATE_BUDGET_S = 8.0
 #: ... and at later steps (their forward models carry the effects added so far; a second
 #: effect is often the one that needs an integration).
 LATER_BUDGET_S = 8.0
-#: Work (s, see :mod:`~spicethermal.fit.budget`) allowed to the joint refit of every effect found
-#: and the ladder after each later step (:func:`refit_step`).
-REFIT_BUDGET_S = 8.0
 #: Work (s, see :mod:`~spicethermal.fit.budget`) allowed to all the steps of one diagnosis together
 #: (the candidates' own budgets stop at it too): no bundle keeps the diagnosis busy for longer,
 #: whatever its fits do.
 DIAGNOSIS_BUDGET_S = 50.0
-#: ... and to the joint refit of a later candidate that is not decisive on top of the effects
-#: found so far (:func:`rescue`).
-RESCUE_BUDGET_S = 8.0
-
-
-def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
-                names: Sequence[str], before: Comparison, noise: Mapping[str, float],
-                say: Callable[[str], None], skipped: dict[str, str],
-                budget_s: float = 6.0, quiet: bool = True, step: int = 1) -> list[Candidate]:
-    """Every effect of ``names`` fitted on top of ``ladder`` and ``effects`` (each form; the
-    default form unless another is decisively better, :func:`choose_form`), each within
-    ``budget_s`` of work; failures go to ``skipped``."""
-    present = {e.name for e in effects}
-    amplitude = None  # the power-per-curve alternative of the device effects, fitted once
-    # the model so far refitted jointly (what a rescue must beat), fitted once when asked
-    refitted: list[float] = []
-
-    def held_bic() -> float:
-        if not refitted:
-            joint = joint_refit(data, ladder, effects, RESCUE_BUDGET_S, before, noise)
-            refitted.append(criterion(joint[2] if joint else before, noise, 0))
-        return refitted[0]
-
-    cands: list[Candidate] = []
-    bic_before = criterion(before, noise, 0)
-    order = sorted(names, key=lambda n: 2 if n in FITTED_LAST else n in GLANCED)
-    for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
-        if name in present:
-            skipped.setdefault(name, "already in the model")
-            continue
-        why = not_needed(name, cands, bic_before, noise) \
-            if name in FITTED_LAST or name in GLANCED else ""
-        if why and name in FITTED_LAST:
-            skipped[name] = f"not needed: {why}"
-            continue
-        # the criterion a glance must beat: the best candidate so far
-        bar_bic = min(c.bic for c in cands) - MIN_BIC_DROP if why else None
-        why = needs(name, data)
-        if why:
-            skipped[name] = why
-            continue
-        if name in SIGNATURE:
-            sets = [d for d in before.datasets if d.startswith(SIGNATURE[name][0])]
-            seen = before
-            if name in AFTER_TRANSIENT and "electrical-transient" not in present:
-                spans = transient_spans(data)
-                seen = Comparison(tuple(p for p in before.points if p.dataset not in spans
-                                        or p.at["t_s"] >= spans[p.dataset]), before.engine)
-            if not can_be_decisive(seen, noise, sets, SIGNATURE[name][1]):
-                skipped[name] = (f"cannot be decisive: {', '.join(sets)} (where it acts) are "
-                                 f"within their noise")
-                continue
-        say(f"fitting {name}")
-        t0 = time.perf_counter()
-        try:
-            scored = scored_forms(data, ladder, name, effects, noise,
-                                  budget_s if bar_bic is None else GLANCE_S)
-            if bar_bic is not None:
-                if min(x[2] for x in scored) > bar_bic:
-                    skipped[name] = f"not needed: {why} (its first form is no better)"
-                    continue
-                scored = scored_forms(data, ladder, name, effects, noise, budget_s)
-            best = scored[choose_form([x[2] for x in scored])]
-        except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS) as exc:
-            skipped[name] = f"fit failed: {exc}"
-            continue
-        fit, cmp, bic = best
-        model_effects: tuple[Effect, ...] = ()
-        if effects and not passes(bic_before - bic, improvement_of(before, cmp, noise),
-                                  explained_fraction(before, cmp, noise)):
-            fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise,
-                                                  held_bic)
-        contradicted = ""
-        if fit.effect.kind == DEVICE and len(data.cooling) > 1:
-            try:
-                if amplitude is None:
-                    amplitude = amplitude_only(data, ladder)
-                contradicted = device_effect_contradicted(data, ladder, fit.effect,
-                                                          fit.n_params, [x[1] for x in scored],
-                                                          amplitude)
-            except (FitError, SimulationError, *NUMERICAL_ERRORS):  # nothing contradicts
-                contradicted = ""
-        if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
-            # the first readings stand out of the model it extends or of its own ladder (a
-            # transient proportional to the power passes for a fast stage of the first)
-            why = transient_hidden(before, fit.effect, noise) and transient_hidden(
-                comparison_of(data, fit.ladder, effects), fit.effect, noise)
-            if why:
-                skipped[name] = f"not seen: {why}"
-                continue
-        improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
-        cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
-                               evidence(fit, data, before, cmp, noise),
-                               explained_fraction(before, cmp, noise),
-                               time.perf_counter() - t0, contradicted, fit.facts,
-                               improvement_of(before, cmp, noise), model_effects))
-    cands.sort(key=lambda c: c.bic)
-    return cands
-
-
-def scored_forms(data: BundleData, ladder: Foster, name: str, effects: Sequence[Effect],
-                 noise: Mapping[str, float], budget_s: float
-                 ) -> list[tuple[EffectFit, Comparison, float]]:
-    """Every form of ``name`` fitted on top of ``ladder`` and ``effects`` within ``budget_s``
-    of work, each with its comparison and criterion."""
-    with time_limit(budget_s):
-        fits = fit_effect_forms(data, ladder, name, effects)
-    scored = []
-    for fit in fits:
-        cmp = comparison_of(data, fit.ladder, [*effects, fit.effect])
-        scored.append((fit, cmp, criterion(cmp, noise, fit.n_params)))
-    return scored
-
-
-def not_needed(name: str, cands: Sequence[Candidate], bic_before: float,
-               noise: Mapping[str, float]) -> str:
-    """Why the costly fit of ``name`` is not needed ("" when it is): a decisive candidate
-    fitted before it (not contradicted) already brings every data set to its noise, or the
-    data sets where ``name`` acts (:data:`SIGNATURE`)."""
-    held = [c for c in cands if not c.contradicted and decisive(c, bic_before)]
-    done = next((c for c in held if at_noise(c.comparison, noise)), None)
-    if done is not None:
-        return f"{done.effect.name} brings every data set to its noise"
-    where = SIGNATURE[name][0] if name in SIGNATURE else ""
-    done = next((c for c in held if where and quiet_where(c.comparison, noise, where)), None)
-    if done is not None:
-        return f"{done.effect.name} brings the {where} data sets (where it acts) to their noise"
-    return ""
-
-
-def quiet_where(comparison: Comparison, noise: Mapping[str, float], prefix: str) -> bool:
-    """Whether the data sets of ``comparison`` whose name starts with ``prefix`` (there is one
-    at least) are at their noise (:func:`~spicethermal.analysis.verdict.at_noise`)."""
-    sub = Comparison(tuple(p for p in comparison.points if p.dataset.startswith(prefix)),
-                     comparison.engine)
-    return bool(sub.points) and at_noise(sub, noise)
 
 
 def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
@@ -279,74 +113,6 @@ def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> 
     if n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2:
         return True
     return bool(far_left(final, noise))
-
-
-def joint_refit(data: BundleData, ladder: Foster, effects: Sequence[Effect], budget_s: float,
-                than: Comparison, noise: Mapping[str, float]
-                ) -> tuple[Foster, list[Effect], Comparison] | None:
-    """Every effect of ``effects`` and ``ladder`` refitted jointly
-    (:func:`~spicethermal.fit.backfit.refit_effects`, within ``budget_s`` of work) with
-    its comparison; ``None`` when it fails or does not lower the noise-weighted squared error
-    of ``than``."""
-    try:
-        with time_limit(budget_s):
-            lad, refitted = refit_effects(data, ladder, effects)
-        cmp = comparison_of(data, lad, refitted)
-    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
-        return None
-    return (lad, refitted, cmp) if chi2(cmp, noise) < chi2(than, noise) else None
-
-
-def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: Comparison,
-           cmp: Comparison, bic: float, noise: Mapping[str, float],
-           held_bic: Callable[[], float]
-           ) -> tuple[EffectFit, Comparison, float, tuple[Effect, ...]]:
-    """A later step's candidate that is not decisive on top of the effects found so far (their
-    parameters held), refitted jointly with them (:func:`~spicethermal.fit.backfit.refit_effects`,
-    within :data:`RESCUE_BUDGET_S`) when its own fit shows it somewhere: some data set's
-    noise-weighted squared error falls by :data:`MIN_BIC_DROP` (a TSP bow that fits the
-    calibration, which an effect found before had mimicked in the curves). The joint refit
-    counts only when its criterion is lower by :data:`MIN_BIC_DROP` than ``held_bic()``, the
-    criterion of the effects found so far refitted jointly without it: what the refit alone
-    gains is no sign of the candidate. Returns the fit, its comparison, its criterion and the
-    model's refitted effects (empty: unchanged)."""
-    tried = fit.facts.get("tried", fit)
-    tried_cmp = cmp if tried is fit else comparison_of(data, tried.ladder, [*effects,
-                                                                            tried.effect])
-    was = before.by_dataset()
-    if not any(chi2(was[n], {n: noise[n]}) - chi2(sub, {n: noise[n]}) >= MIN_BIC_DROP
-               for n, sub in tried_cmp.by_dataset().items() if n in was):
-        return fit, cmp, bic, ()
-    joint = joint_refit(data, tried.ladder, [*effects, tried.effect], RESCUE_BUDGET_S, cmp,
-                        noise)
-    if joint is None:
-        return fit, cmp, bic, ()
-    ladder, refitted, new = joint
-    new_bic = criterion(new, noise, fit.n_params)
-    if held_bic() - new_bic < MIN_BIC_DROP:
-        return fit, cmp, bic, ()
-    facts = {k: v for k, v in fit.facts.items() if k not in ("no_gain", "tried")}
-    return (EffectFit(refitted[-1], ladder, fit.n_params, facts), new, new_bic,
-            tuple(refitted))
-
-
-def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
-               before: Comparison, noise: Mapping[str, float]) -> tuple[Candidate, list[Effect]]:
-    """``chosen`` (the last of ``effects``) after the joint refit of every effect and the ladder
-    (:func:`~spicethermal.fit.backfit.refit_effects`, within :data:`REFIT_BUDGET_S`), with its
-    figures against ``before``; unchanged when the refit does not lower the noise-weighted
-    squared error."""
-    joint = joint_refit(data, chosen.ladder, effects, REFIT_BUDGET_S, chosen.comparison, noise)
-    if joint is None:
-        return chosen, effects
-    ladder, refitted, cmp = joint
-    fit = EffectFit(refitted[-1], ladder, chosen.n_params, chosen.facts)
-    return replace(chosen, effect=refitted[-1], ladder=ladder, comparison=cmp,
-                   bic=criterion(cmp, noise, chosen.n_params),
-                   improvement=before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf,
-                   explained=explained_fraction(before, cmp, noise),
-                   evidence=evidence(fit, data, before, cmp, noise),
-                   noise_gain=improvement_of(before, cmp, noise)), refitted
 
 
 @own_cache()  # its fits' work, so where they stop, owes nothing to earlier runs
@@ -448,6 +214,15 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
                 # the effects found before held their one-at-a-time fits: refit all
                 chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
             steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
+            if len(steps) == 2:
+                try:
+                    swap = swap_first(data, steps, first, base, noise, LATER_BUDGET_S)
+                except TimeLimitError:  # the budget ran out: the steps stand
+                    swap = None
+                if swap is not None:
+                    steps = swap
+                    k_total = steps[0].chosen.n_params + steps[1].chosen.n_params
+                    chosen, model_effects = steps[1].chosen, list(steps[1].effects)
             cur_ladder, cur_effects, cur = chosen.ladder, model_effects, chosen.comparison
             cur_bic = criterion(cur, noise, k_total)
     where = tuple(localise(base, noise))

@@ -2,34 +2,10 @@
 
 The diagnosis (:mod:`spicethermal.analysis.diagnose`) and ``spicethermal fit --effect`` need, for
 every candidate effect, its parameters fitted to the data sets that show it, and the model's
-predictions of every data point with the effect in place. This module holds the predictions
-and the fitting machinery (below); the data sets and how the bench reads a temperature are the
-measurement model, :mod:`spicethermal.fit.measurement`; the time budgets every fit runs under are
-:mod:`spicethermal.fit.budget`.
-
-Forward models (:func:`predict`), all exact for the catalogue's physics:
-
-* linear ladder: closed forms (``Foster.cooling``, :func:`spicethermal.engines.pwm.steady_state`);
-* ``temperature-coefficient``: every form in :mod:`spicethermal.fit.tcforward` (the junction form
-  in closed form on a cooling curve and frozen at the self-consistent mean junction
-  temperature under PWM, :mod:`spicethermal.fit.tcjunction`; the local forms on the ladder's Cauer
-  equivalent, exact steady state, stiff integration after the cut, frozen at every node's mean
-  temperature under PWM); its fit is :mod:`spicethermal.fit.tcfit`;
-* ``phase-change`` (:mod:`spicethermal.fit.pcforward`) on a cooling curve: the nodal network
-  with the band's heat capacity at its node, integrated by LSODA with an exact rank-one
-  inverse of the capacity matrix until the node leaves the band, then exact modal steps
-  (< 1 mK from the model's Radau integration);
-  curves that stay outside the band (:func:`spicethermal.effects.phase_change.band`) use
-  the closed form.
-  Under PWM the mean is exact (a heat capacity does not change it) and, when the band is
-  within reach, the ripple is computed with the capacity frozen at the band's secant over
-  the node's swing (:func:`pc_frozen_ladder`, quasi-static), else in closed form. The band's
-  shape is the catalogue's own (:meth:`~spicethermal.effects.Effect.extra_capacitance`);
-* measurement effects: ``sample-window`` (the PWM reading at the end of the window),
-  ``electrical-transient`` (cooling readings off by ``A·e^{−5t/masked_s}``),
-  ``tsp-nonlinearity`` (readings ``T + q (T − T_cal)²``; in the calibration data set the
-  linear fit absorbs the straight part, leaving ``q (u − P u)/(1 + q b_u)`` with
-  ``u = (T − T_cal)²``, ``P`` the projection on straight lines and ``b_u`` the slope of ``u``).
+predictions of every data point with the effect in place. This module holds the fitting
+machinery (below); the predictions are :mod:`spicethermal.fit.forward`; the data sets and how
+the bench reads a temperature are the measurement model, :mod:`spicethermal.fit.measurement`;
+the time budgets every fit runs under are :mod:`spicethermal.fit.budget`.
 
 Fits: the ladder (:func:`baseline_ladder`), the robust least squares every fit goes through
 (:func:`joint_fit`, :func:`robust_lsq`, within a :func:`time_limit`) and the
@@ -52,16 +28,23 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
-from ..engines.pwm import steady_state
 from ..identify.curves import ZthCurve, detect_transient
 from .budget import (
     EVALUATION_S,
-    TC_STEP_S,
     TimeLimitError,
     bounded,
     check_time,
     time_limit,
     unlimited,
+)
+from .forward import (
+    cooling_true_c,
+    effects_map,
+    held_share,
+    integrated,
+    predict,
+    pwm_true_c,
+    window_average_k,
 )
 from .ladder import fit_foster
 from .measurement import (
@@ -77,7 +60,6 @@ from .measurement import (
     tsp_true,
 )
 from .pcforward import band_reached, pc_cooling_rise, pc_frozen_ladder
-from .tcforward import tc_cooling, tc_frozen
 from .tcjunction import as_foster, tc_cooling_rise, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -108,6 +90,8 @@ __all__ = [
     "check_time",
     "cooling_true_c",
     "effects_map",
+    "held_share",
+    "integrated",
     "joint_fit",
     "needs",
     "others",
@@ -143,100 +127,6 @@ MAX_BASELINE_ORDER = 6
 ORDER_GAIN = 1.2
 #: Numerical failures that make a trial point of a fit (or a whole candidate) fail.
 NUMERICAL_ERRORS = (ArithmeticError, ValueError, np.linalg.LinAlgError)
-
-# --------------------------------------------------------------------------------------------
-# forward models
-# --------------------------------------------------------------------------------------------
-def effects_map(effects: Sequence[Effect]) -> dict[str, Effect]:
-    """``effects`` by name."""
-    return {e.name: e for e in effects}
-
-
-
-
-def _tc_step() -> None:
-    """The budget's check at every right-hand side of an integrated temperature coefficient."""
-    check_time(TC_STEP_S)
-
-
-def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
-                   effects: Sequence[Effect]) -> NDArray:
-    """True junction temperature (°C) along a cooling curve under the device effects."""
-    fx = effects_map(effects)
-    tc, pc = fx.get("temperature-coefficient"), fx.get("phase-change")
-    tref = curve.tref_steady_c
-    if pc is not None:
-        rise = pc_cooling_rise(ladder, pc, tref, curve.power_w, curve.t_s, tc)
-    elif tc is not None:
-        rise = tc_cooling(ladder, tc, tref, curve.power_w, curve.t_s, _tc_step)
-    else:
-        rise = curve.power_w * ladder.cooling(curve.t_s)
-    return curve.tref_c + rise
-
-
-def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect]) -> NDArray:
-    """True junction temperature (°C) at the end of the sample window of every PWM row."""
-    fx = effects_map(effects)
-    tc, pc, sw = (fx.get(n) for n in ("temperature-coefficient", "phase-change",
-                                      "sample-window"))
-    window = float(sw.params["window_s"]) if sw is not None else data.window_s
-    average = sw is not None and sw.form == "average" and window > 0
-    out = np.empty(data.freq_hz.size)
-    for i, (f, d, p, tref) in enumerate(zip(data.freq_hz, data.duty, data.power_w, data.tref_c,
-                                            strict=True)):
-        lad: Foster | Cauer = ladder
-        if tc is not None:
-            lad = tc_frozen(ladder, tc, tref, p * d)
-        if pc is not None and band_reached(pc, tref, tref + p * as_foster(lad).rth):
-            lad = pc_frozen_ladder(lad, pc, tref, p, f, d)
-        if average:
-            out[i] = tref + window_average_k(lad, p, f, d, window)
-        else:
-            out[i] = tref + steady_state(lad, p, f, d, window).reading_k
-    return out
-
-
-def window_average_k(ladder: Foster | Cauer, power_w: float, freq_hz: float, duty: float,
-                     window_s: float) -> float:
-    """Mean junction rise (K) over a power-off window of ``window_s`` that starts when an
-    on-phase of the periodic steady state ends: each Foster stage starts at its peak ``pᵢ``
-    and decays, so the mean is ``Σ pᵢ τᵢ/w (1 − e^{−w/τᵢ})``.
-
-    >>> lad = Foster.from_tau([10.0], [1e-3])
-    >>> round(window_average_k(lad, 1.0, 1e6, 0.5, 1e-3), 3) == round(5 * (1 - math.exp(-1)), 3)
-    True
-    """
-    f = as_foster(ladder)
-    total = 0.0
-    for r, tau in zip(f.r, f.tau, strict=True):
-        peak = steady_state(Foster.from_tau([r], [tau]), power_w, freq_hz, duty).peak_k
-        total += peak * tau / window_s * -math.expm1(-window_s / tau)
-    return total
-
-
-def predict(data: BundleData, ladder: Foster | Cauer,
-            effects: Sequence[Effect] = ()) -> dict[str, NDArray]:
-    """What the bench would read (°C) at every point of every data set, by data set name.
-
-    >>> from spicethermal.io.bundle import Bundle, PwmTable
-    >>> d = BundleData.from_bundle(Bundle(ambient_c=25.0,
-    ...                            pwm=PwmTable([1e3], [0.5], [30.0], power_w=0.1)))
-    >>> round(float(predict(d, Foster.from_tau([100.0], [10.0]))["pwm"][0]), 3)
-    30.0
-    """
-    fx = effects_map(effects)
-    tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
-    out: dict[str, NDArray] = {}
-    line = data.line_temps_c
-    for c in data.cooling:
-        out[c.name] = calibrated_reading(cooling_true_c(c, ladder, effects), tsp, line) + \
-            transient_offset(c.t_s, tr, c.power_w)
-    if data.pwm is not None:
-        out["pwm"] = calibrated_reading(pwm_true_c(data.pwm, ladder, effects), tsp, line)
-    if data.calibration is not None:
-        out["calibration"] = calibration_reading(data.calibration.temp_c, tsp)
-    return out
-
 
 # --------------------------------------------------------------------------------------------
 # the ladder
@@ -403,7 +293,7 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
               keep_before: Mapping[str, float] | None = None,
               max_nfev: int | None = None,
               diff_step: float | None = None,
-              tol: float = FIT_TOL) -> tuple[Foster, list[Effect], Any]:
+              tol: float = FIT_TOL, linearise: bool = False) -> tuple[Foster, list[Effect], Any]:
     """Least squares of the readings of data sets ``names`` over the effect parameters
     ``x`` (``build(x)`` gives the effects) and, if ``fit_ladder``, the ladder's
     ``log R`` and ``log τ`` (same order; τ at least :data:`FASTEST_STAGE` × the first cooling
@@ -412,8 +302,16 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     s are left out, and so are those at or after ``keep_before[name]`` s. When the ladder is
     fitted, each curve's steady reading just before the cut is a data point too (it pins
     Rth). ``diff_step`` is the relative finite-difference step (larger than
-    the default for forward models solved by an adaptive integrator). Returns the ladder, the
-    effects and scipy's result."""
+    the default for forward models solved by an adaptive integrator).
+
+    With ``linearise`` (the fit of a measurement effect on top of integrated device effects
+    that ``build`` holds, whatever ``x``), those device effects enter the refit of the ladder
+    as their share of each cooling curve at the start ladder (:func:`held_share`), computed
+    again at the fitted ladder for a second pass: every evaluation is then a closed form
+    instead of an integration per cooling curve. (A power transient's refit with the ladder
+    on top of a power-law coefficient needed 70 s of work on seed 1's draw 010 of the random
+    validation set, with 8 s allowed; the caller judges the result on the exact forward
+    model.) Returns the ladder, the effects and scipy's result (of the last pass)."""
     f = as_foster(ladder)
     m = f.order if fit_ladder else 0
     sub = subset(data, names)
@@ -427,17 +325,22 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         return Foster.from_tau(np.exp(x[:m]), np.exp(x[m:2 * m])), x[2 * m:]
 
     steady = [c for c in sub.cooling if c.tj_steady_c is not None] if m else []
+    held = [e for e in build(np.asarray(x0, float)) if integrated(e)] \
+        if linearise and m and sub.cooling else []
+    share: dict[str, NDArray] | None = None
 
     def fun(x: NDArray) -> NDArray:
         lad, xe = split(x)
         effects = build(xe)
-        pred = predict(sub, lad, effects)
+        pred = predict(sub, lad, effects, share)
         parts = [data.weighted(pred, names, keep)]
         tsp = effects_map(effects).get("tsp-nonlinearity")
+        closed = effects if share is None else [e for e in effects if not integrated(e)]
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
-            parts.append((calibrated_reading(cooling_true_c(top, lad, effects), tsp,
-                                             data.line_temps_c) - c.tj_steady_c)
+            true = cooling_true_c(top, lad, closed) + (0.0 if share is None
+                                                        else share[c.name][0])
+            parts.append((calibrated_reading(true, tsp, data.line_temps_c) - c.tj_steady_c)
                          / data.scale(c.name))
         return np.concatenate(parts)
 
@@ -451,12 +354,25 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
     start[:m] = np.minimum(start[:m], r_hi)
     lo_l = np.concatenate([np.full(m, -np.inf), np.full(m, tau_lo)])
     hi_l = np.concatenate([np.full(m, r_hi), np.full(m, np.inf)])
-    res = robust_lsq(fun, np.concatenate([start, np.asarray(x0, float)]),
-               np.concatenate([lo_l, np.asarray(lo, float)]),
-               np.concatenate([hi_l, np.asarray(hi, float)]),
-               **({"max_nfev": max_nfev} if max_nfev else {}), diff_step=diff_step,
-               ftol=tol, xtol=tol, gtol=tol)
-    lad, xe = split(res.x)
+    x = np.concatenate([start, np.asarray(x0, float)])
+    lo_a, hi_a = np.concatenate([lo_l, np.asarray(lo, float)]), \
+        np.concatenate([hi_l, np.asarray(hi, float)])
+    kw = {"max_nfev": max_nfev} if max_nfev else {}
+    res = None
+    for _ in range(2 if held else 1):
+        if held:
+            try:
+                share = held_share(sub, split(x)[0], held)
+            except (SimulationError, *NUMERICAL_ERRORS):
+                if res is None:
+                    raise
+                break  # the second pass cannot start: the first one stands
+        res = robust_lsq(fun, x, lo_a, hi_a, **kw, diff_step=diff_step, ftol=tol, xtol=tol,
+                         gtol=tol)
+        x = res.x
+        if res.status == -9:  # out of time: no second pass
+            break
+    lad, xe = split(x)
     return lad.pruned(), build(xe), res
 
 

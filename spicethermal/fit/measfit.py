@@ -149,7 +149,8 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
         # refitted on every data set
         on = list(data.datasets) if form == "power" or (form == "fixed" and one_power) \
             else names
-        lad, effs, _ = joint_fit(data, on, ladder, True, list(x0), lo, hi, build)
+        lad, effs, _ = joint_fit(data, on, ladder, True, list(x0), lo, hi, build,
+                                 linearise=True)
         out.append(EffectFit(effs[-1], lad, len(lo), {}))
     return out
 
@@ -196,7 +197,7 @@ def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
             lad: Foster | Cauer) -> tuple[Foster | Cauer, list[Effect]]:
         if n_cal < 2 + len(x0) + CAL_SPARE:
             new_lad, effs, _ = joint_fit(data, names, lad, fit_ladder, x0, lo, hi, build,
-                                         exclude=exclude)
+                                         exclude=exclude, linearise=True)
             return new_lad, effs
         # the calibration fixes the bow: the coefficients of T² (q − 3 c T_cal) and T³ (c)
         _, effs, _ = joint_fit(data, ["calibration"], lad, False, x0, lo, hi, build)
@@ -211,7 +212,7 @@ def fit_tsp_nonlinearity(data: BundleData, ladder: Foster | Cauer,
             return build(np.array([a2 + 3e-2 * cub * x[0], x[0], cub][:len(x0)]))
 
         new_lad, effs, _ = joint_fit(data, rest, lad, fit_ladder, [p["t_cal_c"]], [lo_t],
-                                     [hi_t], on_bow, exclude=exclude)
+                                     [hi_t], on_bow, exclude=exclude, linearise=True)
         return new_lad, effs
 
     x0 = [float(np.clip(q0 * 1e4, -0.99 * qmax, 0.99 * qmax)), tcal0]

@@ -27,6 +27,7 @@ import math
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -67,8 +68,17 @@ def as_cauer(ladder: Foster | Cauer) -> Cauer:
         Its Cauer form (zero capacities merged,
         :meth:`~spicethermal.core.ladder.Cauer.with_capacitances`).
     """
-    cauer = ladder if isinstance(ladder, Cauer) else ladder.to_cauer()
-    return cauer.with_capacitances()
+    if isinstance(ladder, Cauer):
+        return ladder.with_capacitances()
+    return _foster_as_cauer(ladder)
+
+
+@lru_cache(maxsize=CACHE_SIZE)
+def _foster_as_cauer(ladder: Foster) -> Cauer:
+    """:func:`as_cauer` of a Foster ladder, kept: the exact conversion (rational arithmetic)
+    was three quarters of a PWM prediction with a local form, once per row of the grid on
+    the same ladder."""
+    return ladder.to_cauer().with_capacitances()
 
 
 # --------------------------------------------------------------------------------------------
