@@ -335,11 +335,10 @@ def joint_fit(data: BundleData, names: Sequence[str], ladder: Foster | Cauer,
         pred = predict(sub, lad, effects, share)
         parts = [data.weighted(pred, names, keep)]
         tsp = effects_map(effects).get("tsp-nonlinearity")
-        closed = effects if share is None else [e for e in effects if not integrated(e)]
         for c in steady:  # the reading just before the cut pins the ladder's Rth
             top = replace(c, t_s=np.zeros(1), tref_c=np.full(1, c.tref_steady_c))
-            true = cooling_true_c(top, lad, closed) + (0.0 if share is None
-                                                        else share[c.name][0])
+            true = cooling_true_c(top, lad, effects,
+                                  None if share is None else share[c.name][:1])
             parts.append((calibrated_reading(true, tsp, data.line_temps_c) - c.tj_steady_c)
                          / data.scale(c.name))
         return np.concatenate(parts)

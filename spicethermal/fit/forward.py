@@ -68,9 +68,14 @@ def _tc_step() -> None:
     check_time(TC_STEP_S)
 
 
-def cooling_true_c(curve: CurveData, ladder: Foster | Cauer,
-                   effects: Sequence[Effect]) -> NDArray:
-    """True junction temperature (°C) along a cooling curve under the device effects."""
+def cooling_true_c(curve: CurveData, ladder: Foster | Cauer, effects: Sequence[Effect],
+                   share: NDArray | None = None) -> NDArray:
+    """True junction temperature (°C) along a cooling curve under the device effects (with
+    ``share``, the integrated ones' share at each reading, :func:`held_share`, in their
+    place)."""
+    if share is not None:
+        closed = [e for e in effects if not integrated(e)]
+        return cooling_true_c(curve, ladder, closed) + share
     fx = effects_map(effects)
     tc, pc = fx.get("temperature-coefficient"), fx.get("phase-change")
     tref = curve.tref_steady_c
@@ -164,11 +169,8 @@ def predict(data: BundleData, ladder: Foster | Cauer,
     tsp, tr = fx.get("tsp-nonlinearity"), fx.get("electrical-transient")
     out: dict[str, NDArray] = {}
     line = data.line_temps_c
-    closed = [e for e in effects if not integrated(e)] if share is not None else effects
     for c in data.cooling:
-        true = cooling_true_c(c, ladder, closed)
-        if share is not None:
-            true = true + share[c.name][1:]
+        true = cooling_true_c(c, ladder, effects, None if share is None else share[c.name][1:])
         out[c.name] = calibrated_reading(true, tsp, line) + transient_offset(c.t_s, tr,
                                                                               c.power_w)
     if data.pwm is not None:
