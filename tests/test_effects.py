@@ -136,6 +136,28 @@ def test_pc_frozen_ladder_keeps_rth_and_slows_the_junction(actuator):
     assert lad.zth(1e-3) < actuator.zth(1e-3)
 
 
+def test_pwm_rows_frozen_under_an_integrated_effect_are_counted_as_work(actuator):
+    """Freezing a PWM row's ladder under a band or a local coefficient costs ten times the
+    row's closed form, and a diagnosis freezes tens of thousands: each is counted, so the
+    budgets bound the CPU time they spend (a junction coefficient's closed form is not)."""
+    from spicethermal.fit.budget import FROZEN_ROW_S, spent
+    from spicethermal.fit.forward import pwm_true_c
+    from spicethermal.fit.measurement import PwmData
+
+    rows = 5
+    grid = PwmData(np.geomspace(10.0, 1e4, rows), np.full(rows, 0.5), np.full(rows, 0.2),
+                   np.full(rows, 25.0), np.zeros(rows), 1e-5)
+    band = Effect.create("phase-change", latent_j=0.05, t_c=40.0, width_k=2.0)
+    far = Effect.create("phase-change", latent_j=0.05, t_c=400.0, width_k=2.0)
+    local = Effect.create("temperature-coefficient", "local", alpha_per_k=2e-3)
+    junction = Effect.create("temperature-coefficient", alpha_per_k=2e-3)
+    for effects, frozen in (([], 0), ([band], rows), ([far], 0), ([local], rows),
+                            ([junction], 0), ([local, band], 2 * rows)):
+        w0 = spent()
+        pwm_true_c(grid, actuator, effects)
+        assert spent() - w0 == frozen * round(FROZEN_ROW_S * 1e9), effects
+
+
 @pytest.mark.parametrize(("node", "max_k", "rms_k"), [(0, 0.35, 0.09), (1, 0.015, 0.004)])
 def test_pc_pwm_reading_near_the_exact_periodic_state(node, max_k, rms_k):
     # a diode's band at 45 % of the node's PWM rise, 5 % wide: the ripple crosses it. The

@@ -294,6 +294,21 @@ def test_phase_change_fit_tries_the_next_node_too():
     assert _chi2_per_point(cmp, noise, "pwm")["pwm"] < 4.0
 
 
+def test_phase_change_fit_finds_a_wide_band_the_coldest_curve_reaches_into():
+    """Draw 013 of ``bench/bench_validation_random.py 40 --seed 31``: an actuator's junction
+    band (0.0115 J, σ 7.2 K at 50.1 °C) so wide that the lowest-power curve (42.6 °C) already
+    crosses its lower tail. Its own ladder has absorbed part of the band, and bands above its
+    temperatures were sought on that ladder only: none gained, and the fit had no latent heat.
+    On the ladder of every curve the band is found whole."""
+    _, noise, fit, cmp = _band_fit("actuator", LatentHeat(0, 0.0115, 50.15, 7.18, "logistic"),
+                                   {"per_decade": 10, "n_curves": 3, "dense_pwm": False},
+                                   3100013)
+    assert int(fit.effect.params["node"]) == 0
+    assert fit.effect.params["t_c"] == pytest.approx(50.15, abs=1.5)
+    assert fit.effect.params["latent_j"] == pytest.approx(0.0115, rel=0.2)
+    assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
+
+
 @pytest.mark.parametrize("name, layers", [
     ("temperature-coefficient/inner-layers/strong", {"last_layer": 1.0}),
     ("temperature-coefficient/outer-layers/strong", {"first_layer": 2.0})])

@@ -53,11 +53,12 @@ def _validated(name: str, values: ArrayLike, n: int | None = None,
         raise DataFormatError(f"{name}: a ladder needs at least one stage")
     if n is not None and arr.size != n:
         raise DataFormatError(f"{name}: expected {n} values, got {arr.size}")
-    for i, v in enumerate(arr):
-        if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+    values = arr.tolist()  # Python floats: a ladder is built for every PWM row of a fit
+    for i, v in enumerate(values):
+        if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
             raise DataFormatError(f"{name}[{i}] = {v!r}: must be "
                                   f"{'non-negative' if allow_zero else 'positive'} and finite")
-    return tuple(float(v) for v in arr)
+    return tuple(values)
 
 
 @dataclass(frozen=True, init=False)

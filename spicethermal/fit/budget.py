@@ -9,7 +9,8 @@ must complete; :func:`bounded` runs a function within a budget and falls back to
 The budgets' clock is the thread's **work** (:func:`spent`, summed exactly in integer
 nanoseconds): the costs passed to :func:`check_time` (:data:`EVALUATION_S` per evaluation of a
 fit's residuals, :data:`PC_STEP_S` and :data:`TC_STEP_S` per right-hand side of the integrated
-forward models), in seconds of CPU time of the machine they were calibrated on. Where a fit
+forward models, :data:`FROZEN_ROW_S` per PWM row frozen under one), in seconds of CPU time of
+the machine they were calibrated on. Where a fit
 stops, and so which effect a diagnosis names, then depends on the input only, not on the
 machine's load or speed: a CPU-time clock made the same bundle's verdict change from one run
 to the next when a fit ended near its budget. CPU time is only the backstop: past
@@ -29,8 +30,9 @@ from typing import Any
 
 from ..core.errors import SimulationError
 
-__all__ = ["EVALUATION_S", "HANG_FACTOR", "PC_STEP_S", "TC_STEP_S", "TimeLimitError", "bounded",
-           "check_time", "cpu_time", "mark", "reached", "spent", "time_limit", "unlimited"]
+__all__ = ["EVALUATION_S", "FROZEN_ROW_S", "HANG_FACTOR", "PC_STEP_S", "TC_STEP_S",
+           "TimeLimitError", "bounded", "check_time", "cpu_time", "mark", "reached", "spent",
+           "time_limit", "unlimited"]
 
 #: Work (s) of one evaluation of a fit's residuals (closed-form forward models and the least
 #: squares' own algebra), of one right-hand side of the phase-change integration, and of one of
@@ -41,6 +43,12 @@ __all__ = ["EVALUATION_S", "HANG_FACTOR", "PC_STEP_S", "TC_STEP_S", "TimeLimitEr
 EVALUATION_S = 3.0e-4
 PC_STEP_S = 2.5e-5
 TC_STEP_S = 8.4e-5
+
+#: Work (s) of freezing one PWM row's ladder under an integrated device effect (a local or
+#: power-law coefficient's, at every node's mean temperature; a band's secant capacity): 0.11-0.16
+#: ms each on the project's machine (session 13), ten times a row's closed form, and a
+#: diagnosis that refits such effects freezes tens of thousands.
+FROZEN_ROW_S = 1.3e-4
 
 #: The CPU-time backstop: a budget of ``s`` seconds of work also ends after ``HANG_FACTOR · s``
 #: seconds of the thread's CPU time (a loop whose work the costs miss cannot hang).

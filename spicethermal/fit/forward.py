@@ -28,7 +28,6 @@ Forward models (:func:`predict`), all exact for the catalogue's physics:
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -37,8 +36,8 @@ import numpy as np
 
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
-from ..engines.pwm import steady_state
-from .budget import TC_STEP_S, check_time
+from ..engines.pwm import check_drive, stage_peaks, steady_state
+from .budget import FROZEN_ROW_S, TC_STEP_S, check_time
 from .measurement import (
     BundleData,
     CurveData,
@@ -100,8 +99,11 @@ def pwm_true_c(data: PwmData, ladder: Foster | Cauer, effects: Sequence[Effect])
                                             strict=True)):
         lad: Foster | Cauer = ladder
         if tc is not None:
+            if integrated(tc):
+                check_time(FROZEN_ROW_S)
             lad = tc_frozen(ladder, tc, tref, p * d)
         if pc is not None and band_reached(pc, tref, tref + p * as_foster(lad).rth):
+            check_time(FROZEN_ROW_S)
             lad = pc_frozen_ladder(lad, pc, tref, p, f, d)
         if average:
             out[i] = tref + window_average_k(lad, p, f, d, window)
@@ -117,15 +119,14 @@ def window_average_k(ladder: Foster | Cauer, power_w: float, freq_hz: float, dut
     and decays, so the mean is ``Σ pᵢ τᵢ/w (1 − e^{−w/τᵢ})``.
 
     >>> lad = Foster.from_tau([10.0], [1e-3])
-    >>> round(window_average_k(lad, 1.0, 1e6, 0.5, 1e-3), 3) == round(5 * (1 - math.exp(-1)), 3)
+    >>> round(window_average_k(lad, 1.0, 1e6, 0.5, 1e-3), 3) == round(5 * (1 - 1 / np.e), 3)
     True
     """
+    check_drive(freq_hz, duty, power_w, window_s)
     f = as_foster(ladder)
-    total = 0.0
-    for r, tau in zip(f.r, f.tau, strict=True):
-        peak = steady_state(Foster.from_tau([r], [tau]), power_w, freq_hz, duty).peak_k
-        total += peak * tau / window_s * -math.expm1(-window_s / tau)
-    return total
+    r, tau = np.asarray(f.r), np.asarray(f.tau)
+    peaks = power_w * stage_peaks(r, tau, 1.0 / freq_hz, duty)
+    return float(np.sum(peaks * tau / window_s * -np.expm1(-window_s / tau)))
 
 
 def integrated(effect: Effect) -> bool:

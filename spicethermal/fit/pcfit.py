@@ -11,10 +11,11 @@ temperatures, not at the junction's. Two searches cover a node's range:
 * between its hottest temperature on the lowest-power curve and on the hottest curve, with the
   lowest-power curve's own ladder held: that curve never crossed such a band, so its ladder
   is the linear device and the band shows whole in the hotter curves;
-* below that, down to :data:`BAND_FLOOR` of its rise on the hottest curve, with the ladder
-  fitted jointly to every curve held: every curve crossed such a band (a fluid that boils at
-  every test power), the lowest-power curve's ladder has absorbed part of it, and only the
-  band's different timing in each curve tells it from a linear ladder.
+* from :data:`BAND_FLOOR` of its rise on the hottest curve up to that hottest temperature,
+  with the ladder fitted jointly to every curve held: every curve crossed such a band (a
+  fluid that boils at every test power), or a wide band reaches down into the lowest-power
+  curve's temperatures, so the lowest-power curve's ladder has absorbed part of it, and only
+  the band's different timing in each curve tells it from a linear ladder.
 """
 
 from __future__ import annotations
@@ -66,7 +67,7 @@ PC_EVAL_S = 0.3
 PC_GRID_S = 2.0
 #: Band centres screened per node and search ...
 GRID_CENTRES = 6
-#: The best projections of this many nodes (of both searches) are checked with the band ...
+#: The best projections of this many nodes of each search are checked with the band ...
 CHECKED = 4
 #: ... The best projection of each node is checked with its latent heat, then with it times or
 #: divided by ``e`` to this power (≈ 3×) while that lowers the error, at most
@@ -148,11 +149,14 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     gaussian, plateau).
 
     Two searches, each with its ladder held (module docstring): above the lowest-power curve's
-    temperatures on that curve's own ladder, below them on ``ladder``. Each screens nodes ×
+    temperatures on that curve's own ladder, over the whole range on ``ladder``. Each
+    screens nodes ×
     centres (:data:`GRID_CENTRES` across the node's range; for the first search also where the
     hottest curve's residual grows fastest in log time and the catalogue's 64.7 °C for
     methanol when it lies in range) with one small band each, its latent heat set by least
-    squares on the change that band makes; each node's best is then checked with the band
+    squares on the change that band makes (every row's first point, then the first search's
+    rows, then the second's, within :data:`PC_GRID_S`); the best of each search's
+    :data:`CHECKED` nodes is then checked with the band
     itself, its latent heat walked up or down (:data:`LATENT_STEP`). Least squares start
     from the best checked point and, when it gains at least half as much or leaves less
     error, from the next one at another node or on the other ladder. The band is fitted to
@@ -214,7 +218,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     searches = [(ref, [(node_temp(ref, k, share_lo), node_temp(ref, k, 1.0))
                        for k in range(ref.order)])]
     if len(data.cooling) > 1 and share_lo > BAND_FLOOR:
-        searches.append((joint, [(node_temp(joint, k, BAND_FLOOR), node_temp(joint, k, share_lo))
+        searches.append((joint, [(node_temp(joint, k, BAND_FLOOR), node_temp(joint, k, 1.0))
                                  for k in range(joint.order)]))
     # a band's centre may lie anywhere over both
     ranges = [(min(r[k][0] for _, r in searches), max(r[k][1] for _, r in searches))
@@ -253,7 +257,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     # every node its share. Least squares from the best points follow.
     rows = []
     no_band = {}
-    for lad, node_ranges in searches:
+    for si, (lad, node_ranges) in enumerate(searches):
         r0 = residual(lad, list(base))
         if r0 is None:
             continue
@@ -275,10 +279,15 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                                    bounds(k)[0][2] * 1.01, bounds(k)[1][2] * 0.99))
             # a probe that adds a third of the node's heat capacity over the band
             probe = 0.3 * float(c_node[k]) * width0
-            rows.append([(lad, r0, k, tc, width0, probe) for tc in centres])
+            rows.append((si, [(lad, r0, k, tc, width0, probe) for tc in centres]))
     if not rows:
         raise FitError("phase-change: no node's temperatures span a band")
-    order = [r[i] for i in range(max(len(r) for r in rows)) for r in rows if i < len(r)]
+    # every row's first point, then the rest search by search (the lowest-power curve's
+    # ladder first: its bands are the common case), each in round-robin over its nodes
+    longest = max(len(r) for _, r in rows)
+    order = [r[0] for _, r in rows] + [r[i] for si in range(len(searches))
+                                       for i in range(1, longest)
+                                       for s, r in rows if s == si and i < len(r)]
     grid = []
     stop = mark(PC_GRID_S)
     for i, (lad, r0, node, tc, width0, probe) in enumerate(order):  # noqa: B007 (build)
@@ -296,7 +305,8 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         x0 = [float(np.clip(math.log(latent / c_scale), bounds(node)[0][0], bounds(node)[1][0])),
               tc, width0]
         grid.append((float(r0 @ r0) - float(r0 @ d) ** 2 / dd, lad, node, x0))
-    # the best projections of the :data:`CHECKED` most promising nodes checked with the band
+    # the best projections of each search's :data:`CHECKED` most promising nodes checked with
+    # the band
     # itself: its latent heat, then steps of ``e**LATENT_STEP`` up or down while the error
     # falls (a strong band is far from the linear projection)
     best: dict[tuple[int, int], tuple] = {}
@@ -305,7 +315,9 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
         if key not in best or g[0] < best[key][0]:
             best[key] = g
     grid = []
-    ranked = sorted(best.values(), key=lambda g: g[0] / no_band[id(g[1])])[:CHECKED]
+    ranked = [g for lad in {id(lad): lad for lad, _ in searches}.values()
+              for g in sorted((g for g in best.values() if g[1] is lad),
+                              key=lambda g: g[0] / no_band[id(g[1])])[:CHECKED]]
     for _, lad, node, x0 in ranked:  # noqa: B007 (build reads node)
         lo_x, hi_x = bounds(node)[0][0], bounds(node)[1][0]
 

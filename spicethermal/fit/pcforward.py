@@ -4,6 +4,7 @@ ladder frozen at the mean temperature under PWM (see :mod:`spicethermal.fit.effe
 from __future__ import annotations
 
 import warnings
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -25,6 +26,10 @@ PC_RTOL, PC_ATOL_K = 1e-7, 1e-6
 #: The PWM model's band capacity (:func:`pc_frozen_ladder`): at most this many secant steps,
 #: stopped at this relative change, and none for a swing below this (K).
 SECANT_STEPS, SECANT_RTOL, SECANT_MIN_SWING_K = 8, 1e-4, 1e-9
+#: Ladders whose nodal matrices are kept (:func:`_nodal`).
+CACHE_SIZE = 64
+
+
 def band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     low, high = phase_change.band(effect)
     return effect.params["latent_j"] > 0 and t_hi_c > low and t_lo_c < high
@@ -133,20 +138,13 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float, powe
     the mean is right only for a swing much narrower than the band (it overstates the
     capacity of a swing across a narrow band and understates one beside it).
     """
-    from scipy.linalg import eigh
-
-    net = Network.of(ladder)
-    g, cm = net.conductance(), net.capacitance()
-    b = np.zeros(net.n)
-    b[0] = power_w * duty
+    g, cm, z = _nodal(ladder)
     node = int(effect.params["node"])
-    t_mean = tref_c + float(np.linalg.solve(g, b)[node])
+    t_mean = tref_c + power_w * duty * float(z[node])
     extra = effect.extra_capacitance(node, t_mean)
     period = 1.0 / freq_hz
     for _ in range(SECANT_STEPS):
-        c = cm.copy()
-        c[node, node] += extra
-        lam, v = eigh(g, c)
+        lam, v = _modes(g, cm, node, extra)
         gain = v[node, :] * v[0, :] / lam * power_w  # each mode's share of the node's rise
         peak = gain * -np.expm1(-lam * duty * period) / -np.expm1(-lam * period)
         trough = peak * np.exp(-lam * (1.0 - duty) * period)
@@ -159,6 +157,30 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float, powe
         extra = secant
         if done:
             break
-    cm[node, node] += extra
-    lam, v = eigh(g, cm)
+    lam, v = _modes(g, cm, node, extra)
     return Foster.from_tau(v[0, :] ** 2 / lam, 1 / lam)
+
+
+@lru_cache(maxsize=CACHE_SIZE)
+def _nodal(ladder: Foster | Cauer) -> tuple[NDArray, NDArray, NDArray]:
+    """The ladder's nodal ``G`` and ``C`` and the steady rise of every node per watt at the
+    junction (read-only, kept: every row of a PWM grid freezes the same ladder)."""
+    net = Network.of(ladder)
+    g, cm = net.conductance(), net.capacitance()
+    unit = np.zeros(net.n)
+    unit[0] = 1.0
+    out = (g, cm, np.linalg.solve(g, unit))
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+def _modes(g: NDArray, cm: NDArray, node: int, extra: float) -> tuple[NDArray, NDArray]:
+    """Eigenvalues and ``C``-orthonormal modes of ``G v = λ C v`` with ``extra`` (J/K) added at
+    ``node`` (by the Cholesky factor of ``C``, as LAPACK's generalised solver does; small
+    matrices, so numpy's call costs less than scipy's)."""
+    c = cm.copy()
+    c[node, node] += extra
+    li = np.linalg.inv(np.linalg.cholesky(c))
+    lam, u = np.linalg.eigh(li @ g @ li.T)
+    return lam, li.T @ u
