@@ -150,14 +150,13 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
 
     Two searches, each with its ladder held (module docstring): above the lowest-power curve's
     temperatures on that curve's own ladder, over the whole range on ``ladder``. Each
-    screens nodes ×
-    centres (:data:`GRID_CENTRES` across the node's range; for the first search also where the
-    hottest curve's residual grows fastest in log time and the catalogue's 64.7 °C for
-    methanol when it lies in range) with one small band each, its latent heat set by least
-    squares on the change that band makes (every row's first point, then the first search's
-    rows, then the second's, within :data:`PC_GRID_S`); the best of each search's
-    :data:`CHECKED` nodes is then checked with the band
-    itself, its latent heat walked up or down (:data:`LATENT_STEP`). Least squares start
+    screens nodes × centres (:data:`GRID_CENTRES` across the node's range; for the first
+    search also where the hottest curve's residual grows fastest in log time and the
+    catalogue's 64.7 °C for methanol when it lies in range) with one small band each, its
+    latent heat set by least squares on the change that band makes (every row's first point,
+    then the first search's rows, then the second's, within :data:`PC_GRID_S`); the best of
+    each search's :data:`CHECKED` nodes is then checked with the band itself, its latent heat
+    walked up or down (:data:`LATENT_STEP`). Least squares start
     from the best checked point and, when it gains at least half as much or leaves less
     error, from the next one at another node or on the other ladder. The band is fitted to
     the cooling curves and the PWM grid (a band the PWM cycles cross is one at the junction);
@@ -306,9 +305,8 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
               tc, width0]
         grid.append((float(r0 @ r0) - float(r0 @ d) ** 2 / dd, lad, node, x0))
     # the best projections of each search's :data:`CHECKED` most promising nodes checked with
-    # the band
-    # itself: its latent heat, then steps of ``e**LATENT_STEP`` up or down while the error
-    # falls (a strong band is far from the linear projection)
+    # the band itself: its latent heat, then steps of ``e**LATENT_STEP`` up or down while the
+    # error falls (a strong band is far from the linear projection)
     best: dict[tuple[int, int], tuple] = {}
     for g in grid:
         key = (id(g[1]), g[2])
