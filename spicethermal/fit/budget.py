@@ -10,12 +10,11 @@ The budgets' clock is the thread's **work** (:func:`spent`, summed exactly in in
 nanoseconds): the costs passed to :func:`check_time` (:data:`EVALUATION_S` per evaluation of a
 fit's residuals, :data:`PC_STEP_S` and :data:`TC_STEP_S` per right-hand side of the integrated
 forward models, :data:`FROZEN_ROW_S` per PWM row frozen under one), in seconds of CPU time of
-the machine they were calibrated on. Where a fit
-stops, and so which effect a diagnosis names, then depends on the input only, not on the
-machine's load or speed: a CPU-time clock made the same bundle's verdict change from one run
-to the next when a fit ended near its budget. CPU time is only the backstop: past
-:data:`HANG_FACTOR` times a budget in CPU seconds (work the costs do not count),
-:func:`check_time` raises too.
+the machine they were calibrated on. Where a fit stops, and so which effect a diagnosis names,
+then depends on the input only, not on the machine's load or speed: a CPU-time clock made the
+same bundle's verdict change from one run to the next when a fit ended near its budget. CPU
+time is only the backstop: past :data:`HANG_FACTOR` times a budget in CPU seconds (work the
+costs do not count), :func:`check_time` raises too.
 """
 
 from __future__ import annotations
