@@ -29,9 +29,9 @@ from .io.files import atomic_write_text, dumps_json, read_json
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-MODEL_FORMAT = "spicethermal-model/2"
+MODEL_FORMAT = "spicethermal-model/3"
 #: Model-file formats :meth:`ThermalModel.from_dict` reads (see docs/model-format.md).
-MODEL_FORMATS_READ = ("spicethermal-model/1", MODEL_FORMAT)
+MODEL_FORMATS_READ = ("spicethermal-model/1", "spicethermal-model/2", MODEL_FORMAT)
 REFERENCES = ("ambient", "case")
 
 
@@ -105,9 +105,10 @@ class ThermalModel:
         return replace(self, ladder=ladder)
 
     # -- nonlinear network ----------------------------------------------------------------
-    def _network(self) -> Network:
+    def network(self) -> Network:
         """The nodal network simulated: the ladder's, or its exact Cauer equivalent when a
-        device effect needs physical node temperatures (a local temperature coefficient)."""
+        device effect needs physical node temperatures (a local temperature coefficient, a
+        latent-heat band away from the junction)."""
         if isinstance(self.ladder, Foster) and any(e.physical_nodes for e in self.effects):
             return Network.of(self.ladder.to_cauer())
         return Network.of(self.ladder)
@@ -182,7 +183,7 @@ class ThermalModel:
         t = np.asarray(t_s, dtype=float).ravel()
         if t.size == 0 or not np.all(np.isfinite(t)) or np.any(t < 0) or np.any(np.diff(t) < 0):
             raise DataFormatError("simulate: times must be finite, non-negative and ascending")
-        net = self._network()
+        net = self.network()
         x0 = np.zeros(net.n) if theta0 is None else np.asarray(theta0, dtype=float)
         if self.is_linear:
             return Trajectory(t, linear_response(net, x0, schedule, t))
@@ -201,7 +202,7 @@ class ThermalModel:
         """
         from scipy.optimize import root
 
-        net = self._network()
+        net = self.network()
         b = np.zeros(net.n)
         b[0] = power_w
         theta = np.linalg.solve(net.conductance(), b)
@@ -225,7 +226,7 @@ class ThermalModel:
         if self.is_linear:
             return steady_state(self.ladder, power_w, freq_hz, duty, window_s)
         check_drive(freq_hz, duty, power_w, window_s)
-        state0, net = self.pwm_initial_state(power_w, freq_hz, duty, tref_c, tol_k), self._network()
+        state0, net = self.pwm_initial_state(power_w, freq_hz, duty, tref_c, tol_k), self.network()
         period = 1 / freq_hz
         on = duty * period
         peak, _ = self._integrate(net, state0, [(0.0, on, power_w)], tref_c)
@@ -275,7 +276,7 @@ class ThermalModel:
         True
         """
         check_drive(freq_hz, duty, power_w)
-        net = self._network()
+        net = self.network()
         period = 1 / freq_hz
         if self.is_linear:
             return _FrozenPeriod(net.capacitance(), net.conductance(), period).start(
@@ -296,12 +297,12 @@ class ThermalModel:
 
     # -- files ---------------------------------------------------------------------------
     def to_dict(self) -> dict:
-        """The ``spicethermal-model/2`` document (docs/model-format.md, schema in
+        """The ``spicethermal-model/3`` document (docs/model-format.md, schema in
         ``spicethermal/data/model.schema.json``).
 
         >>> d = ThermalModel(Cauer([1.0, 2.0], [0.0, 3.0]), reference="case").to_dict()
         >>> d["format"], d["stages"][0], d["reference"]
-        ('spicethermal-model/2', {'r_k_per_w': 1.0, 'c_j_per_k': 0.0}, 'case')
+        ('spicethermal-model/3', {'r_k_per_w': 1.0, 'c_j_per_k': 0.0}, 'case')
         """
         out = {
             "format": MODEL_FORMAT,
@@ -319,8 +320,10 @@ class ThermalModel:
 
     @classmethod
     def from_dict(cls, data: Mapping, source: str = "model") -> ThermalModel:
-        """Read a ``spicethermal-model/2`` (or ``/1``) document; errors name ``source`` and
-        the key.
+        """Read a ``spicethermal-model/3`` (or ``/2``, ``/1``) document; errors name ``source``
+        and the key. An older file whose Foster ladder holds a ``phase-change`` band away from
+        the junction is refused: its band sat at an inner node of the Foster network, which
+        no physical layer matches, where ``/3`` places it at that layer of the Cauer form.
 
         >>> m = ThermalModel.from_dict({"format": "spicethermal-model/1", "topology": "foster",
         ...     "stages": [{"r_k_per_w": 2.0, "c_j_per_k": 0.5}]})
@@ -359,18 +362,26 @@ class ThermalModel:
         if not isinstance(provenance, Mapping):
             raise DataFormatError(f"{source}: 'provenance' must be an object")
         try:
-            return cls(ladder, tuple(Effect.from_dict(e) for e in effects),
-                       data.get("reference", "ambient"), provenance, float(case_c))
+            model = cls(ladder, tuple(Effect.from_dict(e) for e in effects),
+                        data.get("reference", "ambient"), provenance, float(case_c))
         except DataFormatError as exc:
             raise DataFormatError(f"{source}: {exc}") from None
+        band = next((e for e in model.effects if e.name == "phase-change" and e.physical_nodes),
+                    None)
+        if band is not None and topology == "foster" and data["format"] != MODEL_FORMAT:
+            raise DataFormatError(
+                f"{source}: {data['format']} puts the phase-change band at node "
+                f"{int(band.params['node'])} of the Foster network, which is no physical layer "
+                f"({MODEL_FORMAT} puts it at that layer of the Cauer form): fit the model again")
+        return model
 
     def save(self, path: str | Path) -> Path:
-        """Write the ``spicethermal-model/2`` JSON file atomically."""
+        """Write the ``spicethermal-model/3`` JSON file atomically."""
         return atomic_write_text(path, dumps_json(self.to_dict(), indent=2) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> ThermalModel:
-        """Read a ``spicethermal-model/2`` (or ``/1``) JSON file."""
+        """Read a ``spicethermal-model/3`` (or ``/2``, ``/1``) JSON file."""
         return cls.from_dict(read_json(path), str(path))
 
 

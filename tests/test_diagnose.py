@@ -228,9 +228,9 @@ def test_quiet_where_judges_only_the_named_data_sets():
            for i in range(20)]
     noise = {"cooling_1": 0.01, "pwm": 0.01}
     both = Comparison(tuple(cooling + pwm))
-    assert quiet_where(both, noise, "cooling")
-    assert not quiet_where(both, noise, "pwm")
-    assert not quiet_where(Comparison(tuple(pwm)), noise, "cooling")  # none to judge
+    assert quiet_where(both, noise, ("cooling",))
+    assert not quiet_where(both, noise, ("pwm",))
+    assert not quiet_where(Comparison(tuple(pwm)), noise, ("cooling",))  # none to judge
 
 
 def test_the_reason_names_a_data_set_left_beyond_its_noise():

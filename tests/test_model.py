@@ -84,9 +84,35 @@ def test_model_file_round_trip(tmp_path, actuator):
                      {"source": "unit test", "order": 4})
     path = m.save(tmp_path / "m.json")
     data = json.loads(path.read_text())
-    assert data["format"] == "spicethermal-model/2" and data["topology"] == "foster"
+    assert data["format"] == "spicethermal-model/3" and data["topology"] == "foster"
     assert data["rth_k_per_w"] == pytest.approx(146.0)
     assert ThermalModel.load(path) == m
+
+
+def test_a_band_away_from_the_junction_reads_as_the_version_meant(tmp_path, actuator):
+    """``spicethermal-model/3`` puts a band at node k > 0 at layer k of the Cauer form; a ``/2``
+    file put it at the Foster network's node k: such a file is refused (refit), one on a
+    Cauer ladder or with the band at the junction means the same in both and is read."""
+    from spicethermal.core.errors import DataFormatError
+
+    band = Effect.create("phase-change", t_c=40.0, width_k=2.0, latent_j=0.05, node=1)
+    m = ThermalModel(actuator, (band,))
+    assert ThermalModel.load(m.save(tmp_path / "m.json")) == m
+    old = {**m.to_dict(), "format": "spicethermal-model/2"}
+    with pytest.raises(DataFormatError, match=r"v2.json: spicethermal-model/2 puts the "
+                                              r"phase-change band at node 1 of the Foster"):
+        ThermalModel.from_dict(old, "v2.json")
+    cauer = m.with_topology("cauer")
+    assert ThermalModel.from_dict({**cauer.to_dict(), "format": "spicethermal-model/2"}) == cauer
+    junction = m.with_effects([Effect.create("phase-change", t_c=40.0, width_k=2.0,
+                                             latent_j=0.05)])
+    assert ThermalModel.from_dict({**junction.to_dict(),
+                                   "format": "spicethermal-model/2"}) == junction
+    # the same device either way: the Foster model is simulated on its Cauer form
+    t = np.geomspace(1e-4, 100.0, 20)
+    a = m.simulate(t, Schedule.step(0.3), tref_c=25.0).tj_k
+    b = cauer.simulate(t, Schedule.step(0.3), tref_c=25.0).tj_k
+    np.testing.assert_allclose(a, b, atol=1e-4)
 
 
 @pytest.mark.parametrize("patch, message", [

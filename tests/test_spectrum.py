@@ -159,7 +159,7 @@ def test_cli_spectrum_json_and_figure(tmp_path, capsys):
     assert out["method"] == "bayes" and out["rth_k_per_w"] == pytest.approx(3.0, rel=1e-3)
     assert np.allclose(out["foster"]["r_k_per_w"], [1.0, 2.0], rtol=0.01)
     assert fig.stat().st_size > 10000
-    assert json.loads(model.read_text())["format"] == "spicethermal-model/2"
+    assert json.loads(model.read_text())["format"] == "spicethermal-model/3"
 
 
 def test_cli_spectrum_bad_input_exits_2_with_one_line(tmp_path, capsys):

@@ -90,9 +90,12 @@ def test_pyspice_backend_agrees_with_batch(tmp_path, actuator):
 @pytest.mark.parametrize("topology", spice.TOPOLOGIES)
 def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology, temperature):
     ladder = Foster.from_tau([20.0, 80.0], [1e-3, 0.5])
+    # a band one layer out needs the Cauer form's physical nodes: a Foster .lib has it at the
+    # junction
+    node = 1 if topology == "cauer" else 0
     model = ThermalModel(ladder, (
         Effect.create("temperature-coefficient", alpha_per_k=-4e-3, t0_c=25.0),
-        Effect.create("phase-change", t_c=40.0, width_k=2.0, latent_j=0.02, node=1),
+        Effect.create("phase-change", t_c=40.0, width_k=2.0, latent_j=0.02, node=node),
     )).with_topology(topology)
     lib = spice.export(model, tmp_path / "m.lib", dialect, topology, "NL",
                        temperature=temperature)
@@ -108,6 +111,16 @@ def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology, tem
     assert np.max(np.abs(sim - py)) < 0.03  # K, of a rise of about 25 K
     lin = ThermalModel(model.ladder).simulate(t, Schedule.step(0.3)).tj_k + 25.0
     assert np.max(np.abs(lin - py)) > 1.0  # the effects matter at this strength
+
+
+def test_a_band_one_layer_out_is_exported_on_the_cauer_form(tmp_path, actuator):
+    model = ThermalModel(actuator, (Effect.create("phase-change", t_c=40.0, width_k=2.0,
+                                                  latent_j=0.02, node=1),))
+    text = spice.export(model, tmp_path / "m.lib", name="PC").read_text()
+    assert "(cauer ladder, 4 stages)" in text.splitlines()[0]
+    with pytest.raises(DataFormatError, match="phase-change .*needs physical node"):
+        spice.export(model, tmp_path / "f.lib", topology="foster", name="PC")
+    assert not (tmp_path / "f.lib").exists()
 
 
 def test_export_command_and_errors(tmp_path, actuator, capsys):

@@ -226,7 +226,7 @@ def _band_fit(device: str, latent: LatentHeat, variant: dict, seed: int):
     evaluation by a few per cent)."""
     from spicethermal.analysis.residuals import comparison_of
     from spicethermal.analysis.verdict import criterion
-    from spicethermal.fit import pcfit
+    from spicethermal.fit import pcfit, pcrefine
     from spicethermal.validation.cases import DEVICES, Case, _bench
 
     dev = DEVICES[device]
@@ -235,8 +235,11 @@ def _band_fit(device: str, latent: LatentHeat, variant: dict, seed: int):
         _bench(dev, {"noise_k": 0.05, "dense_pwm": True, "steady": True, "volts": False,
                      **variant}), seed))
     with pytest.MonkeyPatch.context() as mp:
-        for budget in ("PC_GRID_S", "PC_JOINT_BUDGET_S", "PC_FORM_BUDGET_S"):
-            mp.setattr(pcfit, budget, 10 * getattr(pcfit, budget))
+        for module in (pcfit, pcrefine):
+            for budget in ("PC_GRID_S", "PC_JOINT_BUDGET_S", "PC_STAGE_BUDGET_S",
+                           "PC_FORM_BUDGET_S"):
+                if hasattr(module, budget):
+                    mp.setattr(module, budget, 10 * getattr(module, budget))
         fits = pcfit.fit_phase_change(data, ladder)
     cmps = [comparison_of(data, f.ladder, [f.effect]) for f in fits]
     k = int(np.argmin([criterion(m, noise, f.n_params) for m, f in zip(cmps, fits,
@@ -309,6 +312,22 @@ def test_phase_change_fit_finds_a_wide_band_the_coldest_curve_reaches_into():
     assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
 
 
+def test_phase_change_fit_splits_the_heater_layer_off_a_large_junction_band():
+    """Draw 006 of ``bench/bench_validation_random.py 40 --seed 53``: an actuator's junction
+    band (0.106 J, σ 6.3 K at 41 °C) whose heat capacity is hundreds of times the heater's
+    own, read five times a decade. The ladder of one more stage fitted from the linear one
+    merged the heater with the next layer and settled at 5× the noise with 45 % too much
+    latent heat; from the fitted ladder with its fastest stage split it finds the heater
+    layer and the band."""
+    _, noise, fit, cmp = _band_fit("actuator", LatentHeat(0, 0.106, 40.96, 6.32, "gaussian"),
+                                   {"per_decade": 5, "n_curves": 2, "noise_k": 0.01,
+                                    "steady": False, "volts": True}, 5300006)
+    assert int(fit.effect.params["node"]) == 0
+    assert fit.effect.params["t_c"] == pytest.approx(40.96, abs=1.0)
+    assert fit.effect.params["latent_j"] == pytest.approx(0.106, rel=0.15)
+    assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
+
+
 @pytest.mark.parametrize("name, layers", [
     ("temperature-coefficient/inner-layers/strong", {"last_layer": 1.0}),
     ("temperature-coefficient/outer-layers/strong", {"first_layer": 2.0})])
@@ -365,6 +384,20 @@ def test_a_power_transient_is_told_from_a_fast_stage_by_the_readings_it_spares()
     assert power.effect.params["k_per_w"] == pytest.approx(c.truth["k_per_w"], rel=0.25)
     cmp = comparison_of(data, power.ladder, [power.effect])
     assert _chi2_per_point(cmp, noise, "pwm")["pwm"] < 1.5
+
+
+def test_a_band_that_mimics_a_coefficient_gives_way_at_a_dead_end():
+    """temperature-coefficient/inner-layers/strong at the diagnosis's own budgets: a band on
+    a ladder of one more stage explains 97 % of the misfit and nothing explains the rest;
+    the coefficient on the inner layers, decisive at the first step too, and an electrical
+    transient bring every data set to its noise, and are named instead."""
+    from spicethermal.analysis.diagnose import diagnose
+    from spicethermal.analysis.verdict import at_noise
+
+    result = diagnose(case("temperature-coefficient/inner-layers/strong").record().bundle)
+    assert result.effects[0] == "temperature-coefficient", result.verdict_reason
+    assert result.candidates[0].effect.name == "phase-change"  # the band was first
+    assert at_noise(result.final, result.noise_k)
 
 
 # -- the fast subset through the diagnosis ------------------------------------------------------

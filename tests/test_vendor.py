@@ -228,11 +228,11 @@ def test_version_1_files_are_read():
           "stages": [{"r_k_per_w": 1.0, "c_j_per_k": 2.0}], "rth_k_per_w": 1.0,
           "reference": "ambient", "effects": [], "provenance": {}}
     m = ThermalModel.from_dict(v1)
-    assert m.ladder == Cauer([1.0], [2.0]) and m.to_dict()["format"] == "spicethermal-model/2"
+    assert m.ladder == Cauer([1.0], [2.0]) and m.to_dict()["format"] == "spicethermal-model/3"
     with pytest.raises(DataFormatError, match="case_c_j_per_k"):
         ThermalModel.from_dict({**v1, "case_c_j_per_k": "big"})
     with pytest.raises(DataFormatError, match="format"):
-        ThermalModel.from_dict({**v1, "format": "spicethermal-model/3"})
+        ThermalModel.from_dict({**v1, "format": "spicethermal-model/4"})
 
 
 # ------------------------------------------------------------------ real vendor networks

@@ -55,7 +55,7 @@ from ..fit.fitters import fit_with_effects
 from ..fit.tcforward import own_cache
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
-from .candidates import candidates, refit_step, swap_first
+from .candidates import candidates, refit_step, swap_dead_end, swap_first
 from .compare import Comparison
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
@@ -200,6 +200,19 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             if not steps:
                 first = cands
             winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
+            if not winners and len(steps) == 1:
+                try:  # the first effect may have mimicked the other device effect
+                    swap = swap_dead_end(data, steps[0], first, base, names, noise,
+                                         LATER_BUDGET_S)
+                except TimeLimitError:  # the budget ran out: the step stands
+                    swap = None
+                if swap is not None:
+                    steps = swap
+                    k_total = steps[0].chosen.n_params + steps[1].chosen.n_params
+                    cur_ladder, cur_effects = steps[1].chosen.ladder, list(steps[1].effects)
+                    cur = steps[1].chosen.comparison
+                    cur_bic = criterion(cur, noise, k_total)
+                    continue
             if not winners:
                 break
             chosen = winners[0]

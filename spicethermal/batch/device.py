@@ -114,7 +114,7 @@ def make_row(source: Source, **values: Any) -> dict[str, Any]:
 def characterize(source: Source, options: Options) -> dict[str, Any]:
     """Fit, diagnose and export one device; return ``{"row", "model", "lib", "curve"}``.
 
-    ``row`` has the :data:`COLUMNS`; ``model`` is the ``spicethermal-model/1`` document (a
+    ``row`` has the :data:`COLUMNS`; ``model`` is the ``spicethermal-model/3`` document (a
     dict) and ``lib`` the subcircuit text (both ``None`` on error); ``curve`` the measured
     Zth(t) (``t_s``, ``zth_k_per_w``, ``rth_k_per_w``) for the population's envelope.
 

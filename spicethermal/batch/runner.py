@@ -4,7 +4,7 @@ results table.
 
 Layout of the output directory::
 
-    OUTDIR/devices/NAME/model.json     spicethermal-model/1
+    OUTDIR/devices/NAME/model.json     spicethermal-model/3
     OUTDIR/devices/NAME/NAME.lib       .SUBCKT NAME TJ TREF
     OUTDIR/devices/NAME/result.json    the row, the measured Zth(t); written last: its
                                        presence means the device is done

@@ -16,7 +16,7 @@ import numpy as np
 from ..core.errors import SimulationError
 from ..core.ladder import Foster
 from ..engines.pwm import stage_peaks
-from ..model import Network, ThermalModel
+from ..model import ThermalModel
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -67,7 +67,7 @@ class Dynamics:
     def __init__(self, model: ThermalModel, ambient_c: float, p_max_w: float,
                  f_pwm_hz: float) -> None:
         self.model = model
-        self.net = Network.of(model.ladder)
+        self.net = model.network()
         self.n = self.net.n
         self.tref = ambient_c
         self.p = p_max_w

@@ -1,9 +1,12 @@
 """``phase-change`` (device): latent heat absorbed across a temperature band at one node.
 
 Latent heat ``latent_j`` absorbed across a band centred at ``t_c`` adds heat capacity from
-node ``node`` (index into the ladder, 0 = junction; the fit tries every node) to the
-reference. The band's shape is the effect's form; in each the extra capacity ``c(T)`` is the
-derivative of the heat ``H(T)`` absorbed up to ``T``, ``H(−∞) = 0`` and ``H(+∞) = latent_j``:
+node ``node`` (0 = junction; the fit tries every node) to the reference. A node ``k > 0`` is
+layer ``k`` of the ladder's exact Cauer form (a Foster ladder's inner nodes are no physical
+layers): a model with such a band is simulated and exported on that form
+(:func:`physical_nodes`). The band's shape is the effect's form; in each the extra capacity
+``c(T)`` is the derivative of the heat ``H(T)`` absorbed up to ``T``, ``H(−∞) = 0`` and
+``H(+∞) = latent_j``:
 
 * ``logistic`` (the default): standard deviation ``width_k``,
   ``H = L / (1 + e^{−(T − t_c)/s})`` with ``s = width_k·√3/π``;
@@ -173,6 +176,11 @@ def spice_stored_heat(effect, node: int, t_node: str, _c_node: float = 0.0) -> s
             f"/({number(effect.logistic_scale_k)})))")
 
 
+def physical_nodes(effect) -> bool:
+    """True for a band away from the junction: it sits at a layer of the Cauer ladder."""
+    return int(effect.params["node"]) > 0
+
+
 SPEC = register(EffectSpec(
     "phase-change", DEVICE,
     "latent heat (cavity fluid, solder, TIM): extra heat capacity over a temperature band",
@@ -185,5 +193,5 @@ SPEC = register(EffectSpec(
      "edge_k": Param("K", 0.2, 0.005, 100.0, "logistic scale of the plateau's edges "
                      "(form plateau)")},
     ("logistic", "gaussian", "plateau"), extra_capacitance=extra_capacitance,
-    latent_heat=latent_heat, spice_stored_heat=spice_stored_heat,
+    latent_heat=latent_heat, spice_stored_heat=spice_stored_heat, physical_nodes=physical_nodes,
     fit="spicethermal.fit.pcfit:fit_phase_change"))

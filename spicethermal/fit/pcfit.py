@@ -2,10 +2,10 @@
 cooling curves (the forward model, an integration of the nodal network with the band's heat
 capacity, is :func:`spicethermal.fit.effectfit.pc_cooling_rise`).
 
-The band sits at one node of the ladder, and each node runs at its own temperatures: in the
-steady state before the cut node ``k`` is at ``Tref + f_k (Tj − Tref)`` with ``f_k`` the
-fraction of the junction's rise across the layers beyond it, so a latent heat in an outer
-layer (an actuator's cavity fluid, a solder that melts) is sought at that node's
+The band sits at one node of the ladder (a layer of its Cauer form), and each node runs at its
+own temperatures: in the steady state before the cut node ``k`` is at ``Tref + f_k (Tj − Tref)``
+with ``f_k`` the fraction of the junction's rise across the layers beyond it, so a latent heat
+in an outer layer (an actuator's cavity fluid, a solder that melts) is sought at that node's
 temperatures, not at the junction's. Two searches cover a node's range:
 
 * between its hottest temperature on the lowest-power curve and on the hottest curve, with the
@@ -31,13 +31,11 @@ from ..effects import CATALOGUE, Effect
 from ..model import Network
 from .budget import EVALUATION_S, check_time, mark, reached
 from .effectfit import (
-    MAX_BASELINE_ORDER,
     NUMERICAL_ERRORS,
     BundleData,
     EffectFit,
     TimeLimitError,
     as_foster,
-    baseline_ladder,
     bounded,
     cooling_true_c,
     joint_fit,
@@ -50,6 +48,15 @@ from .effectfit import (
     time_limit,
     unlimited,
 )
+from .pcrefine import (
+    PC_FIT_TOL,
+    PC_JOINT_BUDGET_S,
+    PC_NFEV,
+    SHAPE_GAIN,
+    junction_stage,
+    other_shape,
+)
+from .tcforward import as_cauer
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -58,8 +65,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["PC_FIT_TOL", "band_start", "fit_phase_change", "node_fractions"]
 
-#: The phase-change fit (an integration per evaluation) stops at this looser tolerance.
-PC_FIT_TOL = 1e-5
 #: Work (s, :mod:`.budget`) allowed to one evaluation of the phase-change grid (a band that makes
 #: the integration crawl is not the start point).
 PC_EVAL_S = 0.3
@@ -77,19 +82,6 @@ LATENT_WALK = 3
 #: Bands are sought down to this fraction of a node's rise on the hottest curve (a band nearer
 #: the reference temperature holds too little of any curve's cooling to tell).
 BAND_FLOOR = 0.2
-#: Iterations allowed to the band's own fit (3 parameters, the ladder held; each also evaluates
-#: the forward model 3 times for its Jacobian).
-PC_NFEV = 15
-#: Work (s, :mod:`.budget`) allowed to the joint refit of the ladder with a phase-change band (each
-#: evaluation integrates the curves that cross the band); past it the best point so far is kept.
-PC_JOINT_BUDGET_S = 1.5
-#: Work (s, :mod:`.budget`) allowed to the fit of each other band shape (started from the logistic
-#: fit).
-PC_FORM_BUDGET_S = 0.6
-#: The other shapes are fitted only when the logistic band lowers the noise-weighted squared
-#: error this much (twice the decision's BIC drop: a band that is not clearly there has no
-#: shape to tell).
-SHAPE_GAIN = 20.0
 
 
 def node_fractions(ladder: Foster | Cauer) -> NDArray:
@@ -109,7 +101,7 @@ def node_fractions(ladder: Foster | Cauer) -> NDArray:
     >>> [round(float(x), 6) for x in node_fractions(Cauer([1.0, 3.0], [1.0, 1.0]))]
     [1.0, 0.75]
     """
-    net = Network.of(ladder)
+    net = Network.of(as_cauer(ladder))
     b = np.zeros(net.n)
     b[0] = 1.0
     theta = np.linalg.solve(net.conductance(), b)
@@ -262,7 +254,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
             continue
         no_band[id(lad)] = float(r0 @ r0)
         fractions = node_fractions(lad)
-        c_node = as_foster(lad).to_cauer().c
+        c_node = as_cauer(lad).c
         for k, (a, b) in enumerate(node_ranges):
             span = b - a
             if span < 0.5:
@@ -375,8 +367,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                     lad, effs = lad2, effs2
         except (FitError, TimeLimitError):
             pass
-    lad, effs, extra_k = _junction_stage(data, cooling, lad, effs, build, (lo, hi), node,
-                                         c_scale)
+    lad, effs, extra_k = junction_stage(data, cooling, lad, effs, build, (lo, hi), c_scale)
     with unlimited():
         gain = plain - sse(sub, lad, [*base, effs[-1]])
     if gain <= 0:  # no band does better than the given ladder without one
@@ -392,73 +383,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     if gain < SHAPE_GAIN or left < SHAPE_GAIN:
         return out
     for form in ("gaussian", "plateau"):
-        fit = _other_shape(data, names, lad, base, effs[-1], form, (lo, hi), c_scale)
+        fit = other_shape(data, names, lad, base, effs[-1], form, (lo, hi), c_scale)
         if fit is not None:
             out.append(EffectFit(fit, lad, (5 if form == "plateau" else 4) + extra_k, facts))
     return out
-
-
-def _junction_stage(data: BundleData, cooling: list[str], lad: Foster, effs: list[Effect],
-                    build, limits: tuple[list[float], list[float]], node: int,
-                    c_scale: float) -> tuple[Foster, list[Effect], int]:
-    """A band at the junction refitted with its ladder on one more stage, when that lowers the
-    noise-weighted squared error by more than the stage's two parameters cost (BIC); returns
-    the ladder, the effects and the parameters added (0 or 2).
-
-    The linear ladder of curves that all cross a junction band lumps the junction with the
-    next layer (their first milliseconds bend too little to ask for another stage): the band's
-    heat then spreads over too large a capacity, and the cooling curves' first milliseconds
-    stay beyond their noise whatever the band. Tried only while they do
-    (:data:`SHAPE_GAIN` above their number of points), within :data:`PC_JOINT_BUDGET_S`."""
-    n_cool = sum(data.measured(n).size for n in cooling)
-    with unlimited():
-        before = sse(data, lad, effs)
-        left = sse(subset(data, cooling), lad, effs) - n_cool
-    if node != 0 or left < SHAPE_GAIN or lad.order >= MAX_BASELINE_ORDER:
-        return lad, effs, 0
-    p = effs[-1].params
-    x0 = [math.log(p["latent_j"] / c_scale), p["t_c"], p["width_k"]]
-    try:
-        start = baseline_ladder(data, lad.order + 1)
-        with time_limit(PC_JOINT_BUDGET_S):
-            lad2, effs2, _ = joint_fit(data, cooling, start, True, x0, *limits, build,
-                                       diff_step=1e-3, tol=PC_FIT_TOL)
-    except (FitError, DataFormatError, SimulationError, TimeLimitError, *NUMERICAL_ERRORS):
-        return lad, effs, 0
-    n = sum(data.measured(d).size for d in data.datasets)
-    with unlimited():
-        if sse(data, lad2, effs2) + 2 * math.log(n) < before:
-            return lad2, effs2, 2
-    return lad, effs, 0
-
-
-def _other_shape(data: BundleData, names: Sequence[str], ladder: Foster, base: Sequence[Effect],
-                 logistic: Effect, form: str, limits: tuple[list[float], list[float]],
-                 c_scale: float) -> Effect | None:
-    """The band of shape ``form`` fitted from the logistic fit (the ladder held); None when its
-    fit fails or runs out of time before any step."""
-    p = logistic.params
-    node = int(p["node"])
-    lo, hi = list(limits[0]), list(limits[1])
-    # a plateau of full width W has the standard deviation W/√12; its edges start at W/10
-    width0 = p["width_k"] * (math.sqrt(12.0) if form == "plateau" else 1.0)
-    x0 = [math.log(max(p["latent_j"], 1e-12) / c_scale), p["t_c"],
-          float(np.clip(width0, lo[2] * 1.01, 2 * hi[2]))]
-    hi[2] = 2 * hi[2] if form == "plateau" else hi[2]
-    if form == "plateau":
-        x0.append(math.log(x0[2] / 10))
-        lo.append(math.log(0.005))
-        hi.append(math.log(max(x0[2], 0.01)))
-
-    def build(x: NDArray) -> list[Effect]:
-        extra = {"edge_k": math.exp(x[3])} if form == "plateau" else {}
-        return [*base, Effect.create("phase-change", form, latent_j=math.exp(x[0]) * c_scale,
-                                     t_c=float(x[1]), width_k=float(x[2]), node=node, **extra)]
-
-    try:
-        with time_limit(PC_FORM_BUDGET_S):
-            _, effs, _ = joint_fit(data, names, ladder, False, x0, lo, hi, build,
-                                   diff_step=1e-3, tol=PC_FIT_TOL, max_nfev=PC_NFEV)
-    except (FitError, TimeLimitError):
-        return None
-    return effs[-1]

@@ -14,6 +14,7 @@ from ..core.ladder import Cauer, Foster
 from ..effects import CATALOGUE, Effect, phase_change
 from ..model import Network
 from .budget import PC_STEP_S, check_time
+from .tcforward import as_cauer
 from .tcjunction import as_foster, tc_cooling_rise, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -33,6 +34,12 @@ CACHE_SIZE = 64
 def band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     low, high = phase_change.band(effect)
     return effect.params["latent_j"] > 0 and t_hi_c > low and t_lo_c < high
+
+
+def band_network(ladder: Foster | Cauer, effect: Effect) -> Network:
+    """The nodal network that holds the band: the ladder's own at the junction, its exact
+    Cauer equivalent's (physical layers) at a node further out."""
+    return Network.of(as_cauer(ladder) if effect.physical_nodes else ladder)
 
 
 def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
@@ -63,7 +70,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
         if tc is not None:
             return tc_cooling_rise(ladder, alpha, t0, tref_c, power_w, t)
         return power_w * f.cooling(t)
-    net = Network.of(ladder)
+    net = band_network(ladder, effect)
     g = net.conductance()
     cinv = np.linalg.inv(net.capacitance())
     p = effect.params
@@ -138,8 +145,8 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float, powe
     the mean is right only for a swing much narrower than the band (it overstates the
     capacity of a swing across a narrow band and understates one beside it).
     """
-    g, cm, z = _nodal(ladder)
     node = int(effect.params["node"])
+    g, cm, z = _nodal(as_cauer(ladder) if effect.physical_nodes else ladder)
     t_mean = tref_c + power_w * duty * float(z[node])
     extra = effect.extra_capacitance(node, t_mean)
     period = 1.0 / freq_hz

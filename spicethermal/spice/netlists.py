@@ -35,7 +35,9 @@ HEATSINK_EXAMPLE = {"heatsink_c": 2.0, "heatsink_r": 1.0, "ambient_c": 25.0, "po
 
 
 def golden_models() -> dict[str, ThermalModel]:
-    """The paper-like actuator (linear) and the same with device effects."""
+    """The paper-like actuator (linear) and the same with device effects: a temperature
+    coefficient and its cavity's methanol, a latent-heat band at layer 2 (so its ``.lib``
+    files are Cauer ladders only: a Foster network has no such layer)."""
     actuator = ThermalModel(Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0]),
                             provenance={"source": "example: paper-like actuator, Rth 146 K/W"})
     effects = actuator.with_effects([
@@ -78,8 +80,9 @@ def _heatsink_deck() -> str:
 
 
 GOLDEN: dict[str, Callable[[], str]] = {
-    **{f"{k}_{d}_{t}.lib": _lib(k, d, t) for k in ("actuator", "actuator_effects")
-       for d in DIALECTS for t in TOPOLOGIES},
+    **{f"actuator_{d}_{t}.lib": _lib("actuator", d, t) for d in DIALECTS for t in TOPOLOGIES},
+    **{f"actuator_effects_{d}_cauer.lib": _lib("actuator_effects", d, "cauer")
+       for d in DIALECTS},
     "actuator_pwm_1khz.cir": _pwm_bench,
     f"{VENDOR_EXAMPLE[1]}.lib": _vendor_lib,
     f"{VENDOR_EXAMPLE[1]}_heatsink.cir": _heatsink_deck,

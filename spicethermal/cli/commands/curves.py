@@ -26,7 +26,7 @@ HELP = "duty-cycle impedance curves r_D(t), eq. 3 and exact (the paper's Fig. 8)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/3 (/2, /1) file")
     parser.add_argument("-o", "--output", required=True, metavar="FIG.png",
                         help="where to write the figure (PNG)")
     parser.add_argument("--duty", type=_duty, action="append", metavar="D",

@@ -42,7 +42,8 @@ def _duty(text: str) -> float:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="model file (spicethermal-model/1)")
+    parser.add_argument("model", metavar="MODEL.json",
+                        help="model file (spicethermal-model/3, /2 or /1)")
     parser.add_argument("--t-max", type=_number, required=True, metavar="C",
                         help="junction limit in °C; applies to the PWM peak")
     parser.add_argument("--target", type=_number, required=True, metavar="C",

@@ -13,7 +13,7 @@ HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and t
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="spicethermal-model/2 (or /1) file")
+    parser.add_argument("model", metavar="MODEL.json", help="spicethermal-model/3 (/2, /1) file")
     parser.add_argument("--dialect", choices=DIALECTS, default="ngspice")
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
                         help="network to write (default: the model's own; converted exactly). "

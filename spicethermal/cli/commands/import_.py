@@ -26,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="what the reference pin is (default: from its name; case for "
                              "tables)")
     parser.add_argument("-o", "--output", required=True, metavar="MODEL.json",
-                        help="model file to write (spicethermal-model/2)")
+                        help="model file to write (spicethermal-model/3)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -22,7 +22,7 @@ HELP = "periodic steady state under PWM: peak, mean, valley and the bench readin
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/1 file")
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/3 (/2, /1) file")
     parser.add_argument("--freq", required=True, metavar="HZ",
                         type=frequency, help="PWM frequency, Hz")
     parser.add_argument("--duty", required=True, metavar="D",
