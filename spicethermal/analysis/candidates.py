@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -320,29 +320,54 @@ def swap_first(data: BundleData, steps: Sequence[Step], first: Sequence[Candidat
     swap is taken when that is decisive on top of the alternative and the model with both has
     a criterion lower by :data:`MIN_BIC_DROP` than the first two steps'."""
     one, two = steps[0].chosen, steps[1].chosen
-    if one.effect.name not in SWAPPABLE:
-        return None
-    before = [e for e in steps[0].effects if e.name != one.effect.name]
     bic_now = criterion(two.comparison, noise, one.n_params + two.n_params)
-    bic0 = criterion(base, noise, 0)
-    for alt in first:
-        if alt.effect.name not in SWAPPABLE or alt.effect.name in (one.effect.name,
-                                                                     two.effect.name) \
-                or alt.contradicted or not decisive(alt, bic0):
+    for alt, on_alt in _alternatives(steps[0], first, base, noise, (two.effect.name,)):
+        def closer(new: Candidate, alt: Candidate = alt) -> bool:
+            return bic_now - criterion(new.comparison, noise,
+                                       alt.n_params + new.n_params) >= MIN_BIC_DROP
+
+        second = _second_step(data, alt, on_alt, [two.effect.name], noise, budget_s, closer)
+        if second is None:
             continue
-        on_alt = [*before, alt.effect] if not alt.model_effects else list(alt.model_effects)
-        cands = candidates(data, alt.ladder, on_alt, [two.effect.name], alt.comparison, noise,
-                           lambda _text: None, {}, budget_s, step=2)
-        new = next((c for c in cands if decisive(c, alt.bic) and not c.contradicted), None)
-        if new is None or bic_now - criterion(new.comparison, noise, alt.n_params
-                                              + new.n_params) < MIN_BIC_DROP:
-            continue
-        model_effects = list(new.model_effects) or [*on_alt, new.effect]
-        if not new.model_effects:
-            new, model_effects = refit_step(data, new, model_effects, alt.comparison, noise)
+        new, cands, model_effects = second
         return [Step(alt, steps[0].candidates, tuple(on_alt)),
                 Step(new, tuple(cands), tuple(model_effects))]
     return None
+
+
+def _alternatives(step: Step, first: Sequence[Candidate], base: Comparison,
+                  noise: Mapping[str, float], also_not: tuple[str, ...] = ()
+                  ) -> Iterator[tuple[Candidate, list[Effect]]]:
+    """The other device effects of :data:`SWAPPABLE` (not ``also_not``) that were decisive and
+    not contradicted at the first step, each with the model's effects with it in place of the
+    step's effect."""
+    one = step.chosen
+    if one.effect.name not in SWAPPABLE:
+        return
+    before = [e for e in step.effects if e.name != one.effect.name]
+    bic0 = criterion(base, noise, 0)
+    for alt in first:
+        if alt.effect.name in SWAPPABLE and alt.effect.name not in (one.effect.name, *also_not) \
+                and not alt.contradicted and decisive(alt, bic0):
+            yield alt, list(alt.model_effects) or [*before, alt.effect]
+
+
+def _second_step(data: BundleData, alt: Candidate, on_alt: list[Effect], names: Sequence[str],
+                 noise: Mapping[str, float], budget_s: float,
+                 keep: Callable[[Candidate], bool] = lambda _c: True
+                 ) -> tuple[Candidate, list[Candidate], list[Effect]] | None:
+    """The best decisive candidate of ``names`` on top of ``alt`` (then refitted with the
+    effects before it), the candidates weighed and the model's effects; ``None`` when none is
+    or ``keep`` rejects it."""
+    cands = candidates(data, alt.ladder, on_alt, names, alt.comparison, noise,
+                       lambda _text: None, {}, budget_s, step=2)
+    new = next((c for c in cands if decisive(c, alt.bic) and not c.contradicted), None)
+    if new is None or not keep(new):
+        return None
+    model_effects = list(new.model_effects) or [*on_alt, new.effect]
+    if not new.model_effects:
+        new, model_effects = refit_step(data, new, model_effects, alt.comparison, noise)
+    return new, cands, model_effects
 
 
 def swap_dead_end(data: BundleData, step: Step, first: Sequence[Candidate], base: Comparison,
@@ -358,26 +383,12 @@ def swap_dead_end(data: BundleData, step: Step, first: Sequence[Candidate], base
     every data set to its noise (temperature-coefficient/inner-layers/strong of the validation
     set). The swap is taken only when the alternative and a second effect (any of ``names``,
     :func:`candidates` within ``budget_s`` of work) leave every data set at its noise."""
-    one = step.chosen
-    if one.effect.name not in SWAPPABLE:
-        return None
-    before = [e for e in step.effects if e.name != one.effect.name]
-    bic0 = criterion(base, noise, 0)
-    for alt in first:
-        if alt.effect.name not in SWAPPABLE or alt.effect.name == one.effect.name \
-                or alt.contradicted or not decisive(alt, bic0):
-            continue
-        on_alt = list(alt.model_effects) or [*before, alt.effect]
-        cands = candidates(data, alt.ladder, on_alt,
-                           [n for n in names if n not in {e.name for e in on_alt}],
-                           alt.comparison, noise, lambda _text: None, {}, budget_s, step=2)
-        new = next((c for c in cands if decisive(c, alt.bic) and not c.contradicted), None)
-        if new is None:
-            continue
-        model_effects = list(new.model_effects) or [*on_alt, new.effect]
-        if not new.model_effects:
-            new, model_effects = refit_step(data, new, model_effects, alt.comparison, noise)
-        if at_noise(new.comparison, noise):
+    for alt, on_alt in _alternatives(step, first, base, noise):
+        second = _second_step(data, alt, on_alt,
+                              [n for n in names if n not in {e.name for e in on_alt}], noise,
+                              budget_s)
+        if second is not None and at_noise(second[0].comparison, noise):
+            new, cands, model_effects = second
             return [Step(alt, step.candidates, tuple(on_alt)),
                     Step(new, tuple(cands), tuple(model_effects))]
     return None
