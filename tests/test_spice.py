@@ -113,7 +113,7 @@ def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology, tem
     assert np.max(np.abs(lin - py)) > 1.0  # the effects matter at this strength
 
 
-def test_a_band_one_layer_out_is_exported_on_the_cauer_form(tmp_path, actuator):
+def test_a_band_one_layer_out_is_exported_on_the_cauer_form(tmp_path, actuator, capsys):
     model = ThermalModel(actuator, (Effect.create("phase-change", t_c=40.0, width_k=2.0,
                                                   latent_j=0.02, node=1),))
     text = spice.export(model, tmp_path / "m.lib", name="PC").read_text()
@@ -121,6 +121,10 @@ def test_a_band_one_layer_out_is_exported_on_the_cauer_form(tmp_path, actuator):
     with pytest.raises(DataFormatError, match="phase-change .*needs physical node"):
         spice.export(model, tmp_path / "f.lib", topology="foster", name="PC")
     assert not (tmp_path / "f.lib").exists()
+    # the command says what it wrote: the Cauer ladder, not the model file's Foster one
+    model.save(tmp_path / "m.json")
+    assert main(["export", str(tmp_path / "m.json"), "-o", str(tmp_path / "c.lib")]) == 0
+    assert "cauer ladder of 4 stages" in capsys.readouterr().out
 
 
 def test_export_command_and_errors(tmp_path, actuator, capsys):

@@ -372,12 +372,7 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
                               f"{', '.join(TEMPERATURES)}")
     pins = pins or Pins()
     name = check_name(default_name(model, filename) if name is None else name)
-    local = [e for e in model.device_effects if e.physical_nodes]
-    if local and topology == "foster":
-        raise DataFormatError(f"--topology foster: effect {local[0].name} (form "
-                              f"{local[0].form}) needs physical node temperatures; use "
-                              "--topology cauer")
-    model = model.with_topology(topology or ("cauer" if local else model.ladder.topology))
+    model = model.with_topology(written_topology(model, topology))
     if pins.ambient and model.ladder.topology == "foster":
         raise DataFormatError("--pins: an ambient pin (thermal ground) needs --topology cauer; "
                               "a Foster ladder has no node for it")
@@ -404,6 +399,26 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
         "stages": stages, "heats": heats,
     }
     return environment().get_template(f"lib/{dialect}.lib.j2").render(**ctx)
+
+
+def written_topology(model: ThermalModel, topology: str | None = None) -> str:
+    """The topology a ``.lib`` of ``model`` is written in: ``topology``, else the model's own,
+    or ``cauer`` when a device effect needs physical node temperatures (where ``foster`` is
+    refused).
+
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.effects import Effect
+    >>> from spicethermal.model import ThermalModel
+    >>> band = Effect.create("phase-change", t_c=40.0, latent_j=0.1, node=1)
+    >>> written_topology(ThermalModel(Foster.from_tau([1.0, 2.0], [1e-3, 1.0]), (band,)))
+    'cauer'
+    """
+    local = [e for e in model.device_effects if e.physical_nodes]
+    if local and topology == "foster":
+        raise DataFormatError(f"--topology foster: effect {local[0].name} (form "
+                              f"{local[0].form}) needs physical node temperatures; use "
+                              "--topology cauer")
+    return topology or ("cauer" if local else model.ladder.topology)
 
 
 def export(model: ThermalModel, path: str | os.PathLike, dialect: str = "ngspice",

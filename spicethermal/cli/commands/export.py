@@ -5,7 +5,16 @@ from __future__ import annotations
 import argparse
 
 from ...model import ThermalModel
-from ...spice.lib import DIALECTS, TEMPERATURES, TOPOLOGIES, Pins, check_name, default_name, export
+from ...spice.lib import (
+    DIALECTS,
+    TEMPERATURES,
+    TOPOLOGIES,
+    Pins,
+    check_name,
+    default_name,
+    export,
+    written_topology,
+)
 
 NAME = "export"
 HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and temperature "
@@ -40,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     name = args.name if args.name is not None else default_name(model, args.output)
     path = export(model, args.output, args.dialect, args.topology, name, pins=pins,
                   temperature=args.temperature)
-    ladder = model.with_topology(args.topology or model.ladder.topology).ladder
+    ladder = model.with_topology(written_topology(model, args.topology)).ladder
     print(f"wrote {path}: .SUBCKT {name} {' '.join(pins.names)}, {ladder.topology} ladder of "
           f"{ladder.order} stages, Rth = {model.rth:.6g} K/W ({model.reference}), "
           f"{args.dialect} dialect, {args.temperature} temperatures")
