@@ -40,7 +40,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..effects import CATALOGUE
@@ -182,7 +182,6 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     steps: list[Step] = []
     first: list[Candidate] = []
     cur_ladder, cur_effects, cur, cur_bic = ladder, list(model.effects), base, bic0
-    k_total = 0
     contradicted = ""
     # one budget for every step: a step that finds its time spent stops the diagnosis
     end = mark(DIAGNOSIS_BUDGET_S)
@@ -201,43 +200,34 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
                 first = cands
             winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
             if not winners and len(steps) == 1:
-                try:  # the first effect may have mimicked the other device effect
-                    swap = swap_dead_end(data, steps[0], first, base, names, noise,
-                                         LATER_BUDGET_S)
-                except TimeLimitError:  # the budget ran out: the step stands
-                    swap = None
-                if swap is not None:
-                    steps = swap
-                    k_total = steps[0].chosen.n_params + steps[1].chosen.n_params
-                    cur_ladder, cur_effects = steps[1].chosen.ladder, list(steps[1].effects)
-                    cur = steps[1].chosen.comparison
-                    cur_bic = criterion(cur, noise, k_total)
-                    continue
-            if not winners:
-                break
-            chosen = winners[0]
-            if steps and len(winners) > 1 and winners[1].bic - chosen.bic < MIN_BIC_DROP:
-                break  # two effects gain alike on top of the model: the gain is neither's
-            contradicted = chosen.contradicted
-            if contradicted:
-                break
-            k_total += chosen.n_params
-            model_effects = list(chosen.model_effects) or [*cur_effects, chosen.effect]
-            if steps and not chosen.model_effects:
-                # the effects found before held their one-at-a-time fits: refit all
-                chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
-            steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
-            if len(steps) == 2:
-                try:
-                    swap = swap_first(data, steps, first, base, noise, LATER_BUDGET_S)
-                except TimeLimitError:  # the budget ran out: the steps stand
-                    swap = None
-                if swap is not None:
-                    steps = swap
-                    k_total = steps[0].chosen.n_params + steps[1].chosen.n_params
-                    chosen, model_effects = steps[1].chosen, list(steps[1].effects)
-            cur_ladder, cur_effects, cur = chosen.ladder, model_effects, chosen.comparison
-            cur_bic = criterion(cur, noise, k_total)
+                # the first effect may have mimicked the other device effect
+                swap = _unless_out_of_time(swap_dead_end, data, steps[0], first, base, names,
+                                           noise, LATER_BUDGET_S)
+                if swap is None:
+                    break
+                steps = swap
+            else:
+                if not winners:
+                    break
+                chosen = winners[0]
+                if steps and len(winners) > 1 and winners[1].bic - chosen.bic < MIN_BIC_DROP:
+                    break  # two effects gain alike on top of the model: the gain is neither's
+                contradicted = chosen.contradicted
+                if contradicted:
+                    break
+                model_effects = list(chosen.model_effects) or [*cur_effects, chosen.effect]
+                if steps and not chosen.model_effects:
+                    # the effects found before held their one-at-a-time fits: refit all
+                    chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
+                steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
+                if len(steps) == 2:
+                    steps = _unless_out_of_time(swap_first, data, steps, first, base, noise,
+                                                LATER_BUDGET_S) or steps
+            # the model so far is the last step's
+            last = steps[-1]
+            cur_ladder, cur_effects, cur = last.chosen.ladder, list(last.effects), \
+                last.chosen.comparison
+            cur_bic = criterion(cur, noise, sum(st.chosen.n_params for st in steps))
     where = tuple(localise(base, noise))
 
     def partial_after(k: int) -> bool:  # the first k effects leave physics they do not explain
@@ -286,3 +276,13 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     effect = steps[0].chosen.effect.name if steps else None
     return Diagnosis(base, model, noise, bic0, tuple(first), effect, reason, where, skipped,
                      time.perf_counter() - t_start, data.source, {}, tuple(steps))
+
+
+def _unless_out_of_time(swap: Callable[..., list[Step] | None], *args: Any
+                        ) -> list[Step] | None:
+    """``swap(*args)``, or ``None`` when the diagnosis's budget runs out within it (the steps
+    found so far stand)."""
+    try:
+        return swap(*args)
+    except TimeLimitError:
+        return None

@@ -36,10 +36,10 @@ def band_reached(effect: Effect, t_lo_c: float, t_hi_c: float) -> bool:
     return effect.params["latent_j"] > 0 and t_hi_c > low and t_lo_c < high
 
 
-def band_network(ladder: Foster | Cauer, effect: Effect) -> Network:
-    """The nodal network that holds the band: the ladder's own at the junction, its exact
-    Cauer equivalent's (physical layers) at a node further out."""
-    return Network.of(as_cauer(ladder) if effect.physical_nodes else ladder)
+def band_ladder(ladder: Foster | Cauer, effect: Effect) -> Foster | Cauer:
+    """The ladder whose nodal network holds the band: ``ladder`` itself at the junction, its
+    exact Cauer equivalent (physical layers) at a node further out."""
+    return as_cauer(ladder) if effect.physical_nodes else ladder
 
 
 def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power_w: float,
@@ -70,7 +70,7 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
         if tc is not None:
             return tc_cooling_rise(ladder, alpha, t0, tref_c, power_w, t)
         return power_w * f.cooling(t)
-    net = band_network(ladder, effect)
+    net = Network.of(band_ladder(ladder, effect))
     g = net.conductance()
     cinv = np.linalg.inv(net.capacitance())
     p = effect.params
@@ -146,7 +146,7 @@ def pc_frozen_ladder(ladder: Foster | Cauer, effect: Effect, tref_c: float, powe
     capacity of a swing across a narrow band and understates one beside it).
     """
     node = int(effect.params["node"])
-    g, cm, z = _nodal(as_cauer(ladder) if effect.physical_nodes else ladder)
+    g, cm, z = _nodal(band_ladder(ladder, effect))
     t_mean = tref_c + power_w * duty * float(z[node])
     extra = effect.extra_capacitance(node, t_mean)
     period = 1.0 / freq_hz
