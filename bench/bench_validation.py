@@ -38,6 +38,8 @@ import traceback  # noqa: E402
 from collections import Counter, defaultdict  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+import numpy as np  # noqa: E402
+
 from spicethermal.validation.cases import Case, catalogue  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -98,12 +100,21 @@ def _diagnose(folder: str, conn) -> None:
         result = diagnose(bundle)
         elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
         conn.send({"named": named_effects(result), "elapsed_s": elapsed, "cpu_s": cpu,
-                   "reason": str(getattr(result, "verdict_reason", ""))[:300]})
+                   "reason": str(result.verdict_reason), "left": left(result)})
     except BaseException as exc:  # a crash is a result here
         conn.send({"crash": f"{type(exc).__name__}: {exc}"[:300],
                    "trace": traceback.format_exc()[-1500:]})
     finally:
         conn.close()
+
+
+def left(result) -> dict[str, float]:
+    """Per data set, the noise-weighted ``χ²/n`` the named effects leave (the baseline's when
+    none is named): how far from its noise each data set stays."""
+    final = result.steps[-1].chosen.comparison if result.steps else result.baseline
+    return {name: round(float(np.sum(sub.residuals_k ** 2)) / result.noise_k[name] ** 2
+                        / max(len(sub.points), 1), 3)
+            for name, sub in final.by_dataset().items()}
 
 
 def named_effects(result) -> list[str]:
@@ -313,13 +324,19 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     results = run_diagnoses({c.name: _folder(out, c) for c in cases}, args.workers,
                             args.timeout)
-    summary = score({c.name: meta[c.name] for c in cases}, results)
+    scored_report({c.name: meta[c.name] for c in cases}, results, out)
+    return 0
+
+
+def scored_report(meta: dict[str, dict], results: dict[str, dict], out: Path) -> None:
+    """Score, print the report and keep it, each diagnosis's outcome beside it, in
+    ``OUT/summary.json``."""
+    summary = score(meta, results)
     report(summary)
     summary["results"] = results
     summary["load_average"] = os.getloadavg()
     (out / "summary.json").write_text(json.dumps(summary, indent=1, default=str))
     print(f"summary: {out / 'summary.json'}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -33,7 +33,7 @@ from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_validation import mark, report, run_diagnoses, score  # noqa: E402
+from bench_validation import mark, run_diagnoses, scored_report  # noqa: E402
 
 from spicethermal.validation.cases import DEVICES, Case, _bench, _laws, _variant  # noqa: E402
 from spicethermal.validation.measure import Transient  # noqa: E402
@@ -198,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{time.perf_counter() - t0:.0f} s", flush=True)
     results = run_diagnoses({c.name: Path(meta[c.name]["folder"]) for c in cases},
                             args.workers, args.timeout)
-    report(score({c.name: meta[c.name] for c in cases}, results))
+    scored_report({c.name: meta[c.name] for c in cases}, results, out)
     return 0
 
 

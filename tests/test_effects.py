@@ -21,7 +21,7 @@ from spicethermal.effects import (
     Param,
     known_names,
 )
-from spicethermal.fit.budget import EVALUATION_S
+from spicethermal.fit.budget import EVALUATION_S, PC_STEP_S, spent
 from spicethermal.fit.effectfit import (
     BundleData,
     CalData,
@@ -114,6 +114,20 @@ def test_pc_cooling_matches_the_models_integration(actuator):
     assert np.max(fast - lin) > 1.0  # the latent heat holds the junction up by kelvins
     cold = pc_cooling_rise(actuator, eff, 25.0, 0.12, t)  # never reaches the band
     assert np.array_equal(cold, 0.12 * actuator.cooling(t))
+
+
+def test_pc_cooling_counts_its_work_and_stops_at_its_budget(actuator):
+    """The integration runs in ODEPACK's own loop (:mod:`spicethermal.fit.lsoda`): it still
+    counts :data:`PC_STEP_S` per right-hand side, and a budget spent within it stops it (the
+    error raised in the right-hand side goes through the compiled loop)."""
+    eff = HIDDEN["phase-change"]
+    t = np.geomspace(1e-5, 100, 25)
+    before = spent()
+    pc_cooling_rise(actuator, eff, 25.0, 0.3, t)
+    steps = (spent() - before) / 1e9 / PC_STEP_S
+    assert 50 < steps < 5000
+    with pytest.raises(TimeLimitError), time_limit(PC_STEP_S * steps / 2):
+        pc_cooling_rise(actuator, eff, 25.0, 0.3, t)
 
 
 @pytest.mark.parametrize("node", [1, 2])

@@ -38,7 +38,10 @@ __all__ = ["EVALUATION_S", "FROZEN_ROW_S", "HANG_FACTOR", "PC_STEP_S", "TC_STEP_
 #: the local temperature coefficient's (with its share of Jacobians and factorisations).
 #: Calibrated (session 11) by regressing the CPU time of the 69 diagnoses of the validation set
 #: (``bench/bench_validation.py``, 2 at a time on the project's 2-core machine) on the counts
-#: of each: the diagnoses that reach their budgets are predicted within 0.84-1.11×.
+#: of each: the diagnoses that reach their budgets are predicted within 0.84-1.11×. The
+#: phase-change integration has since left ``solve_ivp``'s step loop for ODEPACK's own
+#: (:mod:`~spicethermal.fit.lsoda`): the same right-hand sides, so the same work and the same
+#: stopping points, at about half the CPU time each.
 EVALUATION_S = 3.0e-4
 PC_STEP_S = 2.5e-5
 TC_STEP_S = 8.4e-5

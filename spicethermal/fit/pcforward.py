@@ -3,7 +3,6 @@ ladder frozen at the mean temperature under PWM (see :mod:`spicethermal.fit.effe
 
 from __future__ import annotations
 
-import warnings
 from functools import lru_cache
 from typing import TYPE_CHECKING
 
@@ -14,6 +13,7 @@ from ..core.ladder import Cauer, Foster
 from ..effects import CATALOGUE, Effect, phase_change
 from ..model import Network
 from .budget import PC_STEP_S, check_time
+from .lsoda import lsoda_until
 from .tcforward import as_cauer
 from .tcjunction import as_foster, tc_cooling_rise, tc_steady_scale
 
@@ -49,13 +49,12 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
 
     The nodal network (the one :class:`~spicethermal.model.ThermalModel` and the SPICE export
     use) with the band's capacity at its node, ``M(θ) dθ/dt = −G θ / s(Tj)``, integrated by
-    LSODA with an exact rank-one inverse of ``M`` (agrees with the model's Radau integration
-    to < 1 mK, 10× faster); without ``tc`` the network is linear again once the node has left
-    the band, and exact modal steps finish the curve; closed form when the curve stays more
-    outside the band (:func:`~spicethermal.effects.phase_change.band`; and there is no ``tc``).
+    LSODA (:func:`~spicethermal.fit.lsoda.lsoda_until`) with an exact rank-one inverse of
+    ``M`` (agrees with the model's Radau integration to < 1 mK, 10× faster); without ``tc``
+    the network is linear again once the node has left the band, and exact modal steps finish
+    the curve from the first reading below it; closed form when the curve stays outside the
+    band (:func:`~spicethermal.effects.phase_change.band`; and there is no ``tc``).
     """
-    from scipy.integrate import solve_ivp
-
 
     if tc is not None and tc.form != "junction":
         raise SimulationError(f"phase-change together with temperature-coefficient form "
@@ -103,28 +102,19 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     order = np.argsort(t)
     below = phase_change.band(effect)[0]
 
-    def left_band(_t: float, theta: NDArray) -> float:
-        return tref_c + theta[node] - below
+    def left_band(theta: NDArray) -> bool:
+        return tc is None and tref_c + float(theta[node]) < below
 
-    left_band.terminal = True  # type: ignore[attr-defined]
-    left_band.direction = -1  # type: ignore[attr-defined]
-    with warnings.catch_warnings():  # a failed integration is reported by sol.success
-        warnings.simplefilter("ignore")
-        sol = solve_ivp(rhs, (0.0, t_end), theta0, method="LSODA", jac=jac, t_eval=t[order],
-                        rtol=PC_RTOL, atol=PC_ATOL_K, first_step=min(f.tau) / 1000,
-                        events=left_band if tc is None else None)
-    if not sol.success:
-        raise SimulationError(f"phase-change cooling integration failed: {sol.message}")
+    got, theta_exit = lsoda_until(rhs, jac, theta0, t[order], min(f.tau) / 1000, PC_RTOL,
+                                  PC_ATOL_K, "phase-change cooling", left_band)
     out = np.empty(t.shape)
-    got = np.asarray(sol.y[0]) if len(sol.t) else np.zeros(0)
     out[order[:got.size]] = got
     if got.size < t.size:  # below the band the network is linear again: exact modal steps
         from scipy.linalg import eigh
 
-        t_exit, theta_exit = float(sol.t_events[0][0]), sol.y_events[0][0]
         lam, v = eigh(g, net.capacitance())
         z0 = np.linalg.solve(v, theta_exit)
-        rest = t[order[got.size:]] - t_exit
+        rest = t[order[got.size:]] - t[order[got.size - 1]]
         out[order[got.size:]] = (z0 * np.exp(-lam * rest[:, None])) @ v[0, :]
     return out
 
