@@ -356,6 +356,33 @@ def test_a_strong_coefficient_is_fitted_on_its_own_layers(name, layers, monkeypa
     assert max(_chi2_per_point(cmp, noise, "cooling").values()) < 1.5
 
 
+def test_a_coefficients_candidate_budget_reaches_its_subset_form():
+    """Draw 023 of ``bench/bench_validation_random.py 40 --seed 53``: an actuator's inner
+    layers at α = +5.4e-3/K, three dense cooling curves. The coefficient's forms come one after
+    the other (junction, local, power law, subset), each integrated on every curve; at the
+    common candidate budget the subset form got none of it and the diagnosis was null at its
+    own 50 s budget. The coefficient's candidate budget reaches it: layers 0..1, α within
+    10 %, the cooling curves at their noise (as the diagnosis judges it)."""
+    from conftest import bench_script
+
+    from spicethermal.analysis import candidates as step
+    from spicethermal.analysis.diagnose import CANDIDATE_BUDGET_S
+    from spicethermal.analysis.residuals import comparison_of
+    from spicethermal.analysis.verdict import beyond_noise
+
+    c = bench_script("bench_validation_random").draw(24, 53)[23]
+    assert c.name == "023 temperature-coefficient/inner/0.0054/K"
+    data, ladder, noise = _weighed(c)
+    name = "temperature-coefficient"
+    scored = step.scored_forms(data, ladder, name, [], noise,
+                               CANDIDATE_BUDGET_S * step.BUDGET_FACTOR.get(name, 1.0))
+    fit = min(scored, key=lambda x: x[2])[0]
+    assert fit.effect.params["last_layer"] == 1.0, [x[0].effect for x in scored]
+    assert fit.effect.params["alpha_per_k"] == pytest.approx(5.4e-3, rel=0.1)
+    over = beyond_noise(comparison_of(data, fit.ladder, [fit.effect]), noise)
+    assert not [d for d in over if d.startswith("cooling")], over
+
+
 def test_a_transient_is_fitted_over_milliseconds_at_most():
     """An inner-layer temperature coefficient changes the first milliseconds of cooling; a
     transient may mimic it only over the span an electrical transient can last."""
@@ -386,14 +413,18 @@ def test_a_power_transient_is_told_from_a_fast_stage_by_the_readings_it_spares()
     assert _chi2_per_point(cmp, noise, "pwm")["pwm"] < 1.5
 
 
-def test_a_band_that_mimics_a_coefficient_gives_way_at_a_dead_end():
-    """temperature-coefficient/inner-layers/strong at the diagnosis's own budgets: a band on
-    a ladder of one more stage explains 97 % of the misfit and nothing explains the rest;
-    the coefficient on the inner layers, decisive at the first step too, and an electrical
-    transient bring every data set to its noise, and are named instead."""
+def test_a_band_that_mimics_a_coefficient_gives_way_at_a_dead_end(monkeypatch):
+    """temperature-coefficient/inner-layers/strong at the diagnosis's own budgets, but with the
+    coefficient's candidate held to the common one (with its own 1.5×, session 15, its subset
+    form is the first choice outright): a band on a ladder of one more stage explains 97 % of
+    the misfit and nothing explains the rest; the coefficient on the inner layers, decisive at
+    the first step too, and an electrical transient bring every data set to its noise, and
+    are named instead."""
+    from spicethermal.analysis import candidates as step
     from spicethermal.analysis.diagnose import diagnose
     from spicethermal.analysis.verdict import at_noise
 
+    monkeypatch.delitem(step.BUDGET_FACTOR, "temperature-coefficient")
     result = diagnose(case("temperature-coefficient/inner-layers/strong").record().bundle)
     assert result.effects[0] == "temperature-coefficient", result.verdict_reason
     assert result.candidates[0].effect.name == "phase-change"  # the band was first
