@@ -331,6 +331,21 @@ def test_budgets_that_cut_the_fits_cut_them_at_the_same_point_every_time(monkeyp
     assert spent() - w0 > runs[0][1]
 
 
+def test_a_dead_end_swap_does_not_bring_back_the_effect_it_replaces():
+    """Draw 012 of ``bench/bench_validation_random.py 40 --seed 53``: a diode's 0.49 J plateau
+    at node 1. The band explains 99 % of the misfit and nothing lowers the rest decisively;
+    the dead-end swap put the junction coefficient (56 %) first and the band back second,
+    at the noise, and named the coefficient. The band alone is the diagnosis."""
+    from conftest import bench_script
+
+    from spicethermal.analysis import diagnose as module
+
+    c = bench_script("bench_validation_random").draw(13, 53)[12]
+    assert c.name == "012 phase-change/plateau@1/0.49"
+    d = module.diagnose(c.record().bundle)
+    assert d.effects == ["phase-change"], d.verdict_reason
+
+
 def test_a_first_effect_that_took_up_the_second_ones_signature_is_swapped(monkeypatch):
     """Draw 013 of ``bench/bench_validation_random.py 40 --seed 23`` (independent generator):
     an actuator whose inner layers follow their own temperature and a transient proportional
