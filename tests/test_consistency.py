@@ -42,3 +42,36 @@ def test_amplitude_only_physics_is_not_named_temperature_coefficient():
 def test_a_real_temperature_coefficient_keeps_its_name(seed):
     d = diagnose(scenario_bundle("temperature-coefficient", seed=seed))
     assert d.effects[:1] == ["temperature-coefficient"]
+
+
+def _remounted(contact_k_per_w: float, seed: int = 0, noise_k: float = 0.02) -> Bundle:
+    """Two cooling curves of a linear Cauer network (the independent validation network's
+    own eigen-solution) whose second curve was measured after a remount: its outermost layer
+    (the contact to the reference) gained ``contact_k_per_w``."""
+    from spicethermal.validation.network import Network
+
+    rng = np.random.default_rng(seed)
+    r0, c0 = (4.0, 15.0, 45.0, 80.0), (2e-5, 2e-4, 8e-3, 0.35)
+    curves = []
+    for p, extra in ((0.12, 0.0), (0.30, contact_k_per_w)):
+        r_f, tau = Network((*r0[:-1], r0[-1] + extra), c0).foster()
+        rise = p * np.sum(r_f[None, :] * np.exp(-T[:, None] / tau[None, :]), axis=1)
+        tj = 25.0 + rise + rng.normal(0.0, noise_k, T.size)
+        curves.append(CoolingTable(T, p, tj_c=tj, tref_steady_c=25.0,
+                                   tj_steady_c=25.0 + p * float(np.sum(r_f))))
+    return Bundle(ambient_c=25.0, cooling=curves, source="remounted device")
+
+
+@pytest.mark.parametrize("contact", [1.5, 3.0])
+def test_a_remounted_contact_is_not_named_temperature_coefficient(contact):
+    """A contact 2-4 % of Rth worse on the second curve: an outer layer's coefficient fits it
+    to the noise (it was named so), but the linear ladder with that layer's resistance changed
+    between the curves fits decisively better."""
+    d = diagnose(_remounted(contact))
+    assert d.effects == [] and d.verdict_effect is None, d.verdict_reason
+    assert "outermost layer's resistance changed between curves" in d.verdict_reason
+    # the change is read off the curves
+    change = float(d.verdict_reason.split("cooling_2 ")[1].split(" K/W")[0])
+    assert change == pytest.approx(contact, rel=0.05)
+    # without the remount the same device is linear: nothing to name
+    assert diagnose(_remounted(0.0)).verdict_effect is None

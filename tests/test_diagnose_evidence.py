@@ -101,3 +101,15 @@ def test_an_effect_switched_off_never_explains():
         text = evidence(EffectFit(effect, Foster.from_tau([1.0], [1.0]), 1, {}), _data(), base,
                         cand, NOISE)
         assert text.startswith(f"no {effect.name}") and " explains " not in text, text
+
+
+@settings(max_examples=300, deadline=None)
+@given(x=st.floats(1e-6, 1e6), limit=st.floats(1e-6, 1e6), digits=st.integers(1, 4))
+def test_a_number_short_of_its_threshold_never_reads_as_reaching_it(x, limit, digits):
+    """The verdict quotes a failed candidate's figures against the thresholds it missed
+    ("explains only 96.6 % (needs 97 %)", not "only 97 % (needs 97 %)")."""
+    from spicethermal.analysis.residuals import fmt_against
+
+    text = fmt_against(x, limit, digits)
+    assert (float(text) < limit) == (x < limit), (x, limit, text)
+    assert not SCIENTIFIC.search(text), text

@@ -25,7 +25,7 @@ from ..fit.effectfit import (
 )
 from ..fit.fitters import choose_form, fit_effect_forms
 from .compare import Comparison
-from .consistency import amplitude_only, device_effect_contradicted, transient_hidden
+from .consistency import alternatives, device_effect_contradicted, transient_hidden
 from .diagnosis import Candidate, Step
 from .evidence import evidence
 from .residuals import comparison_of
@@ -111,7 +111,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
     default form unless another is decisively better, :func:`choose_form`), each within
     ``budget_s`` of work; failures go to ``skipped``."""
     present = {e.name for e in effects}
-    amplitude = None  # the power-per-curve alternative of the device effects, fitted once
+    linear = None  # the linear alternatives to the device effects, fitted once
     # the model so far refitted jointly (what a rescue must beat), fitted once when asked
     refitted: list[float] = []
 
@@ -173,14 +173,10 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                                   held_bic)
         contradicted = ""
         if fit.effect.kind == DEVICE and len(data.cooling) > 1:
-            try:
-                if amplitude is None:
-                    amplitude = amplitude_only(data, ladder)
-                contradicted = device_effect_contradicted(data, ladder, fit.effect,
-                                                          fit.n_params, [x[1] for x in scored],
-                                                          amplitude)
-            except (FitError, SimulationError, *NUMERICAL_ERRORS):  # nothing contradicts
-                contradicted = ""
+            if linear is None:
+                linear = alternatives(data, ladder)
+            contradicted = device_effect_contradicted(data, ladder, fit.effect, fit.n_params,
+                                                      [x[1] for x in scored], linear)
         if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
             # the first readings stand out of the model it extends or of its own ladder (a
             # transient proportional to the power passes for a fast stage of the first)

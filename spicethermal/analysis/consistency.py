@@ -16,6 +16,15 @@ one (:func:`device_effect_contradicted`). On a weak effect whose dynamics are wi
 both fit alike and the effect keeps its name; when the amplitudes alone leave a misfit, the
 test says nothing (an effect of another form may be at work).
 
+A setup that changed between the curves is the other linear alternative
+(:func:`outer_only`): a device remounted, a thermal interface reseated or a heatsink clamped
+anew changes the outermost layer's resistance from one curve to the next, and each curve is
+then the response of a linear ladder, the same but for that layer. A resistance that follows
+temperature changes as the device cools *within* each curve; a contact that changed between
+the curves does not. When the linear ladder with the outer resistance free per curve fits the
+cooling curves at the noise and decisively better than every form of the effect, the effect
+only mimics a change of setup.
+
 An electrical transient is an error of the first readings after the cut: those readings
 (within its fitted span) must stand out of their curves, their noise-weighted ``χ²`` per point
 at least :data:`EARLY_FACTOR` × the noise's and × the rest of the curves'
@@ -29,20 +38,22 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.ladder import Foster
+from ..core.errors import DataFormatError, FitError, SimulationError
+from ..core.ladder import Cauer, Foster
 from ..effects import DEVICE, Effect
-from ..fit.effectfit import BundleData, as_foster, robust_lsq, transient_spans
+from ..fit.effectfit import NUMERICAL_ERRORS, BundleData, as_foster, robust_lsq, transient_spans
 from .verdict import AT_NOISE_CHI2, MIN_BIC_DROP
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..core.ladder import Cauer
     from .compare import Comparison
 
-__all__ = ["EARLY_FACTOR", "amplitude_only", "device_effect_contradicted", "transient_hidden"]
+__all__ = ["EARLY_FACTOR", "Alternative", "alternatives", "amplitude_only",
+           "device_effect_contradicted", "outer_only", "transient_hidden"]
 
 #: The readings within an electrical transient's span must show a noise-weighted χ² per point
 #: at least this many times the noise's (1) and the rest of the curves'.
@@ -106,35 +117,134 @@ def amplitude_only(data: BundleData, ladder: Foster | Cauer) -> tuple[float, int
     return 2.0 * float(res.cost), len(rest)
 
 
-def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect: Effect,
-                               n_params: int, comparisons: Sequence[Comparison],
-                               amplitude: tuple[float, int] | None = None) -> str:
-    """Why device effect ``effect`` is contradicted by the cooling dynamics ("" when it is
-    not, or when the test does not apply: a measurement effect, fewer than two cooling
-    curves): the cooling curves are the linear shape scaled per curve at the noise
-    (:func:`amplitude_only`, χ²/n within the white-noise bound of
-    :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`), and that fits them decisively better than
-    every form of the effect.
+def outer_only(data: BundleData, ladder: Foster | Cauer) -> tuple[float, int, dict[str, float]]:
+    """Noise-weighted χ² of the cooling curves (outside their transients) under the linear
+    ladder, refitted jointly in its Cauer form, with the outermost layer's resistance free per
+    curve (the reference curve's held); the number of free resistances; and each other
+    curve's change of that resistance (K/W).
 
     Parameters
     ----------
     data : BundleData
         The bundle's arrays, with the noise scales set.
     ladder : Foster or Cauer
-        The ladder of the model the effect extends (start of the alternative's fit).
+        Start of the ladder's fit.
+
+    Returns
+    -------
+    tuple of (float, int, dict)
+        χ², the number of free resistances (cooling curves − 1) and, per other curve, the
+        change of the outer resistance.
+
+    Examples
+    --------
+    >>> from spicethermal.io.bundle import Bundle, CoolingTable
+    >>> lad = Cauer([10.0, 30.0], [1e-4, 0.03])
+    >>> moved = Cauer([10.0, 35.0], [1e-4, 0.03])  # remounted: the contact gained 5 K/W
+    >>> t = np.geomspace(1e-3, 10, 40)
+    >>> curves = [CoolingTable(t, p, tj_c=25 + p * c.cooling(t))
+    ...           for p, c in ((1.0, lad), (2.0, moved))]
+    >>> data = BundleData.from_bundle(Bundle(ambient_c=25.0, cooling=curves))
+    >>> chi2, k, change = outer_only(data, Cauer([12.0, 25.0], [2e-4, 0.02]))
+    >>> chi2 < 1e-8, k, round(change["cooling_2"], 3)
+    (True, 1, 5.0)
+    """
+    start = ladder if isinstance(ladder, Cauer) else ladder.to_cauer()
+    m = start.order
+    ref = data.reference_curve
+    kept = _kept(data)
+    rest = [c.name for c in data.cooling if c is not ref]
+
+    def curves_of(x: np.ndarray) -> dict[str, Cauer]:
+        r, c = np.exp(x[:m]), np.exp(x[m:2 * m])
+        out = {ref.name: Cauer(r, c)}
+        for name, g in zip(rest, np.exp(x[2 * m:]), strict=True):
+            out[name] = Cauer(np.concatenate([r[:-1], [r[-1] * g]]), c)
+        return out
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        ladders = curves_of(x)
+        parts = []
+        for c in data.cooling:
+            keep = kept[c.name]
+            model = c.tref_c[keep] + c.power_w * ladders[c.name].cooling(c.t_s[keep])
+            parts.append((model - c.tj_c[keep]) / data.scale(c.name))
+        return np.concatenate(parts)
+
+    full = start.with_capacitances()
+    x0 = np.concatenate([np.log(full.r), np.log(full.c), np.zeros(len(rest))])
+    big = np.full(x0.size, np.inf)
+    res = robust_lsq(fun, x0, -big, big)
+    ladders = curves_of(np.asarray(res.x))
+    base = ladders[ref.name].r[-1]
+    return 2.0 * float(res.cost), len(rest), {name: ladders[name].r[-1] - base
+                                               for name in rest}
+
+
+@dataclass(frozen=True)
+class Alternative:
+    """A linear explanation of the cooling curves that no device effect is: its noise-weighted
+    χ² (outside the transients), its number of free parameters beyond the ladder, and what it
+    says (the verdict's words)."""
+
+    chi2: float
+    n_params: int
+    what: str
+
+
+def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
+    """The linear alternatives to a device effect fitted to ``data`` from ``ladder``: a power
+    per curve (:func:`amplitude_only`) and an outer resistance per curve (:func:`outer_only`).
+    An alternative whose fit fails numerically is left out."""
+    out = []
+    try:
+        chi2, k = amplitude_only(data, ladder)
+        out.append(Alternative(chi2, k, "the linear ladder's shape scaled per curve, at the "
+                                        "noise (a power that is not the recorded one"))
+    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+        pass
+    try:
+        chi2, k, change = outer_only(data, ladder)
+        moved = ", ".join(f"{name} {dr:+.3g} K/W" for name, dr in change.items())
+        out.append(Alternative(chi2, k, f"the linear ladder with its outermost layer's "
+                                        f"resistance changed between curves ({moved}), at the "
+                                        f"noise (a contact or mounting that changed between the "
+                                        f"measurements, which no temperature dependence does"))
+    except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
+        pass
+    return out
+
+
+def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect: Effect,
+                               n_params: int, comparisons: Sequence[Comparison],
+                               linear: Sequence[Alternative] | None = None) -> str:
+    """Why device effect ``effect`` is contradicted by the cooling dynamics ("" when it is
+    not, or when the test does not apply: a measurement effect, fewer than two cooling
+    curves): a linear alternative (:func:`alternatives`: a power per curve, an outer
+    resistance per curve) fits the cooling curves at the noise (χ²/n within the white-noise
+    bound of :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`) and decisively better than
+    every form of the effect (BIC lower by
+    :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`).
+
+    Parameters
+    ----------
+    data : BundleData
+        The bundle's arrays, with the noise scales set.
+    ladder : Foster or Cauer
+        The ladder of the model the effect extends (start of the alternatives' fits).
     effect : Effect
         The effect (its best form), for the sentence.
     n_params : int
         Its number of fitted parameters.
     comparisons : sequence of Comparison
         The model with each form of the effect against the bundle.
-    amplitude : tuple, optional
-        :func:`amplitude_only` of ``data`` if already computed.
+    linear : sequence of Alternative, optional
+        :func:`alternatives` of ``data`` if already computed.
 
     Returns
     -------
     str
-        The reason, or "".
+        The reason (the alternative that beats the effect by most), or "".
     """
     if effect.kind != DEVICE or len(data.cooling) < 2 or not comparisons:
         return ""
@@ -147,15 +257,18 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
                    / data.scale(c.name) ** 2 for c in data.cooling)
 
     chi2_effect = min(cooling_chi2(c) for c in comparisons)
-    chi2_amp, k_amp = amplitude if amplitude is not None else amplitude_only(data, ladder)
     log_n = math.log(max(n, 2))
-    gap = (chi2_effect + n_params * log_n) - (chi2_amp + k_amp * log_n)
-    at_noise = chi2_amp / max(n, 1) <= AT_NOISE_CHI2 + 3 * math.sqrt(2 / max(n, 1))
-    if gap < MIN_BIC_DROP or not at_noise:
+    bound = AT_NOISE_CHI2 + 3 * math.sqrt(2 / max(n, 1))
+    found = [((chi2_effect + n_params * log_n) - (alt.chi2 + alt.n_params * log_n), alt)
+             for alt in (linear if linear is not None else alternatives(data, ladder))
+             if alt.chi2 / max(n, 1) <= bound]
+    if not found:
         return ""
-    return (f"{effect.name} would change the cooling dynamics, but the cooling curves are the "
-            f"linear ladder's shape scaled per curve, at the noise (a power that is not the "
-            f"recorded one; χ² {chi2_amp:.0f} on {n} points against {chi2_effect:.0f} with the "
+    gap, alt = max(found, key=lambda x: x[0])
+    if gap < MIN_BIC_DROP:
+        return ""
+    return (f"{effect.name} would change the cooling dynamics, but the cooling curves are "
+            f"{alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with the "
             f"effect: BIC {gap:.0f} lower)")
 
 

@@ -59,7 +59,7 @@ from .candidates import candidates, refit_step, swap_dead_end, swap_first
 from .compare import Comparison
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
-from .residuals import comparison_of, localise, noise_estimates
+from .residuals import comparison_of, fmt_against, localise, noise_estimates
 from .table2 import TableAnalysis, analyse_table, diagnose_table
 from .verdict import (
     MAX_LEFT_CHI2,
@@ -258,7 +258,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         # several effects together for more of it)
         tried = ", ".join(s.chosen.effect.name for s in steps)
         located = localise(cur, noise) or localise(cur)
-        why = (f"would explain only {100 * total:.0f} % of it (needs "
+        why = (f"would explain only {fmt_against(100 * total, 100 * MIN_TOTAL_EXPLAINED, 2)} % "
+               f"of it (needs "
                f"{100 * MIN_TOTAL_EXPLAINED:.0f} % when a structured residual remains)"
                if total < MIN_TOTAL_EXPLAINED else
                f"would explain {100 * total:.0f} % of it but leave a structured residual above "

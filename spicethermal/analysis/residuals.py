@@ -142,6 +142,23 @@ def fmt_time(t: float) -> str:
     return f"{fmt_number(t / 1e-9)} ns"
 
 
+def fmt_against(x: float, limit: float, digits: int = 3) -> str:
+    """``x`` to ``digits`` significant digits, or as many more as it takes to keep it on its
+    side of ``limit``: a value short of a threshold never reads as reaching it.
+
+    >>> fmt_against(96.6, 97.0, 2), fmt_against(1.1496, 1.15), fmt_against(9.6, 10.0, 1)
+    ('96.6', '1.1496', '9.6')
+    >>> fmt_against(12.3, 10.0, 2), fmt_against(126000.0, 10.0, 2)
+    ('12', '130000')
+    """
+    for d in range(max(digits, 1), 17):
+        text = np.format_float_positional(x, precision=d, unique=False, fractional=False,
+                                          trim="-")
+        if (float(text) < limit) == (x < limit):
+            return text
+    return np.format_float_positional(x, trim="-")
+
+
 def fmt_number(x: float, digits: int = 3) -> str:
     """``x`` to ``digits`` significant digits, positional (never ``1e-05``), ``−`` for minus.
 
