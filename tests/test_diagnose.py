@@ -267,30 +267,23 @@ def test_the_reason_names_a_data_set_left_beyond_its_noise():
 def test_far_left_names_only_structured_data_sets_beyond_three_times_their_noise():
     """The rule that keeps a convection switch (99 % of the misfit taken up by an outer
     layer's coefficient, the PWM readings left 5× their noise in one smooth bow) from being
-    named: only a data set whose residual is both structured and above 3× its noise. A cooling
-    curve's residual is structured by its runs; the PWM grid's readings are separate operating
-    points in a bookkeeping order, so there its size alone counts (seed 67's draw 029: 7× the
-    noise, runs z −2.85)."""
+    named: only a data set whose residual is both structured and above 3× its noise."""
     from spicethermal.analysis.compare import Comparison, ComparisonPoint
     from spicethermal.analysis.diagnose import unexplained
     from spicethermal.analysis.verdict import far_left
 
-    def points(name: str, rms: float, structured: bool) -> list:
+    def pwm(rms: float, structured: bool) -> list:
         sign = [1.0] * 9 + [-1.0] * 9 if structured else [1.0, -1.0] * 9
-        at = (lambda i: {"freq_hz": 10.0 * (i + 1), "duty": 0.5}) if name == "pwm" else \
-            (lambda i: {"t_s": 1e-3 * (i + 1)})
-        return [ComparisonPoint(name, at(i), rms * s, 0.0) for i, s in enumerate(sign)]
+        return [ComparisonPoint("pwm", {"freq_hz": 10.0 * (i + 1), "duty": 0.5}, rms * s, 0.0)
+                for i, s in enumerate(sign)]
 
-    for name in ("pwm", "cooling_1"):
-        noise = {name: 0.01}
-        bow = Comparison(tuple(points(name, 0.05, True)))
-        assert set(far_left(bow, noise)) == {name}
-        assert far_left(bow, noise)[name] == pytest.approx(25.0)
-        assert unexplained(bow, noise, 1)
-        assert not far_left(Comparison(tuple(points(name, 0.02, True))), noise)  # 2× its noise
-    # no structure: noise in a curve, a misfit in a grid
-    assert not far_left(Comparison(tuple(points("cooling_1", 0.05, False))), {"cooling_1": 0.01})
-    assert set(far_left(Comparison(tuple(points("pwm", 0.05, False))), {"pwm": 0.01})) == {"pwm"}
+    noise = {"pwm": 0.01}
+    bow = Comparison(tuple(pwm(0.05, True)))
+    assert set(far_left(bow, noise)) == {"pwm"}
+    assert far_left(bow, noise)["pwm"] == pytest.approx(25.0)
+    assert unexplained(bow, noise, 1)
+    assert not far_left(Comparison(tuple(pwm(0.02, True))), noise)  # 2× its noise
+    assert not far_left(Comparison(tuple(pwm(0.05, False))), noise)  # no structure
 
 
 def test_a_step_that_the_diagnosis_budget_cuts_is_not_taken(monkeypatch):

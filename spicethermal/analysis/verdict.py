@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 __all__ = ["AT_NOISE_CHI2", "MAX_LEFT_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
-           "MIN_TOTAL_EXPLAINED", "OPERATING_POINTS", "RUNS_MIN", "RUNS_Z", "at_noise",
+           "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z", "at_noise",
            "beyond_noise", "bic_drop", "can_be_decisive", "chi2", "criterion", "decisive",
            "explained_fraction", "far_left", "improvement", "passes", "runs_z", "structured",
            "verdict_reason"]
@@ -49,10 +49,6 @@ MAX_LEFT_CHI2 = 9.0
 RUNS_Z = -3.0
 #: ... which needs this many residuals (fewer: :func:`structured` judges their size alone).
 RUNS_MIN = 8
-#: Data sets whose readings are separate operating points (the PWM grid: one periodic steady
-#: state per frequency and duty), whose order is bookkeeping: :func:`structured` judges their
-#: size as well as their runs.
-OPERATING_POINTS = ("pwm",)
 
 
 def criterion(comparison: Comparison, noise: Mapping[str, float], k: int) -> float:
@@ -112,13 +108,9 @@ def runs_z(residuals: NDArray) -> float:
 def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     """Data sets whose residual is beyond their noise (RMS above :data:`EXPLAINED_RATIO` ×)
     and structured (:func:`runs_z` below :data:`RUNS_Z`), and those too short for a runs test
-    (fewer than :data:`RUNS_MIN` readings, such as a PWM grid of six) or made of separate
-    operating points (:data:`OPERATING_POINTS`: a PWM grid's duty-major order says nothing
-    of how its misfit is shaped) whose residual is beyond 3× their noise (``χ²/n`` above
-    :data:`MAX_LEFT_CHI2`): their noise comes from the curves read by the same sensor, so
-    such a misfit is no noise, whatever its signs (seed 67's draw 029 of the random validation
-    set: a convection switch passed for an outer layer's coefficient, which left its 18 PWM
-    readings at 7× their noise, runs z −2.85).
+    (fewer than :data:`RUNS_MIN` readings, such as a PWM grid of six) whose residual is
+    beyond 3× their noise (``χ²/n`` above :data:`MAX_LEFT_CHI2`): their noise comes from the
+    curves read by the same sensor, so such a misfit is no noise, whatever its signs.
 
     >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
     >>> c = Comparison(tuple(ComparisonPoint(d, {"t_s": i + 1.0}, x, 0.0) for i, (d, x)
@@ -126,19 +118,14 @@ def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     ...                                   + [("b", 4.0), ("b", -4.0)] * 3)))
     >>> structured(c, {"a": 0.1, "b": 1.0}), structured(c, {"a": 0.1, "b": 2.0})
     (['a', 'b'], ['a'])
-    >>> grid = Comparison(tuple(ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.1 * k}, x, 0.0)
-    ...                         for k, x in enumerate([0.5, -0.5] * 9)))  # runs z = +4
-    >>> structured(grid, {"pwm": 0.1}), structured(grid, {"pwm": 0.2})
-    (['pwm'], [])
     """
     out = []
     for name, sub in comparison.by_dataset().items():
         r = sub.residuals_k
-        big = (r.size < RUNS_MIN or name.startswith(OPERATING_POINTS)) and \
-            _per_point(sub, noise[name]) > MAX_LEFT_CHI2
-        runs = r.size >= RUNS_MIN and sub.rms_k > EXPLAINED_RATIO * noise[name] and \
-            runs_z(r) < RUNS_Z
-        if big or runs:
+        if r.size < RUNS_MIN:
+            if _per_point(sub, noise[name]) > MAX_LEFT_CHI2:
+                out.append(name)
+        elif sub.rms_k > EXPLAINED_RATIO * noise[name] and runs_z(r) < RUNS_Z:
             out.append(name)
     return out
 
