@@ -374,3 +374,21 @@ def test_a_first_effect_that_took_up_the_second_ones_signature_is_swapped(monkey
     assert one is next(x for x in d.candidates if x.effect.name == "temperature-coefficient")
     assert two.improvement > 2 and two.rms_k < 0.5 * d.candidates[0].rms_k
     assert d.to_json()["verdict"]["effects"] == d.effects
+
+
+def test_a_ringing_over_the_first_readings_is_looked_for():
+    """Draw 023 of ``bench/bench_validation_random.py 40 --seed 41`` (independent generator):
+    a ringing of −0.32 K after the cut, on three curves of five readings a decade at 0.05 K of
+    noise. Its first readings stand 6× out of their noise, but each curve's χ²/n is 1.6× the
+    noise variance overall: the baseline was judged at the noise and no effect was tried. The
+    first readings' excess now opens the first step, and the transient is found."""
+    from conftest import bench_script
+
+    from spicethermal.analysis.verdict import at_noise, early_excess
+
+    c = bench_script("bench_validation_random").draw(24, 41)[23]
+    assert c.name == "023 electrical-transient/ringing/-0.32"
+    d = diagnose(c.record().bundle)
+    assert at_noise(d.baseline, d.noise_k) and early_excess(d.baseline, d.noise_k) > 10
+    assert d.effects == ["electrical-transient"], d.verdict_reason
+    assert d.steps[0].chosen.effect.form == "ringing"

@@ -71,6 +71,7 @@ from .verdict import (
     chi2,
     criterion,
     decisive,
+    early_excess,
     explained_fraction,
     far_left,
     runs_z,
@@ -186,8 +187,11 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     # one budget for every step: a step that finds its time spent stops the diagnosis
     end = mark(DIAGNOSIS_BUDGET_S)
     with time_limit(DIAGNOSIS_BUDGET_S):
-        while len(steps) < MAX_STEPS and not at_noise(cur, noise) and \
-                not reached(end):
+        # the first step also when the first readings stand out of a baseline otherwise at
+        # its noise (an electrical transient over a few readings)
+        while len(steps) < MAX_STEPS and not reached(end) and (
+                not at_noise(cur, noise) or
+                not steps and early_excess(cur, noise) >= MIN_BIC_DROP):
             # the first step's candidates and skips are the report's; later ones are its steps'
             try:
                 cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
