@@ -75,3 +75,20 @@ def test_a_remounted_contact_is_not_named_temperature_coefficient(contact):
     assert change == pytest.approx(contact, rel=0.05)
     # without the remount the same device is linear: nothing to name
     assert diagnose(_remounted(0.0)).verdict_effect is None
+
+
+def test_an_outer_coefficient_that_a_change_of_setup_fits_as_well_is_not_named():
+    """Draw 016 of ``bench/bench_validation_random.py 30 --seed 101 --only uncatalogued``
+    (independent generator): an actuator whose outer layer's resistance drops 10-40 % when
+    it passes 33 °C (convection changing regime). A coefficient of the outer layers fits the
+    cooling curves at the noise, and so does the linear ladder with that layer's resistance
+    changed between the curves: the data cannot tell the layer's temperature dependence from
+    a change of setup, and nothing is named."""
+    from conftest import bench_script
+
+    c = bench_script("bench_validation_random").draw(30, 101, "uncatalogued")[16]
+    assert c.name.startswith("016 uncatalogued/convection-switch")
+    d = diagnose(c.record().bundle)
+    assert d.effects == [] and d.verdict_effect is None, d.verdict_reason
+    assert "cannot tell that layer's temperature dependence from a change of setup" in \
+        d.verdict_reason

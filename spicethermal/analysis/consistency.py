@@ -37,7 +37,7 @@ curve (an approximate form of another effect) and is not named.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -46,6 +46,7 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import DEVICE, Effect
+from ..effects.temperature_coefficient import LOCAL_FORMS
 from ..fit.effectfit import NUMERICAL_ERRORS, BundleData, as_foster, robust_lsq, transient_spans
 from .verdict import AT_NOISE_CHI2, MIN_BIC_DROP
 
@@ -190,6 +191,16 @@ class Alternative:
     chi2: float
     n_params: int
     what: str
+    #: Whether a device effect acts on the very element this alternative changes between the
+    #: curves (then the effect must be decisively closer, not only as close, to be named).
+    rivals: Callable[[Effect], bool] = lambda _effect: False
+
+
+def outer_layers(effect: Effect) -> bool:
+    """Whether ``effect`` is a temperature coefficient of the outer layers only (a local form
+    with ``first_layer`` ≥ 1): the layers whose resistance a remount or an airflow changes."""
+    return effect.name == "temperature-coefficient" and effect.form in LOCAL_FORMS and \
+        effect.params.get("first_layer", 0.0) >= 1
 
 
 def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
@@ -209,7 +220,8 @@ def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
         out.append(Alternative(chi2, k, f"the linear ladder with its outermost layer's "
                                         f"resistance changed between curves ({moved}), at the "
                                         f"noise (a contact or mounting that changed between the "
-                                        f"measurements, which no temperature dependence does"))
+                                        f"measurements",
+                               outer_layers))
     except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
         pass
     return out
@@ -262,11 +274,20 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
     found = [((chi2_effect + n_params * log_n) - (alt.chi2 + alt.n_params * log_n), alt)
              for alt in (linear if linear is not None else alternatives(data, ladder))
              if alt.chi2 / max(n, 1) <= bound]
+    # an alternative that changes another element must be decisively closer; one that changes
+    # the effect's own element between the curves need only be as close: the data then cannot
+    # tell that element's temperature dependence from a change of setup
+    found = [(gap, alt) for gap, alt in found
+             if gap >= (-MIN_BIC_DROP if alt.rivals(effect) else MIN_BIC_DROP)]
     if not found:
         return ""
     gap, alt = max(found, key=lambda x: x[0])
     if gap < MIN_BIC_DROP:
-        return ""
+        return (f"{effect.name} ({effect.form}, layers {effect.params['first_layer']:.0f} "
+                f"outwards) fits the cooling curves no more closely than {alt.what}; χ² "
+                f"{alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with the effect: BIC "
+                f"within {MIN_BIC_DROP:g}): the data cannot tell that layer's temperature "
+                f"dependence from a change of setup between the curves")
     return (f"{effect.name} would change the cooling dynamics, but the cooling curves are "
             f"{alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with the "
             f"effect: BIC {gap:.0f} lower)")
