@@ -392,3 +392,25 @@ def test_a_ringing_over_the_first_readings_is_looked_for():
     assert at_noise(d.baseline, d.noise_k) and early_excess(d.baseline, d.noise_k) > 10
     assert d.effects == ["electrical-transient"], d.verdict_reason
     assert d.steps[0].chosen.effect.form == "ringing"
+
+
+def test_a_tsp_bow_is_weighed_in_its_own_calibration():
+    """Draw 002 of ``bench/bench_validation_random.py 40 --seed 79`` (independent generator): a
+    coefficient that follows the junction and a TSP's quadratic bow. The coefficient takes up
+    the curves first; the bow is then left in the calibration only (twelve points at 12× their
+    noise variance), which moves neither the pooled RMS nor the misfit pooled over several
+    hundred curve readings. The calibration measures the sensor alone: the bow's gain and
+    explained fraction count there, the BIC drop overall, and the refit with the coefficient
+    moves the effects first with the ladder held (a reading, not the thermal path)."""
+    from conftest import bench_script
+
+    c = bench_script("bench_validation_random").draw(3, 79)[2]
+    assert c.name == "002 pair/temperature-coefficient:junction+tsp-nonlinearity:quadratic"
+    d = diagnose(c.record().bundle)
+    assert d.effects == ["temperature-coefficient", "tsp-nonlinearity"], d.verdict_reason
+    two = d.steps[1].chosen
+    cal = {n: s for n, s in two.comparison.by_dataset().items()}["calibration"]
+    was = d.steps[0].chosen.comparison.by_dataset()["calibration"]
+    assert cal.rms_k < 0.5 * was.rms_k  # the bow is in the calibration ...
+    assert two.improvement < 1.15 < two.gain  # ... not in the pooled RMS
+    assert "in units of the noise" in d.verdict_reason or two.improvement >= 1

@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING
 
 from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
-from ..effects import DEVICE, Effect
-from ..fit.backfit import refit_effects
+from ..effects import DEVICE, MEASUREMENT, Effect, spec
+from ..fit.backfit import HELD_LADDER_S, refit_effects
 from ..fit.effectfit import (
     NUMERICAL_ERRORS,
     BundleData,
@@ -60,6 +60,11 @@ __all__ = ["REFIT_BUDGET_S", "RESCUE_BUDGET_S", "SWAPPABLE", "candidates", "join
 SIGNATURE = {"phase-change": (("cooling",), 4),
              "electrical-transient": (("cooling", "pwm"), 2),
              "sample-window": (("pwm",), 1)}
+
+#: Effects that a data set of their own measures directly (a TSP's calibration: the sensor
+#: alone, no thermal model in it): their gain counts there too
+#: (:func:`~spicethermal.analysis.verdict.improvement`).
+DIRECT = {"tsp-nonlinearity": ("calibration",)}
 
 #: ... of which these act on the cooling curves beyond their electrical transient.
 AFTER_TRANSIENT = ("phase-change",)
@@ -117,7 +122,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
 
     def held_bic() -> float:
         if not refitted:
-            joint = joint_refit(data, ladder, effects, RESCUE_BUDGET_S, before, noise)
+            joint = joint_refit(data, ladder, effects, RESCUE_BUDGET_S, before, noise, True)
             refitted.append(criterion(joint[2] if joint else before, noise, 0))
         return refitted[0]
 
@@ -167,8 +172,9 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             continue
         fit, cmp, bic = best
         model_effects: tuple[Effect, ...] = ()
-        if effects and not passes(bic_before - bic, improvement_of(before, cmp, noise),
-                                  explained_fraction(before, cmp, noise)):
+        within = DIRECT.get(name, ())
+        if effects and not passes(bic_before - bic, improvement_of(before, cmp, noise, within),
+                                  explained_fraction(before, cmp, noise, within)):
             fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise,
                                                   held_bic)
         contradicted = ""
@@ -188,9 +194,9 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
         cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
                                evidence(fit, data, before, cmp, noise),
-                               explained_fraction(before, cmp, noise),
+                               explained_fraction(before, cmp, noise, within),
                                time.perf_counter() - t0, contradicted, fit.facts,
-                               improvement_of(before, cmp, noise), model_effects))
+                               improvement_of(before, cmp, noise, within), model_effects))
     cands.sort(key=lambda c: c.bic)
     return cands
 
@@ -237,15 +243,15 @@ def quiet_where(comparison: Comparison, noise: Mapping[str, float],
 
 
 def joint_refit(data: BundleData, ladder: Foster, effects: Sequence[Effect], budget_s: float,
-                than: Comparison, noise: Mapping[str, float]
+                than: Comparison, noise: Mapping[str, float], held_first: bool = False
                 ) -> tuple[Foster, list[Effect], Comparison] | None:
     """Every effect of ``effects`` and ``ladder`` refitted jointly
     (:func:`~spicethermal.fit.backfit.refit_effects`, within ``budget_s`` of work) with
     its comparison; ``None`` when it fails or does not lower the noise-weighted squared error
     of ``than``."""
     try:
-        with time_limit(budget_s):
-            lad, refitted = refit_effects(data, ladder, effects)
+        with time_limit(budget_s + (HELD_LADDER_S if held_first else 0.0)):
+            lad, refitted = refit_effects(data, ladder, effects, held_first)
         cmp = comparison_of(data, lad, refitted)
     except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
         return None
@@ -272,8 +278,9 @@ def rescue(data: BundleData, fit: EffectFit, effects: Sequence[Effect], before: 
     if not any(chi2(was[n], {n: noise[n]}) - chi2(sub, {n: noise[n]}) >= MIN_BIC_DROP
                for n, sub in tried_cmp.by_dataset().items() if n in was):
         return fit, cmp, bic, ()
+    # a measurement effect leaves the thermal path alone: the effects first, the ladder held
     joint = joint_refit(data, tried.ladder, [*effects, tried.effect], RESCUE_BUDGET_S, cmp,
-                        noise)
+                        noise, spec(tried.effect.name).kind == MEASUREMENT)
     if joint is None:
         return fit, cmp, bic, ()
     ladder, refitted, new = joint
@@ -296,12 +303,13 @@ def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
         return chosen, effects
     ladder, refitted, cmp = joint
     fit = EffectFit(refitted[-1], ladder, chosen.n_params, chosen.facts)
+    within = DIRECT.get(chosen.effect.name, ())
     return replace(chosen, effect=refitted[-1], ladder=ladder, comparison=cmp,
                    bic=criterion(cmp, noise, chosen.n_params),
                    improvement=before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf,
-                   explained=explained_fraction(before, cmp, noise),
+                   explained=explained_fraction(before, cmp, noise, within),
                    evidence=evidence(fit, data, before, cmp, noise),
-                   noise_gain=improvement_of(before, cmp, noise)), refitted
+                   noise_gain=improvement_of(before, cmp, noise, within)), refitted
 
 
 def swap_first(data: BundleData, steps: Sequence[Step], first: Sequence[Candidate],

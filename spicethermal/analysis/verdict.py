@@ -63,10 +63,11 @@ def chi2(comparison: Comparison, noise: Mapping[str, float]) -> float:
 
 
 def explained_fraction(before: Comparison, after: Comparison,
-                       noise: Mapping[str, float]) -> float:
+                       noise: Mapping[str, float], within: Sequence[str] = ()) -> float:
     """Fraction of ``before``'s misfit beyond the noise that ``after`` removes,
     ``(χ²_before − χ²_after) / (χ²_before − N)`` with noise-weighted χ² (1 when ``before``
-    is already at the noise and ``after`` is no worse).
+    is already at the noise and ``after`` is no worse). ``within``: data sets that measure
+    the effect directly (:func:`improvement`); the larger of the overall fraction and theirs.
 
     >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
     >>> c = lambda r: Comparison(tuple(ComparisonPoint("x", {"t_s": i + 1.0}, x, 0.0)
@@ -76,11 +77,13 @@ def explained_fraction(before: Comparison, after: Comparison,
     >>> round(explained_fraction(c([3.0, -3.0]), c([2.0, 2.0]), {"x": 1.0}), 3)
     0.625
     """
+    b, a = _own(before, within), _own(after, within)
+    own = explained_fraction(b, a, noise) if b and a else -math.inf
     c0, c1 = chi2(before, noise), chi2(after, noise)
     excess = c0 - len(before.points)
     if excess <= 0:
-        return 1.0 if c1 <= c0 else 0.0
-    return float(min(1.0, (c0 - c1) / excess))
+        return max(own, 1.0 if c1 <= c0 else 0.0)
+    return float(max(own, min(1.0, (c0 - c1) / excess)))
 
 
 def runs_z(residuals: NDArray) -> float:
@@ -226,12 +229,15 @@ def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
 
 
 def improvement(before: Comparison, after: Comparison,
-                noise: Mapping[str, float] | None = None) -> float:
+                noise: Mapping[str, float] | None = None, within: Sequence[str] = ()) -> float:
     """How many times ``after`` lowers the misfit of ``before``: the pooled RMS ratio, or
     (given ``noise``) the larger of that and the noise-weighted ratio
     ``√(χ²_before / χ²_after)``. The pooled RMS weighs every point alike, so an effect seen in
     one small data set only (a TSP's bow in the calibration, once another effect has taken up
-    the curves) barely moves it; in units of each data set's noise it shows.
+    the curves) barely moves it; in units of each data set's noise it shows. ``within``:
+    data sets that measure the effect directly (a TSP's own calibration), whose noise-weighted
+    ratio counts too: beside a few hundred curve readings a calibration of twelve left at
+    12× its noise variance by the curves' effect moved the overall ratio only 1.1×.
 
     >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
     >>> c = lambda r, d: Comparison(tuple(ComparisonPoint(n, {"t_s": i + 1.0}, x, 0.0)
@@ -241,13 +247,27 @@ def improvement(before: Comparison, after: Comparison,
     >>> noise = {"x": 1.0, "y": 0.01}
     >>> round(improvement(before, after), 2), round(improvement(before, after, noise), 1)
     (1.02, 16.7)
+    >>> noise = {"x": 0.1, "y": 0.05}
+    >>> round(improvement(before, after, noise), 2), round(improvement(before, after, noise,
+    ...                                                                ["y"]), 1)
+    (1.08, 30.0)
     """
     pooled = before.rms_k / after.rms_k if after.rms_k > 0 else math.inf
     if noise is None:
         return pooled
     c0, c1 = chi2(before, noise), chi2(after, noise)
     weighted = math.sqrt(c0 / c1) if c1 > 0 else math.inf
+    direct = [_own(before, within), _own(after, within)]
+    if all(direct):
+        c0, c1 = (chi2(c, noise) for c in direct)
+        weighted = max(weighted, math.sqrt(c0 / c1) if c1 > 0 else math.inf)
     return max(pooled, weighted)
+
+
+def _own(comparison: Comparison, within: Sequence[str]) -> Comparison | None:
+    """The points of ``comparison`` in the data sets ``within`` (None when there are none)."""
+    points = tuple(p for p in comparison.points if p.dataset in within)
+    return type(comparison)(points, comparison.engine) if points else None
 
 
 def passes(bic_drop: float, gain: float, explained: float,
@@ -282,8 +302,12 @@ def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, floa
     prev = base
     for s in steps:
         c = s.chosen
-        parts.append(f"{c.effect.name} ({c.effect.form}) lowers the RMS {c.improvement:.3g}× "
-                     f"({prev.rms_k:.3g} → {c.rms_k:.3g} K) and explains "
+        # an effect measured in a small data set of its own (a TSP's calibration) may lower
+        # the misfit in units of the noise while the pooled RMS barely moves or rises
+        rms = f"{prev.rms_k:.3g} → {c.rms_k:.3g} K"
+        lowers = (f"lowers the RMS {c.improvement:.3g}× ({rms})" if c.improvement >= 1 else
+                  f"lowers the misfit {c.gain:.3g}× in units of the noise (RMS {rms})")
+        parts.append(f"{c.effect.name} ({c.effect.form}) {lowers} and explains "
                      f"{100 * c.explained:.0f} % of the misfit beyond the noise")
         prev = c.comparison
     left = structured(final, noise)
