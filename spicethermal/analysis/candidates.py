@@ -177,12 +177,14 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                   explained_fraction(before, cmp, noise, within)):
             fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise,
                                                   held_bic)
-        contradicted = ""
+        contradicted = tied = ""
         if fit.effect.kind == DEVICE and len(data.cooling) > 1:
             if linear is None:
                 linear = alternatives(data, ladder)
-            contradicted = device_effect_contradicted(data, ladder, fit.effect, fit.n_params,
-                                                      [x[1] for x in scored], linear)
+            # every form as fitted alone, and the candidate's own fit (a joint refit with the
+            # effects found before may have fitted the cooling curves where those did not)
+            contradicted, tied = device_effect_contradicted(
+                data, ladder, fit.effect, fit.n_params, [*(x[1] for x in scored), cmp], linear)
         if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
             # the first readings stand out of the model it extends or of its own ladder (a
             # transient proportional to the power passes for a fast stage of the first)
@@ -196,7 +198,8 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                evidence(fit, data, before, cmp, noise),
                                explained_fraction(before, cmp, noise, within),
                                time.perf_counter() - t0, contradicted, fit.facts,
-                               improvement_of(before, cmp, noise, within), model_effects))
+                               improvement_of(before, cmp, noise, within), model_effects,
+                               tied))
     cands.sort(key=lambda c: c.bic)
     return cands
 

@@ -192,8 +192,13 @@ class Alternative:
     n_params: int
     what: str
     #: Whether a device effect acts on the very element this alternative changes between the
-    #: curves (then the effect must be decisively closer, not only as close, to be named).
+    #: curves (when it fits them only as closely, the data cannot tell the two apart) ...
     rivals: Callable[[Effect], bool] = lambda _effect: False
+    #: ... and what the data then cannot tell apart (the verdict's words) ...
+    alike: str = ""
+    #: ... and whether that refuses the effect outright (else only when the model it
+    #: completes leaves a data set beyond its noise: :func:`device_effect_contradicted`).
+    outright: bool = True
 
 
 def outer_layers(effect: Effect) -> bool:
@@ -201,6 +206,14 @@ def outer_layers(effect: Effect) -> bool:
     with ``first_layer`` ≥ 1): the layers whose resistance a remount or an airflow changes."""
     return effect.name == "temperature-coefficient" and effect.form in LOCAL_FORMS and \
         effect.params.get("first_layer", 0.0) >= 1
+
+
+def whole_path(effect: Effect) -> bool:
+    """Whether ``effect`` is a temperature coefficient of the junction form: every layer's
+    resistance scaled by one law of the junction temperature, which before the cut scales the
+    whole steady rise as a heating power other than the recorded one does (only its change
+    while the device cools tells them apart)."""
+    return effect.name == "temperature-coefficient" and effect.form == "junction"
 
 
 def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
@@ -211,7 +224,10 @@ def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
     try:
         chi2, k = amplitude_only(data, ladder)
         out.append(Alternative(chi2, k, "the linear ladder's shape scaled per curve, at the "
-                                        "noise (a power that is not the recorded one"))
+                                        "noise (a power that is not the recorded one",
+                               whole_path, "a resistance that follows the junction temperature "
+                                           "from a heating power other than the recorded one",
+                               outright=False))
     except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
         pass
     try:
@@ -221,7 +237,8 @@ def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
                                         f"resistance changed between curves ({moved}), at the "
                                         f"noise (a contact or mounting that changed between the "
                                         f"measurements",
-                               outer_layers))
+                               outer_layers, "that layer's temperature dependence from a "
+                                             "change of setup between the curves"))
     except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
         pass
     return out
@@ -229,14 +246,23 @@ def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
 
 def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect: Effect,
                                n_params: int, comparisons: Sequence[Comparison],
-                               linear: Sequence[Alternative] | None = None) -> str:
-    """Why device effect ``effect`` is contradicted by the cooling dynamics ("" when it is
-    not, or when the test does not apply: a measurement effect, fewer than two cooling
-    curves): a linear alternative (:func:`alternatives`: a power per curve, an outer
+                               linear: Sequence[Alternative] | None = None) -> tuple[str, str]:
+    """Why device effect ``effect`` is contradicted by the cooling dynamics, and why the
+    cooling curves cannot tell it from a linear alternative ("" when they can, or when the
+    test does not apply: a measurement effect, fewer than two cooling curves).
+
+    Contradicted: a linear alternative (:func:`alternatives`: a power per curve, an outer
     resistance per curve) fits the cooling curves at the noise (χ²/n within the white-noise
     bound of :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`) and decisively better than
-    every form of the effect (BIC lower by
-    :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`).
+    every form of the effect (BIC lower by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`).
+    Not told apart: an alternative that changes the effect's own element between the curves
+    (:attr:`Alternative.rivals`) fits them at the noise and within that margin. A change of
+    setup (the outer resistance) then refuses an outer layer's coefficient outright (a
+    contradiction); a power per curve refuses a junction coefficient only when the model it
+    completes leaves a data set beyond its noise (a tie, judged by
+    :func:`~spicethermal.analysis.diagnose.diagnose`): the weak coefficients of the project's
+    own scenarios, fitted in the junction form, tie with it at the noise and are real, while no
+    outer layer's coefficient in the validation draws tied with a change of setup.
 
     Parameters
     ----------
@@ -255,11 +281,12 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
 
     Returns
     -------
-    str
-        The reason (the alternative that beats the effect by most), or "".
+    tuple of (str, str)
+        The contradiction (the alternative that beats the effect by most) and the tie, each
+        a reason or "".
     """
     if effect.kind != DEVICE or len(data.cooling) < 2 or not comparisons:
-        return ""
+        return "", ""
     kept = _kept(data)
     n = sum(int(np.sum(k)) for k in kept.values())
 
@@ -274,23 +301,24 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
     found = [((chi2_effect + n_params * log_n) - (alt.chi2 + alt.n_params * log_n), alt)
              for alt in (linear if linear is not None else alternatives(data, ladder))
              if alt.chi2 / max(n, 1) <= bound]
-    # an alternative that changes another element must be decisively closer; one that changes
-    # the effect's own element between the curves need only be as close: the data then cannot
-    # tell that element's temperature dependence from a change of setup
-    found = [(gap, alt) for gap, alt in found
-             if gap >= (-MIN_BIC_DROP if alt.rivals(effect) else MIN_BIC_DROP)]
-    if not found:
-        return ""
-    gap, alt = max(found, key=lambda x: x[0])
-    if gap < MIN_BIC_DROP:
-        return (f"{effect.name} ({effect.form}, layers {effect.params['first_layer']:.0f} "
-                f"outwards) fits the cooling curves no more closely than {alt.what}; χ² "
-                f"{alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with the effect: BIC "
-                f"within {MIN_BIC_DROP:g}): the data cannot tell that layer's temperature "
-                f"dependence from a change of setup between the curves")
-    return (f"{effect.name} would change the cooling dynamics, but the cooling curves are "
-            f"{alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with the "
-            f"effect: BIC {gap:.0f} lower)")
+    beaten = [(gap, alt) for gap, alt in found if gap >= MIN_BIC_DROP]
+    if beaten:
+        gap, alt = max(beaten, key=lambda x: x[0])
+        return (f"{effect.name} would change the cooling dynamics, but the cooling curves are "
+                f"{alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with "
+                f"the effect: BIC {gap:.0f} lower)"), ""
+    # an alternative that changes the effect's own element between the curves, as close:
+    # the data cannot tell that element's temperature dependence from a change between them
+    tied = [(gap, alt) for gap, alt in found if gap > -MIN_BIC_DROP and alt.rivals(effect)]
+    if not tied:
+        return "", ""
+    gap, alt = max(tied, key=lambda x: (x[1].outright, x[0]))
+    layers = (f", layers {effect.params['first_layer']:.0f} outwards"
+              if effect.form in LOCAL_FORMS else "")
+    why = (f"{effect.name} ({effect.form}{layers}) fits the cooling curves no more closely "
+           f"than {alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with "
+           f"the effect: BIC within {MIN_BIC_DROP:g}): the data cannot tell {alt.alike}")
+    return (why, "") if alt.outright else ("", why)
 
 
 def transient_hidden(before: Comparison, effect: Effect, noise: Mapping[str, float]) -> str:

@@ -68,6 +68,7 @@ from .verdict import (
     MIN_IMPROVEMENT,
     MIN_TOTAL_EXPLAINED,
     at_noise,
+    beyond_noise,
     chi2,
     criterion,
     decisive,
@@ -232,6 +233,17 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             cur_ladder, cur_effects, cur = last.chosen.ladder, list(last.effects), \
                 last.chosen.comparison
             cur_bic = criterion(cur, noise, sum(st.chosen.n_params for st in steps))
+    # an effect the cooling curves cannot tell from a linear alternative (a power, a contact
+    # that changed between the curves) is named only when its model fits every data set at
+    # its noise: leaving one beyond it, nothing holds it up
+    tied = next((k for k, st in enumerate(steps) if st.chosen.tied), None)
+    over = beyond_noise(steps[-1].chosen.comparison, noise) if steps else {}
+    if tied is not None and over and not contradicted:
+        contradicted = (f"{steps[tied].chosen.tied}, and the model with it leaves "
+                        f"{', '.join(f'{n} at {r:.3g}×' for n, r in over.items())} its noise "
+                        f"variance")
+        steps = steps[:tied]
+        cur = steps[-1].chosen.comparison if steps else base
     where = tuple(localise(base, noise))
 
     def partial_after(k: int) -> bool:  # the first k effects leave physics they do not explain
