@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from spicethermal.analysis.diagnose import diagnose
-from spicethermal.analysis.verdict import at_noise
 from spicethermal.analysis.scenarios import ACTUATOR_R, ACTUATOR_TAU, scenario_bundle
+from spicethermal.analysis.verdict import at_noise
 from spicethermal.core.ladder import Foster
 from spicethermal.io.bundle import Bundle, CoolingTable
 
@@ -123,3 +123,7 @@ def test_a_junction_coefficient_that_a_power_error_fits_as_well_is_named_only_at
     d = diagnose(c.record().bundle)
     assert d.effects == ["temperature-coefficient"] and d.steps[0].chosen.tied, d.verdict_reason
     assert at_noise(d.steps[0].chosen.comparison, d.noise_k)
+    # the name stands, and the reason says what else fits the cooling curves as well
+    assert "the residual is at the noise; but the cooling curves alone do not single it out: " \
+        "temperature-coefficient (junction) fits the cooling curves no more closely than the " \
+        "linear ladder's shape scaled per curve" in d.verdict_reason

@@ -290,6 +290,9 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         steps = []
     else:
         reason = verdict_reason(base, cur, noise, first, steps, skipped)
+        if tied is not None and tied < len(steps):  # named at the noise, but say what else fits
+            reason += (f"; but the cooling curves alone do not single it out: "
+                       f"{steps[tied].chosen.tied}")
     effect = steps[0].chosen.effect.name if steps else None
     return Diagnosis(base, model, noise, bic0, tuple(first), effect, reason, where, skipped,
                      time.perf_counter() - t_start, data.source, {}, tuple(steps))
