@@ -257,10 +257,10 @@ def improvement(before: Comparison, after: Comparison,
         return pooled
     c0, c1 = chi2(before, noise), chi2(after, noise)
     weighted = math.sqrt(c0 / c1) if c1 > 0 else math.inf
-    direct = [_own(before, within), _own(after, within)]
-    if all(direct):
-        c0, c1 = (chi2(c, noise) for c in direct)
-        weighted = max(weighted, math.sqrt(c0 / c1) if c1 > 0 else math.inf)
+    b, a = _own(before, within), _own(after, within)
+    if b and a:
+        own0, own1 = chi2(b, noise), chi2(a, noise)
+        weighted = max(weighted, math.sqrt(own0 / own1) if own1 > 0 else math.inf)
     return max(pooled, weighted)
 
 

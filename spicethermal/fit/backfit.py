@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -156,7 +157,7 @@ def refit_effects(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Ef
     for fit_ladder, limit in passes:
         try:
             out = refit(best, fit_ladder) if limit is None else \
-                bounded(lambda b=best: refit(b, False), limit, None)
+                bounded(partial(refit, best, fit_ladder), limit, None)
             if out is not None and sse(data, out[0], out[1]) < sse(data, *best):
                 best = (as_foster(out[0]), out[1])
         except (FitError, SimulationError, *NUMERICAL_ERRORS):
