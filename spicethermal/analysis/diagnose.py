@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
@@ -56,13 +56,13 @@ from ..fit.tcforward import own_cache
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
 from .candidates import candidates, refit_step, swap_dead_end, swap_first
-from .compare import Comparison
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
 from .residuals import comparison_of, fmt_against, localise, noise_estimates
 from .table2 import TableAnalysis, analyse_table, diagnose_table
 from .verdict import (
     MAX_LEFT_CHI2,
+    MAX_STEPS,
     MIN_BIC_DROP,
     MIN_EXPLAINED,
     MIN_IMPROVEMENT,
@@ -75,6 +75,7 @@ from .verdict import (
     early_excess,
     explained_fraction,
     far_left,
+    partial_fit,
     runs_z,
     structured,
     verdict_reason,
@@ -88,8 +89,6 @@ __all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", 
            "diagnose_table", "evidence", "explained_fraction", "fit_with_effects", "localise",
            "noise_estimates", "runs_z", "structured", "write_report"]
 
-#: Effects added at most, one per step.
-MAX_STEPS = 3
 #: Time budget (s of work, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
 #: candidate's fit at the first step; a fit past it keeps its
 #: best point so far (a fit that cannot start fails).
@@ -101,20 +100,6 @@ LATER_BUDGET_S = 8.0
 #: (the candidates' own budgets stop at it too): no bundle keeps the diagnosis busy for longer,
 #: whatever its fits do.
 DIAGNOSIS_BUDGET_S = 50.0
-
-
-def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
-    """Whether the effects leave a misfit too large to call them the diagnosis (the caller
-    asks only when the residual is structured): a data set whose structured residual is
-    above 3× its noise (:func:`far_left`); after two, a noise-weighted ``χ²/N`` above
-    :data:`MAX_LEFT_CHI2`; after three, any (a structured residual that three catalogued
-    effects leave is physics they only approximate together: a convection that switches
-    passes for a temperature coefficient, a sample window and a latent heat)."""
-    if n_steps >= MAX_STEPS:
-        return True
-    if n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2:
-        return True
-    return bool(far_left(final, noise))
 
 
 @own_cache()  # its fits' work, so where they stop, owes nothing to earlier runs
@@ -247,9 +232,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     where = tuple(localise(base, noise))
 
     def partial_after(k: int) -> bool:  # the first k effects leave physics they do not explain
-        c = steps[k - 1].chosen.comparison
-        return bool(structured(c, noise)) and (
-            explained_fraction(base, c, noise) < MIN_TOTAL_EXPLAINED or unexplained(c, noise, k))
+        return partial_fit(base, steps[k - 1].chosen.comparison, noise, k)
 
     partial = bool(steps) and partial_after(len(steps))
     # a later effect that only mops up the misfit of an approximate first one leaves the

@@ -20,8 +20,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer, Foster
     from ..effects import Effect
 
-__all__ = ["EXPLAINED_RATIO", "NOISE_FLOOR_K", "comparison_of", "fmt_number", "fmt_time",
-           "localise", "noise_estimates", "rms"]
+__all__ = ["EXPLAINED_RATIO", "NOISE_FLOOR_K", "PWM_OWN_NOISE_MIN", "comparison_of",
+           "fmt_number", "fmt_time", "localise", "noise_estimates", "rms"]
 
 #: A data set fits "within its noise" when its RMS is within this many noise estimates.
 EXPLAINED_RATIO = 2.0
@@ -33,6 +33,15 @@ NOISE_FLOOR_K = 0.005
 CAL_POLY_DEGREE = 3
 #: Fraction of the largest consecutive residual differences left out of the noise estimate.
 NOISE_TRIM = 0.1
+#: A PWM grid of fewer readings gets at least the noise of the sensor that reads it, as its
+#: calibration measures it (scatter about a cubic, at most the curves'): an estimate from the
+#: differences of six readings of white noise falls below 0.44× the truth one time in twenty
+#: (below 0.27× one in a hundred), and a grid judged against a noise estimated that low is
+#: "3× its noise" on its noise alone (seed 303's draw 027 of the random validation set: a grid
+#: of six at 0.0137 K, calibration and curves at 0.05 K); of twelve, 0.59× and 0.45×. Not
+#: the curves' own estimate: a misfit on sparse curves inflates it (seed 5's draw 024: 0.14 K
+#: for a sensor of 0.05 K), and the grid weighed that lightly let a band's fit trade it away.
+PWM_OWN_NOISE_MIN = 12
 
 
 def comparison_of(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Effect] = (),
@@ -70,7 +79,8 @@ def noise_estimates(comparison: Comparison) -> dict[str, float]:
     from scipy.stats import norm
 
     out = {}
-    for name, sub in comparison.by_dataset().items():
+    sets = comparison.by_dataset()
+    for name, sub in sets.items():
         r = sub.residuals_k
         if r.size < 3:
             out[name] = max(float(np.std(r)), NOISE_FLOOR_K)
@@ -95,8 +105,14 @@ def noise_estimates(comparison: Comparison) -> dict[str, float]:
     curves = [v for k, v in out.items() if k.startswith("cooling")]
     if "pwm" in out and curves:
         # the same TSP reads the PWM grid: its few readings, ordered by frequency and duty,
-        # mix the misfit's pattern into their differences, so the curves' noise caps theirs
-        out["pwm"] = min(out["pwm"], max(min(curves), NOISE_FLOOR_K))
+        # mix the misfit's pattern into their differences, so the curves' noise caps theirs,
+        # and a grid too small to estimate its own noise takes theirs
+        sensor = max(min(curves), NOISE_FLOOR_K)
+        if len(sets["pwm"].points) >= PWM_OWN_NOISE_MIN:
+            out["pwm"] = min(out["pwm"], sensor)
+        else:  # too few for its own: at least the sensor's, as the calibration measures it
+            out["pwm"] = min(max(out["pwm"], min(out.get("calibration", sensor), sensor)),
+                             sensor)
     return out
 
 

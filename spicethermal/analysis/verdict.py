@@ -23,11 +23,11 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .compare import Comparison
 
-__all__ = ["AT_NOISE_CHI2", "MAX_LEFT_CHI2", "MIN_BIC_DROP", "MIN_EXPLAINED", "MIN_IMPROVEMENT",
-           "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z", "at_noise", "beyond_noise", "bic_drop",
-           "can_be_decisive", "chi2", "criterion", "decisive", "early_excess",
-           "explained_fraction", "far_left", "improvement", "passes", "runs_z", "structured",
-           "verdict_reason"]
+__all__ = ["AT_NOISE_CHI2", "MAX_LEFT_CHI2", "MAX_STEPS", "MIN_BIC_DROP", "MIN_EXPLAINED",
+           "MIN_IMPROVEMENT", "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z", "at_noise",
+           "beyond_noise", "bic_drop", "can_be_decisive", "chi2", "criterion", "decisive",
+           "early_excess", "explained_fraction", "far_left", "improvement", "partial_fit",
+           "passes", "runs_z", "structured", "unexplained", "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
 MIN_IMPROVEMENT = 1.15
@@ -44,8 +44,10 @@ MIN_TOTAL_EXPLAINED = 0.97
 AT_NOISE_CHI2 = 1.5
 #: Several effects that leave a structured residual whose noise-weighted ``χ²/N`` is above
 #: this (an RMS above 3× the noise) are not named, nor any that leave a data set's structured
-#: residual above it (:func:`~spicethermal.analysis.diagnose.unexplained`, :func:`far_left`).
+#: residual above it (:func:`unexplained`, :func:`far_left`).
 MAX_LEFT_CHI2 = 9.0
+#: Effects a diagnosis adds at most, one per step.
+MAX_STEPS = 3
 #: A data set's residual is structured when its runs test gives z below this ...
 RUNS_Z = -3.0
 #: ... which needs this many residuals (fewer: :func:`structured` judges their size alone).
@@ -111,10 +113,13 @@ def runs_z(residuals: NDArray) -> float:
 
 def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     """Data sets whose residual is beyond their noise (RMS above :data:`EXPLAINED_RATIO` ×)
-    and structured (:func:`runs_z` below :data:`RUNS_Z`), and those too short for a runs test
-    (fewer than :data:`RUNS_MIN` readings, such as a PWM grid of six) whose residual is
-    beyond 3× their noise (``χ²/n`` above :data:`MAX_LEFT_CHI2`): their noise comes from the
-    curves read by the same sensor, so such a misfit is no noise, whatever its signs.
+    and structured (:func:`runs_z` below :data:`RUNS_Z`), and those whose residual is beyond
+    3× their noise (``χ²/n`` above :data:`MAX_LEFT_CHI2`) whatever its signs: such a misfit
+    is no noise, and a runs test may not see it: it needs :data:`RUNS_MIN` readings, and more
+    to have any power (of twelve, only two runs reach z = −3). A convection that switches,
+    taken for an outer layer's coefficient, left a PWM grid of 18 readings at 7× its noise,
+    below the model at 20 and 50 % duty and above it at 80 %: four runs, z = −2.85, "no
+    structure". A PWM grid's noise comes from the curves read by the same sensor.
 
     >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
     >>> c = Comparison(tuple(ComparisonPoint(d, {"t_s": i + 1.0}, x, 0.0) for i, (d, x)
@@ -126,10 +131,9 @@ def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     out = []
     for name, sub in comparison.by_dataset().items():
         r = sub.residuals_k
-        if r.size < RUNS_MIN:
-            if _per_point(sub, noise[name]) > MAX_LEFT_CHI2:
-                out.append(name)
-        elif sub.rms_k > EXPLAINED_RATIO * noise[name] and runs_z(r) < RUNS_Z:
+        if _per_point(sub, noise[name]) > MAX_LEFT_CHI2 or (
+                r.size >= RUNS_MIN and sub.rms_k > EXPLAINED_RATIO * noise[name]
+                and runs_z(r) < RUNS_Z):
             out.append(name)
     return out
 
@@ -203,6 +207,31 @@ def far_left(final: Comparison, noise: Mapping[str, float]) -> dict[str, float]:
     over = beyond_noise(final, noise)
     return {name: over[name] for name in structured(final, noise)
             if over.get(name, 0.0) > MAX_LEFT_CHI2}
+
+
+def unexplained(final: Comparison, noise: Mapping[str, float], n_steps: int) -> bool:
+    """Whether the effects leave a misfit too large to call them the diagnosis (the caller
+    asks only when the residual is structured): a data set whose structured residual is
+    above 3× its noise (:func:`far_left`); after two, a noise-weighted ``χ²/N`` above
+    :data:`MAX_LEFT_CHI2`; after three, any (a structured residual that three catalogued
+    effects leave is physics they only approximate together: a convection that switches
+    passes for a temperature coefficient, a sample window and a latent heat)."""
+    if n_steps >= MAX_STEPS:
+        return True
+    if n_steps > 1 and chi2(final, noise) / max(len(final.points), 1) > MAX_LEFT_CHI2:
+        return True
+    return bool(far_left(final, noise))
+
+
+def partial_fit(base: Comparison, final: Comparison, noise: Mapping[str, float],
+                n_steps: int) -> bool:
+    """Whether ``n_steps`` effects that take the misfit of ``base`` to ``final`` explain only
+    part of it, so that they are no diagnosis: a structured residual remains
+    (:func:`structured`), and they explain less than :data:`MIN_TOTAL_EXPLAINED` of the misfit
+    beyond the noise or leave too much of it (:func:`unexplained`)."""
+    return bool(structured(final, noise)) and (
+        explained_fraction(base, final, noise) < MIN_TOTAL_EXPLAINED
+        or unexplained(final, noise, n_steps))
 
 
 def can_be_decisive(comparison: Comparison, noise: Mapping[str, float],
