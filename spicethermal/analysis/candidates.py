@@ -214,7 +214,9 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 if linear_ladder is not ladder:
                     alike = alternatives(data, linear_ladder)
                 else:
-                    alike = linear = alternatives(data, ladder) if linear is None else linear
+                    if linear is None:
+                        linear = alternatives(data, ladder)
+                    alike = linear
                 # every form as fitted alone, and the candidate's own fit (a joint refit with the
                 # effects found before may have fitted the cooling curves where those did not)
                 # (with the effect's own parameters: the ladder's are the alternatives' too)
@@ -261,8 +263,7 @@ def budget_left() -> bool:
 
 
 def scored_forms(data: BundleData, ladder: Foster, name: str, effects: Sequence[Effect],
-                 noise: Mapping[str, float], budget_s: float
-                 ) -> list[tuple[EffectFit, Comparison, float]]:
+                 noise: Mapping[str, float], budget_s: float) -> list[Scored]:
     """Every form of ``name`` fitted on top of ``ladder`` and ``effects`` within ``budget_s``
     of work, each with its comparison and criterion."""
     with time_limit(budget_s):

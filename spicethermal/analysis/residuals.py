@@ -106,7 +106,7 @@ def noise_estimates(comparison: Comparison) -> dict[str, float]:
     if "pwm" in out and curves:
         # the same TSP reads the PWM grid: its few readings, ordered by frequency and duty,
         # mix the misfit's pattern into their differences, so the curves' noise caps theirs,
-        # and a grid too small to estimate its own noise takes theirs
+        # and a grid too small to estimate its own gets at least the calibration's
         sensor = max(min(curves), NOISE_FLOOR_K)
         if len(sets["pwm"].points) >= PWM_OWN_NOISE_MIN:
             out["pwm"] = min(out["pwm"], sensor)

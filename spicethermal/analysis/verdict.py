@@ -119,7 +119,8 @@ def structured(comparison: Comparison, noise: Mapping[str, float]) -> list[str]:
     to have any power (of twelve, only two runs reach z = −3). A convection that switches,
     taken for an outer layer's coefficient, left a PWM grid of 18 readings at 7× its noise,
     below the model at 20 and 50 % duty and above it at 80 %: four runs, z = −2.85, "no
-    structure". A PWM grid's noise comes from the curves read by the same sensor.
+    structure". A PWM grid's noise comes from the sensor that reads the curves and the
+    calibration (:func:`~spicethermal.analysis.residuals.noise_estimates`).
 
     >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
     >>> c = Comparison(tuple(ComparisonPoint(d, {"t_s": i + 1.0}, x, 0.0) for i, (d, x)
