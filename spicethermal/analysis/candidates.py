@@ -214,9 +214,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 if linear_ladder is not ladder:
                     alike = alternatives(data, linear_ladder)
                 else:
-                    if linear is None:
-                        linear = alternatives(data, ladder)
-                    alike = linear
+                    alike = linear = alternatives(data, ladder) if linear is None else linear
                 # every form as fitted alone, and the candidate's own fit (a joint refit with the
                 # effects found before may have fitted the cooling curves where those did not)
                 # (with the effect's own parameters: the ladder's are the alternatives' too)
