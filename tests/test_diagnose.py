@@ -566,3 +566,59 @@ def test_a_latent_heat_is_fitted_on_a_ladder_one_stage_longer_than_the_linear_fi
     assert first.n_params >= 4 + 2  # the band's four and the stage's two
     assert not partial_fit(d.baseline, first.comparison, d.noise_k, 1)
     assert first.effect.params["t_c"] == pytest.approx(47.7, abs=1.5)
+
+
+@pytest.mark.parametrize("room", [1e9, 0.0])
+def test_a_later_steps_rescues_come_after_the_cheap_fits(room, monkeypatch):
+    """A later step's candidate that is not decisive on its own fit is rescued (refitted
+    jointly with the effects found) only after the cheap candidates' plain fits, before the
+    costly ones, and, with a decisive candidate in hand, only while the diagnosis's budget
+    leaves room for the refit of the effect it will name (seed 5's draw 028: two rescues spent
+    17 s of work before a fixed transient beside a power-law coefficient was fitted, and the
+    step's refit got none)."""
+    from dataclasses import replace
+
+    from spicethermal.analysis import candidates as module
+    from spicethermal.analysis.residuals import comparison_of, noise_estimates
+    from spicethermal.fit.effectfit import BundleData, baseline_ladder, switched_off
+
+    data = BundleData.from_bundle(scenario_bundle("sample-window"))
+    ladder = baseline_ladder(data)
+    found = [switched_off("tsp-nonlinearity", "quadratic", data)]  # an effect found before
+    base = comparison_of(data, ladder, found)
+    noise = noise_estimates(base)
+    data = replace(data, scales=noise)
+    calls = []
+    real_fit, real_rescue, real_passes = module.scored_forms, module.rescue, module.passes
+
+    def fit(data, ladder, name, *args):
+        calls.append(("fit", name))
+        return real_fit(data, ladder, name, *args)
+
+    def rescue(data, fit, *args):
+        calls.append(("rescue", fit.effect.name))
+        return real_rescue(data, fit, *args)
+
+    def passes(*args):  # the transient is not decisive on its own fit here
+        return calls[-1] != ("fit", "electrical-transient") and real_passes(*args)
+
+    monkeypatch.setattr(module, "scored_forms", fit)
+    monkeypatch.setattr(module, "rescue", rescue)
+    monkeypatch.setattr(module, "passes", passes)
+    monkeypatch.setattr(module, "left", lambda: room)
+    skipped: dict[str, str] = {}
+    cands = module.candidates(data, ladder, found, list(known_names()), base, noise,
+                              lambda _text: None, skipped, 8.0, step=2)
+    assert cands[0].effect.name == "sample-window"
+    fits = [name for kind, name in calls if kind == "fit"]
+    assert fits[:2] == ["sample-window", "electrical-transient"] and len(fits) >= 3
+    if room:  # after the cheap fits, before the costly ones
+        at = calls.index(("rescue", "electrical-transient"))
+        assert {name for _, name in calls[:at]} == {"sample-window", "electrical-transient"}
+        assert calls[at + 1:] and all(name in ("temperature-coefficient", "phase-change")
+                                      for _, name in calls[at + 1:])
+        assert "electrical-transient" in {c.effect.name for c in cands}
+    else:
+        assert all(kind == "fit" for kind, _ in calls)
+        assert skipped["electrical-transient"].endswith(
+            "sample-window is, and the diagnosis's budget is kept for its refit")

@@ -1,13 +1,14 @@
 """One step of the diagnosis: every candidate effect fitted on top of the model so far, and
 what a later step does beyond that (the rescue of a candidate that its held fit hides, the
-joint refit of every effect found, the swap of a first effect that took up the second one's
-signature). :func:`~spicethermal.analysis.diagnose.diagnose` runs the steps."""
+joint refit of every effect found; the swap of a first effect that took up the second one's
+signature is :mod:`~spicethermal.analysis.swaps`'s).
+:func:`~spicethermal.analysis.diagnose.diagnose` runs the steps."""
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -15,7 +16,7 @@ from ..core.errors import DataFormatError, FitError, SimulationError
 from ..core.progress import bar
 from ..effects import DEVICE, MEASUREMENT, Effect, spec
 from ..fit.backfit import HELD_LADDER_S, refit_effects
-from ..fit.budget import TimeLimitError, check_time
+from ..fit.budget import TimeLimitError, check_time, left
 from ..fit.effectfit import (
     MAX_BASELINE_ORDER,
     NUMERICAL_ERRORS,
@@ -28,8 +29,13 @@ from ..fit.effectfit import (
 )
 from ..fit.fitters import choose_form, fit_effect_forms
 from .compare import Comparison
-from .consistency import alternatives, device_effect_contradicted, transient_hidden
-from .diagnosis import Candidate, Step
+from .consistency import (
+    Alternative,
+    alternatives,
+    device_effect_contradicted,
+    transient_hidden,
+)
+from .diagnosis import Candidate
 from .evidence import evidence
 from .residuals import comparison_of
 from .verdict import (
@@ -49,9 +55,9 @@ from .verdict import improvement as improvement_of
 if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Foster
 
-__all__ = ["FITTED_FIRST", "LONGER_LADDER", "REFIT_BUDGET_S", "RESCUE_BUDGET_S", "SWAPPABLE",
+__all__ = ["FITTED_FIRST", "LONGER_LADDER", "REFIT_BUDGET_S", "RESCUE_BUDGET_S", "RESCUE_COST_S",
            "Scored", "candidates", "joint_refit", "longer_ladder", "not_needed", "quiet_where",
-           "refit_step", "rescue", "scored_forms", "swap_dead_end", "swap_first"]
+           "refit_step", "rescue", "scored_forms"]
 
 #: Effects whose only signature is in some data sets (those whose name starts so) and their
 #: least number of parameters: they are not fitted when those data sets leave no room for a
@@ -112,11 +118,13 @@ REFIT_BUDGET_S = 8.0
 #: found so far (:func:`rescue`).
 RESCUE_BUDGET_S = 8.0
 
-#: Device effects that can pass for one another at the first step (each changes how the
-#: heat flows through the device): when the first step took one and the second step found
-#: another effect, the others that were decisive at the first step are tried in its place
-#: (:func:`swap_first`).
-SWAPPABLE = ("temperature-coefficient", "phase-change")
+#: Work (s) a rescue may cost with the joint refit of the effect a step names after it (two
+#: joint refits of :data:`RESCUE_BUDGET_S` and their held first passes, and
+#: :data:`REFIT_BUDGET_S`): with a decisive candidate in hand, a rescue is tried only when
+#: the diagnosis's budget has that much left (seed 5's draw 028 of the random validation set: a
+#: fixed transient, decisive on top of a power-law coefficient, was left unrefitted and
+#: short of the noise when the rescues of a sample window and a TSP bow spent 17 s of work).
+RESCUE_COST_S = 2 * (RESCUE_BUDGET_S + HELD_LADDER_S) + REFIT_BUDGET_S
 
 #: Device effects fitted on the linear ladder one stage longer too when on the baseline's they
 #: lead the first step (fitted last, they fit better than every other candidate) and explain
@@ -132,14 +140,19 @@ Scored = tuple[EffectFit, Comparison, float]
 
 
 def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
-                names: Sequence[str], before: Comparison, noise: Mapping[str, float],
-                say: Callable[[str], None], skipped: dict[str, str],
-                budget_s: float = 6.0, quiet: bool = True, step: int = 1) -> list[Candidate]:
+               names: Sequence[str], before: Comparison, noise: Mapping[str, float],
+               say: Callable[[str], None], skipped: dict[str, str],
+               budget_s: float = 6.0, quiet: bool = True, step: int = 1) -> list[Candidate]:
     """Every effect of ``names`` fitted on top of ``ladder`` and ``effects`` (each form; the
     default form unless another is decisively better, :func:`choose_form`), each within
-    ``budget_s`` of work; failures go to ``skipped``."""
+    ``budget_s`` of work; failures go to ``skipped``. A later step's candidate that is not
+    decisive on its own fit gets its :func:`rescue` after the cheap candidates' fits and before
+    the costly ones (:data:`GLANCED`, :data:`FITTED_LAST`), the best first: on top of an
+    integrated effect a rescue (a joint refit of every effect) can cost ten plain fits, and two
+    of them spent the diagnosis's budget before a transient beside a power-law coefficient was
+    tried (seed 5's draw 028 of the random validation set)."""
     present = {e.name for e in effects}
-    linear = None  # the linear alternatives to the device effects, fitted once
+    linear: list[Alternative] = []  # the linear alternatives to the device effects, fitted once
     # the model so far refitted jointly (what a rescue must beat), fitted once when asked
     refitted: list[float] = []
 
@@ -151,9 +164,82 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
 
     cands: list[Candidate] = []
     bic_before = criterion(before, noise, 0)
+
+    def settle(name: str, spent_s: float, scored: list[Scored], best: Scored,
+               linear_ladder: Foster, model_effects: tuple[Effect, ...]) -> None:
+        """The candidate of ``best`` weighed against the linear alternatives and its own
+        signature, into ``cands`` (or ``skipped``)."""
+        fit, cmp, bic = best
+        within = DIRECT.get(name, ())
+        contradicted = tied = ""
+        if fit.effect.kind == DEVICE and len(data.cooling) > 1:
+            # the alternatives on the linear ladder the effect was fitted on
+            if linear_ladder is not ladder:
+                alike = alternatives(data, linear_ladder)
+            else:
+                linear[:] = linear or alternatives(data, ladder)
+                alike = linear
+            # every form as fitted alone, and the candidate's own fit (a joint refit with the
+            # effects found before may have fitted the cooling curves where those did not)
+            # (with the effect's own parameters: the ladder's are the alternatives' too)
+            own = fit.n_params - 2 * (linear_ladder.order - ladder.order)
+            contradicted, tied = device_effect_contradicted(
+                data, linear_ladder, fit.effect, own, [*(x[1] for x in scored), cmp], alike)
+        if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
+            # the first readings stand out of the model it extends or of its own ladder (a
+            # transient proportional to the power passes for a fast stage of the first)
+            why = transient_hidden(before, fit.effect, noise) and transient_hidden(
+                comparison_of(data, fit.ladder, effects), fit.effect, noise)
+            if why:
+                skipped[name] = f"not seen: {why}"
+                return
+        improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
+        cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
+                               evidence(fit, data, before, cmp, noise),
+                               explained_fraction(before, cmp, noise, within), spent_s,
+                               contradicted, fit.facts,
+                               improvement_of(before, cmp, noise, within), model_effects, tied))
+
+    deferred = []  # later-step fits not decisive on their own, rescued after the cheap fits
+
+    def flush() -> bool:
+        """The rescues of the deferred fits, the best first (False when the diagnosis's budget
+        ran out within one: the rest are not weighed)."""
+        jobs = sorted(deferred, key=lambda job: job[3][2])
+        deferred.clear()
+        for k, (name, spent_s, scored, best, linear_ladder) in enumerate(jobs):
+            named = min((c for c in cands if decisive(c, bic_before) and not c.contradicted),
+                        key=lambda c: c.bic, default=None)
+            if named is not None and left() < RESCUE_COST_S:
+                skipped[name] = (f"fitted, not decisive on its own; not refitted with the "
+                                 f"effects found: {named.effect.name} is, and the diagnosis's "
+                                 f"budget is kept for its refit")
+                continue
+            t0 = time.perf_counter()
+            try:
+                fit, cmp, bic, model_effects = rescue(data, best[0], effects, before, best[1],
+                                                      best[2], noise, held_bic)
+                settle(name, spent_s + time.perf_counter() - t0, scored, (fit, cmp, bic),
+                       linear_ladder, model_effects)
+            except TimeLimitError:  # the diagnosis's budget ran out: the rest are not weighed
+                for rest in jobs[k:]:
+                    skipped[rest[0]] = ("fitted, not decisive on its own, and not refitted "
+                                        "with the effects found: the diagnosis's budget ran out")
+                return False
+        return True
+
     order = sorted(names, key=lambda n: 2 if n in FITTED_LAST else 1 if n in GLANCED
                    else -1 if n in FITTED_FIRST else 0)
     for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
+        # the costly fits come after the rescues of the cheap ones: a cheap rescue can make
+        # them unneeded (seed 303's draw 012: a transient's rescue of 0.14 s of work, on top
+        # of a coefficient and a sample window, brings every data set to its noise, where the
+        # latent heat's fit spends 11 s and the rescue found the budget spent)
+        if (name in FITTED_LAST or name in GLANCED) and deferred and not flush():
+            for rest_name in order[order.index(name):]:
+                if rest_name not in present:
+                    skipped[rest_name] = "not tried: the diagnosis's budget ran out"
+            break
         try:
             if name in present:
                 skipped.setdefault(name, "already in the model")
@@ -201,41 +287,14 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS) as exc:
                 skipped[name] = f"fit failed: {exc}"
                 continue
-            fit, cmp, bic = best
-            model_effects: tuple[Effect, ...] = ()
-            within = DIRECT.get(name, ())
-            if effects and not passes(bic_before - bic, improvement_of(before, cmp, noise, within),
+            within, cmp = DIRECT.get(name, ()), best[1]
+            job = (name, time.perf_counter() - t0, scored, best, linear_ladder)
+            gain = improvement_of(before, cmp, noise, within)
+            if effects and not passes(bic_before - best[2], gain,
                                       explained_fraction(before, cmp, noise, within)):
-                fit, cmp, bic, model_effects = rescue(data, fit, effects, before, cmp, bic, noise,
-                                                      held_bic)
-            contradicted = tied = ""
-            if fit.effect.kind == DEVICE and len(data.cooling) > 1:
-                # the alternatives on the linear ladder the effect was fitted on
-                if linear_ladder is not ladder:
-                    alike = alternatives(data, linear_ladder)
-                else:
-                    alike = linear = alternatives(data, ladder) if linear is None else linear
-                # every form as fitted alone, and the candidate's own fit (a joint refit with the
-                # effects found before may have fitted the cooling curves where those did not)
-                # (with the effect's own parameters: the ladder's are the alternatives' too)
-                own = fit.n_params - 2 * (linear_ladder.order - ladder.order)
-                contradicted, tied = device_effect_contradicted(
-                    data, linear_ladder, fit.effect, own, [*(x[1] for x in scored), cmp], alike)
-            if fit.effect.name == "electrical-transient" and not fit.facts.get("no_gain"):
-                # the first readings stand out of the model it extends or of its own ladder (a
-                # transient proportional to the power passes for a fast stage of the first)
-                why = transient_hidden(before, fit.effect, noise) and transient_hidden(
-                    comparison_of(data, fit.ladder, effects), fit.effect, noise)
-                if why:
-                    skipped[name] = f"not seen: {why}"
-                    continue
-            improvement = before.rms_k / cmp.rms_k if cmp.rms_k > 0 else math.inf
-            cands.append(Candidate(fit.effect, fit.ladder, cmp, fit.n_params, bic, improvement,
-                                   evidence(fit, data, before, cmp, noise),
-                                   explained_fraction(before, cmp, noise, within),
-                                   time.perf_counter() - t0, contradicted, fit.facts,
-                                   improvement_of(before, cmp, noise, within), model_effects,
-                                   tied))
+                deferred.append(job)
+                continue
+            settle(*job, ())
         except TimeLimitError:
             if budget_left():
                 skipped[name] = "fit failed: time budget exhausted"
@@ -246,6 +305,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 if rest_name not in present:
                     skipped[rest_name] = "not tried: the diagnosis's budget ran out"
             break
+    flush()  # (when the diagnosis's budget runs out within a rescue, what was weighed stands)
     cands.sort(key=lambda c: c.bic)
     return cands
 
@@ -404,96 +464,3 @@ def refit_step(data: BundleData, chosen: Candidate, effects: list[Effect],
                    explained=explained_fraction(before, cmp, noise, within),
                    evidence=evidence(fit, data, before, cmp, noise),
                    noise_gain=improvement_of(before, cmp, noise, within)), refitted
-
-
-def swap_first(data: BundleData, steps: Sequence[Step], first: Sequence[Candidate],
-               base: Comparison, noise: Mapping[str, float],
-               budget_s: float) -> list[Step] | None:
-    """The first two steps again with the first effect swapped for another device effect of
-    :data:`SWAPPABLE` that was decisive at the first step too, or ``None``.
-
-    A first effect chosen greedily can take up the signature of the second: a phase change
-    took the first milliseconds that a transient proportional to the power corrupts, and was
-    chosen over the temperature coefficient that fits far closer once the transient is found
-    (seed 23's draw 013 of the random validation set). For each alternative, its own
-    first-step candidate, the second step is fitted again on top of it, for the second
-    effect only (:func:`candidates`, every form, within ``budget_s`` of work): the
-    swap is taken when that is decisive on top of the alternative and the model with both has
-    a criterion lower by :data:`MIN_BIC_DROP` than the first two steps'."""
-    one, two = steps[0].chosen, steps[1].chosen
-    bic_now = criterion(two.comparison, noise, one.n_params + two.n_params)
-    for alt, on_alt in _alternatives(steps[0], first, base, noise, (two.effect.name,)):
-        def closer(new: Candidate, alt: Candidate = alt) -> bool:
-            return bic_now - criterion(new.comparison, noise,
-                                       alt.n_params + new.n_params) >= MIN_BIC_DROP
-
-        second = _second_step(data, alt, on_alt, [two.effect.name], noise, budget_s, closer)
-        if second is None:
-            continue
-        new, cands, model_effects = second
-        return [Step(alt, steps[0].candidates, tuple(on_alt)),
-                Step(new, tuple(cands), tuple(model_effects))]
-    return None
-
-
-def _alternatives(step: Step, first: Sequence[Candidate], base: Comparison,
-                  noise: Mapping[str, float], also_not: tuple[str, ...] = ()
-                  ) -> Iterator[tuple[Candidate, list[Effect]]]:
-    """The other device effects of :data:`SWAPPABLE` (not ``also_not``) that were decisive and
-    not contradicted at the first step, each with the model's effects with it in place of the
-    step's effect."""
-    one = step.chosen
-    if one.effect.name not in SWAPPABLE:
-        return
-    before = [e for e in step.effects if e.name != one.effect.name]
-    bic0 = criterion(base, noise, 0)
-    for alt in first:
-        if alt.effect.name in SWAPPABLE and alt.effect.name not in (one.effect.name, *also_not) \
-                and not alt.contradicted and decisive(alt, bic0):
-            yield alt, list(alt.model_effects) or [*before, alt.effect]
-
-
-def _second_step(data: BundleData, alt: Candidate, on_alt: list[Effect], names: Sequence[str],
-                 noise: Mapping[str, float], budget_s: float,
-                 keep: Callable[[Candidate], bool] = lambda _c: True
-                 ) -> tuple[Candidate, list[Candidate], list[Effect]] | None:
-    """The best decisive candidate of ``names`` on top of ``alt`` (then refitted with the
-    effects before it), the candidates weighed and the model's effects; ``None`` when none is
-    or ``keep`` rejects it."""
-    cands = candidates(data, alt.ladder, on_alt, names, alt.comparison, noise,
-                       lambda _text: None, {}, budget_s, step=2)
-    new = next((c for c in cands if decisive(c, alt.bic) and not c.contradicted), None)
-    if new is None or not keep(new):
-        return None
-    model_effects = list(new.model_effects) or [*on_alt, new.effect]
-    if not new.model_effects:
-        new, model_effects = refit_step(data, new, model_effects, alt.comparison, noise)
-    return new, cands, model_effects
-
-
-def swap_dead_end(data: BundleData, step: Step, first: Sequence[Candidate], base: Comparison,
-                  names: Sequence[str], noise: Mapping[str, float],
-                  budget_s: float) -> list[Step] | None:
-    """The first step again with another device effect of :data:`SWAPPABLE` that was decisive
-    at the first step too, and a second step on top of it, or ``None``: for a first effect
-    that leaves a residual beyond the noise that no second effect lowers decisively.
-
-    Each device effect can mimic the other: a latent-heat band, with its ladder refitted on
-    one more stage, explained 97 % of a strong temperature coefficient on the inner layers and
-    left the rest to nothing, where the coefficient (94 %) and an electrical transient bring
-    every data set to its noise (temperature-coefficient/inner-layers/strong of the validation
-    set). The swap is taken only when the alternative and a second effect (any of ``names``
-    but the effect it replaces, :func:`candidates` within ``budget_s`` of work) leave every
-    data set at its noise. The replaced effect does not come back second: that pair was
-    weighed already, in the other order, and its second effect was not decisive (a 0.49 J
-    plateau at a diode's node 1, 99 % of the misfit, got a junction coefficient of 56 % put
-    before it: seed 53's draw 012 of the random validation set)."""
-    for alt, on_alt in _alternatives(step, first, base, noise):
-        taken = {e.name for e in on_alt} | {step.chosen.effect.name}
-        second = _second_step(data, alt, on_alt, [n for n in names if n not in taken], noise,
-                              budget_s)
-        if second is not None and at_noise(second[0].comparison, noise):
-            new, cands, model_effects = second
-            return [Step(alt, step.candidates, tuple(on_alt)),
-                    Step(new, tuple(cands), tuple(model_effects))]
-    return None

@@ -55,10 +55,11 @@ from ..fit.fitters import fit_with_effects
 from ..fit.tcforward import own_cache
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
-from .candidates import candidates, refit_step, swap_dead_end, swap_first
+from .candidates import candidates, refit_step
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
 from .residuals import comparison_of, fmt_against, localise, noise_estimates
+from .swaps import swap_dead_end, swap_first
 from .table2 import TableAnalysis, analyse_table, diagnose_table
 from .verdict import (
     MAX_LEFT_CHI2,

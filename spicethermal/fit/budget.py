@@ -30,8 +30,8 @@ from typing import Any
 from ..core.errors import SimulationError
 
 __all__ = ["EVALUATION_S", "FROZEN_ROW_S", "HANG_FACTOR", "PC_STEP_S", "TC_STEP_S",
-           "TimeLimitError", "bounded", "check_time", "cpu_time", "mark", "reached", "spent",
-           "time_limit", "unlimited"]
+           "TimeLimitError", "bounded", "check_time", "cpu_time", "left", "mark", "reached",
+           "spent", "time_limit", "unlimited"]
 
 #: Work (s) of one evaluation of a fit's residuals (closed-form forward models and the least
 #: squares' own algebra), of one right-hand side of the phase-change integration, and of one of
@@ -89,6 +89,18 @@ def reached(end: int) -> bool:
     (False, None, True)
     """
     return spent() >= end
+
+
+def left() -> float:
+    """Work (s) left in the innermost :func:`time_limit` (``inf`` outside every budget).
+
+    >>> with time_limit(1.0):
+    ...     check_time(0.25)
+    ...     left()
+    0.75
+    """
+    deadline = _DEADLINE.get()[0]
+    return max(deadline - spent(), 0) / 1e9 if deadline != math.inf else math.inf
 
 
 def cpu_time() -> float:

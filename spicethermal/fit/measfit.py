@@ -150,17 +150,17 @@ def fit_electrical_transient(data: BundleData, ladder: Foster | Cauer,
     for form in refine:
         _, x0, build = held[form]
         lo, hi = forms[form][1], forms[form][2]
-        # a form that can pass for a fast stage (with one power, the fixed one too) is
-        # refitted on every data set
-        on = list(data.datasets) if form == "power" or (form == "fixed" and one_power) \
-            else names
-        # the linear ladder may have taken the transient as a fast stage of its own, and then
-        # the held fit's error has any sign and span (seed 5's draw 011: +0.0047 K/W over
-        # 15 µs for a truth of -0.0038 K/W over 260 µs): on the linear ladder alone the refit
-        # also starts from no error at spans a decade either side (on top of other effects
-        # their ladder was refitted with them, and each start costs their forward models)
+        # a form that can pass for a fast stage (the power form; with one power, the fixed
+        # one too) is refitted on every data set. The linear ladder may have taken it as a
+        # fast stage of its own, and then the held fit's error has any sign and span (seed
+        # 5's draw 011: +0.0047 K/W over 15 µs for a truth of -0.0038 K/W over 260 µs): on
+        # the linear ladder alone its refit also starts from no error at spans a decade
+        # either side (on top of other effects their ladder was refitted with them, and each
+        # start costs their forward models)
+        fast = form == "power" or (form == "fixed" and one_power)
         starts = [list(x0)] + [[0.0, s, *x0[2:]] for s in (x0[1] - 1, x0[1] + 1)
-                               if not base and lo[1] <= s <= hi[1]]
+                               if not base and fast and lo[1] <= s <= hi[1]]
+        on = list(data.datasets) if fast else names
         lad, effs, _ = min((joint_fit(data, on, ladder, True, x, lo, hi, build,
                                       linearise=True) for x in starts),
                            key=lambda r: r[2].cost)
