@@ -152,7 +152,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
     of them spent the diagnosis's budget before a transient beside a power-law coefficient was
     tried (seed 5's draw 028 of the random validation set)."""
     present = {e.name for e in effects}
-    linear: list[Alternative] = []  # the linear alternatives to the device effects, fitted once
+    linear: list[Alternative] | None = None  # the linear alternatives, fitted once
     # the model so far refitted jointly (what a rescue must beat), fitted once when asked
     refitted: list[float] = []
 
@@ -169,6 +169,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                linear_ladder: Foster, model_effects: tuple[Effect, ...]) -> None:
         """The candidate of ``best`` weighed against the linear alternatives and its own
         signature, into ``cands`` (or ``skipped``)."""
+        nonlocal linear
         fit, cmp, bic = best
         within = DIRECT.get(name, ())
         contradicted = tied = ""
@@ -177,8 +178,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             if linear_ladder is not ladder:
                 alike = alternatives(data, linear_ladder)
             else:
-                linear[:] = linear or alternatives(data, ladder)
-                alike = linear
+                alike = linear = alternatives(data, ladder) if linear is None else linear
             # every form as fitted alone, and the candidate's own fit (a joint refit with the
             # effects found before may have fitted the cooling curves where those did not)
             # (with the effect's own parameters: the ladder's are the alternatives' too)
@@ -205,7 +205,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
     def flush() -> bool:
         """The rescues of the deferred fits, the best first (False when the diagnosis's budget
         ran out within one: the rest are not weighed)."""
-        jobs = sorted(deferred, key=lambda job: job[3][2])
+        jobs = sorted(deferred, key=lambda job: job[3][2])  # by the best form's criterion
         deferred.clear()
         for k, (name, spent_s, scored, best, linear_ladder) in enumerate(jobs):
             named = min((c for c in cands if decisive(c, bic_before) and not c.contradicted),
@@ -230,15 +230,19 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
 
     order = sorted(names, key=lambda n: 2 if n in FITTED_LAST else 1 if n in GLANCED
                    else -1 if n in FITTED_FIRST else 0)
+
+    def not_tried(name: str) -> None:  # the diagnosis's budget ran out before ``name``
+        for rest_name in order[order.index(name):]:
+            if rest_name not in present:
+                skipped[rest_name] = "not tried: the diagnosis's budget ran out"
+
     for name in bar(order, desc=f"diagnose step {step}: fitting effects", quiet=quiet):
         # the costly fits come after the rescues of the cheap ones: a cheap rescue can make
         # them unneeded (seed 303's draw 012: a transient's rescue of 0.14 s of work, on top
         # of a coefficient and a sample window, brings every data set to its noise, where the
         # latent heat's fit spends 11 s and the rescue found the budget spent)
         if (name in FITTED_LAST or name in GLANCED) and deferred and not flush():
-            for rest_name in order[order.index(name):]:
-                if rest_name not in present:
-                    skipped[rest_name] = "not tried: the diagnosis's budget ran out"
+            not_tried(name)
             break
         try:
             if name in present:
@@ -301,9 +305,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                 continue
             # the diagnosis's budget ran out within this candidate: the step is weighed on the
             # candidates fitted before it, the others were not tried
-            for rest_name in order[order.index(name):]:
-                if rest_name not in present:
-                    skipped[rest_name] = "not tried: the diagnosis's budget ran out"
+            not_tried(name)
             break
     flush()  # (when the diagnosis's budget runs out within a rescue, what was weighed stands)
     cands.sort(key=lambda c: c.bic)
