@@ -622,3 +622,36 @@ def test_a_later_steps_rescues_come_after_the_cheap_fits(room, monkeypatch):
         assert all(kind == "fit" for kind, _ in calls)
         assert skipped["electrical-transient"].endswith(
             "sample-window is, and the diagnosis's budget is kept for its refit")
+
+
+def test_a_coefficient_beside_a_window_is_weighed_on_its_own_fit_of_the_curves():
+    """Draw 000 of ``bench/bench_validation_random.py 40 --seed 5``: a diode whose layers
+    follow their own temperature at α = −2.5e-3/K, read through a window averaged over
+    0.22 ms. The window is found first; on top of it, held, every form of the coefficient
+    misread the PWM grid and stood switched off, so the test against a power per curve (χ² 89
+    on the cooling curves) saw only the junction form's rescue (χ² 188) and refused the
+    coefficient. Its local form fits the curves at χ² 30: weighed on that, the coefficient is
+    named after the window."""
+    from conftest import bench_script
+
+    c = bench_script("bench_validation_random").draw(1, 5)[0]
+    assert c.name == "000 pair/sample-window:average+temperature-coefficient:local"
+    d = diagnose(c.record().bundle)
+    assert d.effects[:2] == ["sample-window", "temperature-coefficient"], d.verdict_reason
+    assert not d.steps[1].chosen.contradicted
+
+
+def test_a_rescue_is_costed_for_what_it_still_has_to_refit():
+    """Draw 037 of ``bench/bench_validation_random.py 40 --seed 79``: a MOSFET whose
+    conductivity follows a power law of temperature, read at the end of a window. With the
+    window found, the coefficient's forms on top of it, held, are switched off; its rescue (a
+    joint refit with the window) brings the bundle near its noise. A rescue was tried only with
+    30 s of the budget left, two joint refits and the step's refit; the first of those (the
+    effects found refitted without a candidate) had already been done for an earlier rescue,
+    so 19 s would do, and with 25 s left the coefficient was listed as not refitted."""
+    from conftest import bench_script
+
+    c = bench_script("bench_validation_random").draw(38, 79)[37]
+    assert c.name.startswith("037 pair/sample-window:end+temperature-coefficient:power")
+    d = diagnose(c.record().bundle)
+    assert d.effects[:2] == ["sample-window", "temperature-coefficient"], d.verdict_reason

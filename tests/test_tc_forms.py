@@ -5,6 +5,7 @@ fit's recovery of known parameters from independently generated bundles, and the
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect
 from spicethermal.fit import tcfit
-from spicethermal.fit.effectfit import BundleData, baseline_ladder, sse
+from spicethermal.fit.effectfit import BundleData, baseline_ladder, sse, subset
 from spicethermal.fit.fitters import fit_effect_forms
 from spicethermal.fit.tcforward import (
     local_cooling_rise,
@@ -347,3 +348,31 @@ def test_local_fits_never_end_worse_than_the_linear_ladder(tmp_path, monkeypatch
 def test_local_ratio_of_a_chain():
     # two equal layers: node rises 2, 1, 0; layer means 1.5, 0.5; R-weighted mean 1; θj = 2
     assert tcfit.local_ratio(Cauer([1.0, 1.0], [1.0, 1.0]).to_foster()) == pytest.approx(2.0)
+
+
+def test_the_local_forms_are_gated_on_the_curves_they_are_fitted_to():
+    """Draw 000 of ``bench/bench_validation_random.py 40 --seed 5`` (independent generator): a
+    diode whose layers follow their own temperature at α = −2.5e-3/K, read through a window
+    averaged over 0.22 ms, cut from 9 and 22 W. With the window fitted first (on the linear
+    ladder) and held, the junction form takes the cooling curves from χ² 13 500 to 190, but the
+    held window misreads the PWM grid with it, so the bundle's whole error rises: gated on
+    it, the local forms were never tried. With an effect held, the gate looks at the cooling
+    curves (what every form is fitted to): the local form is tried and finds the truth's α."""
+    from conftest import bench_script
+
+    from spicethermal.analysis.residuals import comparison_of, noise_estimates
+
+    c = bench_script("bench_validation_random").draw(1, 5)[0]
+    assert c.name == "000 pair/sample-window:average+temperature-coefficient:local"
+    data = BundleData.from_bundle(c.record().bundle)
+    ladder = baseline_ladder(data)
+    data = replace(data, scales=noise_estimates(comparison_of(data, ladder, [])))
+    window = next(f for f in fit_effect_forms(data, ladder, "sample-window")
+                  if f.effect.form == "average")
+    fits = tcfit.fit_temperature_coefficient(data, window.ladder, [window.effect])
+    names = [cv.name for cv in data.cooling]
+    cooling = {f.effect.form: sse(subset(data, names), f.ladder, [window.effect, f.effect])
+               for f in fits if not f.effect.params["first_layer"]}
+    assert "local" in cooling and cooling["local"] < 0.5 * cooling["junction"]
+    local = next(f for f in fits if f.effect.form == "local")
+    assert local.effect.params["alpha_per_k"] == pytest.approx(-2.5e-3, rel=0.1)

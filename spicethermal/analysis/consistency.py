@@ -254,7 +254,8 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
     Contradicted: a linear alternative (:func:`alternatives`: a power per curve, an outer
     resistance per curve) fits the cooling curves at the noise (χ²/n within the white-noise
     bound of :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`) and decisively better than
-    every form of the effect (BIC lower by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`).
+    every form of the effect as fitted, even one switched off for the whole bundle (BIC lower
+    by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`).
     Not told apart: an alternative that changes the effect's own element between the curves
     (:attr:`Alternative.rivals`) fits them at the noise and within that margin. A change of
     setup (the outer resistance) then refuses an outer layer's coefficient outright (a
