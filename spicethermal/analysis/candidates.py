@@ -324,7 +324,7 @@ def as_fitted(data: BundleData, effects: Sequence[Effect], scored: list[Scored]
     (on top of a sample window fitted without the coefficient, every form of a coefficient
     misread the PWM grid and was switched off, while its local form fitted two curves of a
     diode at χ² 30, below the 89 of a power per curve: seed 5's draw 000 of the random
-    validation set). A fit whose comparison fails is left out."""
+    validation set). A fit whose comparison fails keeps the switched-off one."""
     out = []
     for fit, cmp, _ in scored:
         tried = fit.facts.get("tried")

@@ -211,13 +211,14 @@ def fit_temperature_coefficient(data: BundleData, ladder: Foster,
     # 2. the local forms, when the junction form shows an effect at all: on every data set, or
     # with effects found before held, on the curves it was fitted to (those effects, fitted
     # without it, may misread the other data sets with it)
-    gated = subset(data, names) if base else data
-    n_g = max(sum(gated.measured(d).size for d in gated.datasets), 2)
-    lin_g, j_g = sse(gated, f, base), sse(gated, lad_j, effs_j)
+    def errors(sets: BundleData) -> tuple[int, float, float]:  # points, linear, junction
+        return (max(sum(sets.measured(d).size for d in sets.datasets), 2), sse(sets, f, base),
+                sse(sets, lad_j, effs_j))
+
+    n_g, lin_g, j_g = errors(subset(data, names) if base else data)
     if _bic(n_g, lin_g, 0) - _bic(n_g, j_g, 1) < GATE_BIC or lin_g < GATE_SSE_RATIO * j_g:
         return out
-    n = max(sum(data.measured(d).size for d in data.datasets), 2)
-    err_lin, err_j = sse(data, f, base), sse(data, lad_j, effs_j)
+    n, err_lin, err_j = errors(data) if base else (n_g, lin_g, j_g)
     if data.scales and err_j <= n + GATE_NOISE_SIGMAS * math.sqrt(2.0 * n):  # at the noise
         return out
     alpha_l = float(np.clip(effs_j[-1].params["alpha_per_k"] * local_ratio(lad_j), -0.015,
