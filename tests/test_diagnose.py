@@ -655,3 +655,19 @@ def test_a_rescue_is_costed_for_what_it_still_has_to_refit():
     assert c.name.startswith("037 pair/sample-window:end+temperature-coefficient:power")
     d = diagnose(c.record().bundle)
     assert d.effects[:2] == ["sample-window", "temperature-coefficient"], d.verdict_reason
+
+
+def test_the_other_band_shapes_keep_their_budget():
+    """Draw 031 of ``bench/bench_validation_random.py 40 --seed 79``: a MOSFET with a latent
+    heat of 0.018 J in a plateau one node out. The logistic band's fit (at the junction) and
+    its junction stage used the whole budget of the phase-change fit, so the gaussian and
+    plateau shapes, which start from it, were never fitted; the logistic band left the PWM
+    readings at 5× their noise and nothing was named. The junction stage now stops short of
+    the shapes' budget, and the plateau takes the cooling curves much closer."""
+    from conftest import bench_script
+
+    c = bench_script("bench_validation_random").draw(32, 79)[31]
+    assert c.name.startswith("031 phase-change/plateau@1")
+    d = diagnose(c.record().bundle)
+    assert d.effects[:1] == ["phase-change"], d.verdict_reason
+    assert d.steps[0].chosen.effect.form == "plateau"

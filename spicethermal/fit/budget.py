@@ -121,10 +121,14 @@ def time_limit(seconds: float) -> Iterator[None]:
     Traceback (most recent call last):
     ...
     spicethermal.fit.budget.TimeLimitError: time budget exhausted
+    >>> with time_limit(math.inf):  # no budget: the enclosing one (here none) holds
+    ...     check_time(1e9); left()
+    inf
     """
     work, cpu = _DEADLINE.get()
-    token = _DEADLINE.set((min(work, mark(seconds)),
-                           min(cpu, cpu_time() + HANG_FACTOR * seconds)))
+    if seconds != math.inf:  # an infinite budget keeps the enclosing one
+        work, cpu = min(work, mark(seconds)), min(cpu, cpu_time() + HANG_FACTOR * seconds)
+    token = _DEADLINE.set((work, cpu))
     try:
         yield
     finally:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer, Foster
-from ..effects import CATALOGUE, Effect, phase_change
+from ..effects import Effect, phase_change
 from ..model import Network
 from .budget import PC_STEP_S, check_time
 from .lsoda import lsoda_until
@@ -82,16 +82,18 @@ def pc_cooling_rise(ladder: Foster | Cauer, effect: Effect, tref_c: float, power
     def scale(theta: NDArray) -> float:
         return max(0.05, 1.0 + alpha * (tref_c + float(theta[0]) - t0))
 
-    capacity = CATALOGUE[effect.name].extra_capacitance
+    capacity = phase_change.capacity_law(effect)
+    ce_node, minus_g = float(ce[node]), -g
 
     def minv(theta: NDArray, y: NDArray) -> NDArray:
-        cx = capacity(effect, node, tref_c + float(theta[node]))
+        cx = capacity(tref_c + float(theta[node]))
         cy = cinv @ y
-        return cy - cx * ce * cy[node] / (1 + cx * ce[node])
+        return cy - cx * ce * cy[node] / (1 + cx * ce_node)
 
     def rhs(_t: float, theta: NDArray) -> NDArray:
         check_time(PC_STEP_S)
-        return minv(theta, -g @ theta / scale(theta))
+        flow = minus_g @ theta
+        return minv(theta, flow if tc is None else flow / scale(theta))
 
     def jac(_t: float, theta: NDArray) -> NDArray:  # the resistance's own slope left out
         return np.column_stack([minv(theta, -g[:, k] / scale(theta)) for k in range(net.n)])
