@@ -414,25 +414,41 @@ def test_a_power_transient_is_told_from_a_fast_stage_by_the_readings_it_spares()
 
 
 def test_a_band_that_mimics_a_coefficient_gives_way_at_a_dead_end(monkeypatch):
-    """temperature-coefficient/inner-layers/strong at the diagnosis's own budgets, but with the
-    coefficient's candidate held to the common one (with its own 1.5×, session 15, its subset
-    form is the first choice outright): a band on a ladder of one more stage explains 97 % of
-    the misfit and nothing explains the rest; the coefficient on the inner layers, decisive at
-    the first step too, and an electrical transient bring every data set to its noise, and
-    are named instead."""
+    """temperature-coefficient/inner-layers/strong with its coefficient's candidate held to the
+    common budget: the band is decisive at the first step too (before session 21 it led under
+    this budget; now the coefficient leads outright, so the swap is called on a step of the band
+    here, as the diagnosis calls it when nothing is decisive on top of the band): the
+    coefficient on the inner layers and an electrical transient, which bring every data set to
+    its noise, are named instead."""
     from spicethermal.analysis import candidates as step
+    from spicethermal.analysis import diagnose as module
     from spicethermal.analysis.diagnose import diagnose
+    from spicethermal.analysis.diagnosis import Step
+    from spicethermal.analysis.swaps import swap_dead_end
     from spicethermal.analysis.verdict import at_noise
 
+    calls: list = []
+    weigh = module.candidates
+
+    def first_step(*args, **kwargs):
+        calls.append((args, weigh(*args, **kwargs)))
+        raise module.TimeLimitError("the first step is all this test needs")
+
+    # with its own 1.5× the coefficient brings every data set to its noise and the band is not
+    # fitted at all
     monkeypatch.delitem(step.BUDGET_FACTOR, "temperature-coefficient")
-    # the band explains 96.9 % and leads the first step, so it is fitted again on a ladder
-    # one stage longer (no better here): under this reduced budget that search spends the
-    # work the swap needs, so it is left out of this test of the swap
-    monkeypatch.setattr(step, "LONGER_LADDER", ())
+    monkeypatch.setattr(module, "candidates", first_step)
     result = diagnose(case("temperature-coefficient/inner-layers/strong").record().bundle)
-    assert result.effects[0] == "temperature-coefficient", result.verdict_reason
-    assert result.candidates[0].effect.name == "phase-change"  # the band was first
-    assert at_noise(result.final, result.noise_k)
+    (data, _ladder, effects, names, base, noise, *_), first = calls[0]
+    band = next(c for c in first if c.effect.name == "phase-change")
+    assert module.decisive(band, result.baseline_bic)  # a band that could lead
+    on_band = band.model_effects or (*effects, band.effect)
+    steps = swap_dead_end(data, Step(band, tuple(first), on_band), first, base, names, noise,
+                          module.LATER_BUDGET_S)
+    assert steps is not None
+    assert [s.chosen.effect.name for s in steps] == ["temperature-coefficient",
+                                                     "electrical-transient"]
+    assert at_noise(steps[-1].chosen.comparison, noise)
 
 
 # -- the fast subset through the diagnosis ------------------------------------------------------
