@@ -39,6 +39,7 @@ from .diagnosis import Candidate
 from .evidence import evidence
 from .residuals import comparison_of
 from .verdict import (
+    DIRECT,
     MIN_BIC_DROP,
     MIN_TOTAL_EXPLAINED,
     at_noise,
@@ -72,10 +73,6 @@ SIGNATURE = {"phase-change": (("cooling",), 4),
              "electrical-transient": (("cooling", "pwm"), 2),
              "sample-window": (("pwm",), 1)}
 
-#: Effects that a data set of their own measures directly (a TSP's calibration: the sensor
-#: alone, no thermal model in it): their gain counts there too
-#: (:func:`~spicethermal.analysis.verdict.improvement`).
-DIRECT = {"tsp-nonlinearity": ("calibration",)}
 
 #: ... of which these act on the cooling curves beyond their electrical transient.
 AFTER_TRANSIENT = ("phase-change",)

@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .compare import Comparison
 
-__all__ = ["AT_NOISE_CHI2", "MAX_LEFT_CHI2", "MAX_STEPS", "MIN_BIC_DROP", "MIN_EXPLAINED",
+__all__ = ["AT_NOISE_CHI2", "DIRECT", "MAX_LEFT_CHI2", "MAX_STEPS", "MIN_BIC_DROP", "MIN_EXPLAINED",
            "MIN_IMPROVEMENT", "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z", "at_noise",
            "beyond_noise", "bic_drop", "can_be_decisive", "chi2", "criterion", "decisive",
            "early_excess", "explained_fraction", "far_left", "improvement", "partial_fit",
@@ -46,6 +46,9 @@ AT_NOISE_CHI2 = 1.5
 #: this (an RMS above 3× the noise) are not named, nor any that leave a data set's structured
 #: residual above it (:func:`unexplained`, :func:`far_left`).
 MAX_LEFT_CHI2 = 9.0
+#: Effects that a data set of their own measures directly (a TSP's calibration: the sensor
+#: alone, no thermal model in it): their gain counts there too (:func:`improvement`).
+DIRECT = {"tsp-nonlinearity": ("calibration",)}
 #: Effects a diagnosis adds at most, one per step.
 MAX_STEPS = 3
 #: A data set's residual is structured when its runs test gives z below this ...
@@ -334,11 +337,25 @@ def verdict_reason(base: Comparison, final: Comparison, noise: Mapping[str, floa
         c = s.chosen
         # an effect measured in a small data set of its own (a TSP's calibration) may lower
         # the misfit in units of the noise while the pooled RMS barely moves or rises
+        # (or barely moves: then the gain in units of the noise that made it decisive is given
+        # too, and where the explained share is measured when it is its own data set's:
+        # a cubic bow lowered the RMS 1.07× and "explained 100 %", of its calibration)
         rms = f"{prev.rms_k:.3g} → {c.rms_k:.3g} K"
-        lowers = (f"lowers the RMS {c.improvement:.3g}× ({rms})" if c.improvement >= 1 else
-                  f"lowers the misfit {c.gain:.3g}× in units of the noise (RMS {rms})")
+        gain = getattr(c, "gain", c.improvement)
+        if c.improvement < 1:
+            lowers = f"lowers the misfit {gain:.3g}× in units of the noise (RMS {rms})"
+        elif c.improvement < MIN_IMPROVEMENT <= gain:
+            lowers = (f"lowers the RMS {c.improvement:.3g}× ({rms}; {gain:.3g}× in units of "
+                      f"the noise)")
+        else:
+            lowers = f"lowers the RMS {c.improvement:.3g}× ({rms})"
+        within = DIRECT.get(c.effect.name, ())
+        overall = explained_fraction(prev, c.comparison, noise)
+        where = (f" in its {', '.join(within)} ({100 * max(overall, 0):.0f} % overall)"
+                 if within and f"{100 * c.explained:.0f}" != f"{100 * max(overall, 0):.0f}"
+                 else "")
         parts.append(f"{c.effect.name} ({c.effect.form}) {lowers} and explains "
-                     f"{100 * c.explained:.0f} % of the misfit beyond the noise")
+                     f"{100 * c.explained:.0f} % of the misfit beyond the noise{where}")
         prev = c.comparison
     left = structured(final, noise)
     if steps and not left:
