@@ -370,18 +370,20 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     refined = []
     for k, (lad, effs, res, node) in enumerate(fits):  # noqa: B007 (build reads node)
         lo, hi = bounds(node)
+        with unlimited():
+            err = sse(data, lad, effs)
         if k == 0 or plain - 2.0 * float(res.cost) >= SHAPE_GAIN:
             try:
                 with time_limit(PC_JOINT_BUDGET_S):
                     lad2, effs2, _ = joint_fit(data, cooling, lad, True, res.x, lo, hi, build,
                                                diff_step=1e-3, tol=PC_FIT_TOL)
                 with unlimited():
-                    if sse(data, lad2, effs2) < sse(data, lad, effs):
-                        lad, effs = lad2, effs2
+                    err2 = sse(data, lad2, effs2)
+                if err2 < err:
+                    lad, effs, err = lad2, effs2, err2
             except (FitError, TimeLimitError):
                 pass
-        with unlimited():
-            refined.append((sse(data, lad, effs), lad, effs, node))
+        refined.append((err, lad, effs, node))
     _, lad, effs, node = min(refined, key=lambda r: r[0])
     lo, hi = bounds(node)
     # the junction's extra stage stops short of the other shapes' budget (seed 79's draw 031
@@ -390,7 +392,8 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
     with time_limit(max(left() - SHAPES_RESERVE_S, 0.0)):
         lad, effs, extra_k = junction_stage(data, cooling, lad, effs, build, (lo, hi), c_scale)
     with unlimited():
-        gain = plain - sse(sub, lad, [*base, effs[-1]])
+        err = sse(sub, lad, [*base, effs[-1]])
+    gain = plain - err
     if gain <= 0:  # no band does better than the given ladder without one
         p = effs[-1].params
         return [EffectFit(Effect.create("phase-change", latent_j=0.0, t_c=p["t_c"],
@@ -398,8 +401,7 @@ def fit_phase_change(data: BundleData, ladder: Foster | Cauer,
                           {"t_range_c": (t_lo, t_hi), "no_gain": True})]
     facts = {"t_range_c": ranges[node]}
     out = [EffectFit(effs[-1], lad, 4 + extra_k, facts)]
-    with unlimited():
-        excess = sse(sub, lad, [*base, effs[-1]]) - sum(sub.measured(n).size for n in names)
+    excess = err - sum(sub.measured(n).size for n in names)
     # a band this weak does not show its shape, nor can another shape gain on a fit at the noise
     if gain < SHAPE_GAIN or excess < SHAPE_GAIN:
         return out
