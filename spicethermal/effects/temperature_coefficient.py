@@ -45,6 +45,13 @@ from .spice import number
 KELVIN = 273.15
 #: Forms whose resistances follow their own layer's temperature (simulated on a Cauer ladder).
 LOCAL_FORMS = ("local", "power-law")
+#: Not a form of the catalogue: the law of a change of regime, a resistance that steps by the
+#: fraction ``drop`` around ``t_switch_c`` over ``width_k``,
+#: ``R(T) = R0 · (1 − drop / (1 + e^{−(T − t_switch_c)/width_k}))`` (a convection that changes
+#: regime, a fan that starts). No effect takes it; :mod:`spicethermal.analysis.regime` fits it
+#: as the rival of a coefficient's smooth law, and :func:`law` evaluates it for the forward
+#: models of the local forms.
+SWITCH = "switch"
 #: Smallest resistance factor of the linear law (a resistance never vanishes).
 FLOOR = 0.05
 #: ``last_layer`` default: clipped to the ladder's last layer, i.e. every layer.
@@ -97,6 +104,8 @@ def law(effect, t_c: float) -> float:
     t = np.asarray(t_c, dtype=float)
     if effect.form == "power-law":
         out = (np.maximum(t + KELVIN, 1.0) / (p["t0_c"] + KELVIN)) ** p["exponent"]
+    elif effect.form == SWITCH:
+        out = 1.0 - p["drop"] * _step(effect, t)
     else:
         out = np.maximum(FLOOR, 1.0 + p["alpha_per_k"] * (t - p["t0_c"]))
     return out if out.ndim else float(out)
@@ -126,9 +135,18 @@ def law_slope(effect, t_c: float) -> float:
     if effect.form == "power-law":
         x = np.maximum(t + KELVIN, 1.0) / (p["t0_c"] + KELVIN)
         out = p["exponent"] * x ** (p["exponent"] - 1.0) / (p["t0_c"] + KELVIN)
+    elif effect.form == SWITCH:
+        step = _step(effect, t)
+        out = -p["drop"] * step * (1.0 - step) / p["width_k"]
     else:
         out = np.where(1.0 + p["alpha_per_k"] * (t - p["t0_c"]) > FLOOR, p["alpha_per_k"], 0.0)
     return out if out.ndim else float(out)
+
+
+def _step(effect, t: np.ndarray) -> np.ndarray:
+    """The logistic step ``1/(1 + e^{−(T − t_switch_c)/width_k})`` of the :data:`SWITCH` law."""
+    p = effect.params
+    return 1.0 / (1.0 + np.exp(-np.clip((t - p["t_switch_c"]) / p["width_k"], -60.0, 60.0)))
 
 
 def resistance_scale(effect, layer: int, t_layer_c: float, tj_c: float) -> float:

@@ -35,7 +35,7 @@ import numpy as np
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
-from ..effects.temperature_coefficient import FLOOR, law, law_slope
+from ..effects.temperature_coefficient import FLOOR, SWITCH, law, law_slope
 from .tcjunction import as_foster, tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -141,13 +141,13 @@ def local_steady_nodes(ladder: Foster | Cauer, effect: Effect, tref_c: float,
                 g = d - lin * float(law(effect, t_out + 0.5 * d))
                 dg = 1 - 0.5 * lin * float(law_slope(effect, t_out + 0.5 * d))
                 if dg <= 0:
-                    raise SimulationError(f"power law exponent {p['exponent']:g} at "
-                                          f"{power_w:g} W has no steady state (runaway)")
+                    raise SimulationError(f"the {effect.form} law at {power_w:g} W has no "
+                                          f"steady state (runaway)")
                 d -= g / dg
                 if abs(g) <= 1e-13 * abs(d):
                     break
             else:
-                raise SimulationError("power-law steady state did not converge")
+                raise SimulationError(f"the {effect.form} law's steady state did not converge")
         theta[i] = theta[i + 1] + d
     return theta[:-1]
 
@@ -390,7 +390,8 @@ def is_neutral(effect: Effect) -> bool:
     True
     """
     p = effect.params
-    slope = p["exponent"] if effect.form == "power-law" else p["alpha_per_k"]
+    slope = {"power-law": p["exponent"], SWITCH: p.get("drop", 0.0)}.get(effect.form,
+                                                                       p["alpha_per_k"])
     return slope == 0 and (effect.form == "junction" or p["c_slope_per_k"] == 0)
 
 
