@@ -73,7 +73,6 @@ SIGNATURE = {"phase-change": (("cooling",), 4),
              "electrical-transient": (("cooling", "pwm"), 2),
              "sample-window": (("pwm",), 1)}
 
-
 #: ... of which these act on the cooling curves beyond their electrical transient.
 AFTER_TRANSIENT = ("phase-change",)
 

@@ -227,7 +227,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         if steps and not contradicted and not at_noise(cur, noise) and \
                 steps[0].chosen.effect.name == "temperature-coefficient":
             c = steps[0].chosen
-            contradicted = regime_switch(data, c.ladder, [], c.effect, c.comparison, noise,
+            contradicted = regime_switch(data, c.ladder, c.effect, c.comparison, noise,
                                          c.n_params)
             if contradicted:
                 steps, cur = [], base

@@ -22,7 +22,7 @@ every form and strength, 34 to 41 569 higher).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +30,7 @@ import numpy as np
 from ..core.errors import FitError, SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
-from ..effects.temperature_coefficient import LOCAL_FORMS, SWITCH
+from ..effects.temperature_coefficient import LOCAL_FORMS, SWITCH, size
 from ..fit.budget import TimeLimitError, bounded
 from ..fit.effectfit import NUMERICAL_ERRORS, BundleData, joint_fit
 from ..fit.tcforward import as_cauer, local_steady_nodes
@@ -68,11 +68,11 @@ class Switch:
                     "alpha_per_k": 0.0, "exponent": 0.0, "c_slope_per_k": 0.0})
 
 
-def regime_switch(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Effect],
-                  effect: Effect, comparison: Comparison, noise: Mapping[str, float],
-                  n_params: int) -> str:
-    """Why the temperature coefficient ``effect`` (fitted on ``ladder`` beside ``effects``,
-    ``comparison`` the model with it against the bundle, ``n_params`` its own parameters) is
+def regime_switch(data: BundleData, ladder: Foster | Cauer, effect: Effect,
+                  comparison: Comparison, noise: Mapping[str, float], n_params: int) -> str:
+    """Why the temperature coefficient ``effect``, the first effect of a model (fitted on
+    ``ladder``, ``comparison`` the model with it against the bundle, ``n_params`` its own
+    parameters), is
     a change of regime rather than a coefficient, or "" (module docstring). Asked only of a
     coefficient that leaves a data set beyond its noise (one at the noise leaves a step
     nothing to gain) and the whole bundle within 3× its noise (``χ²/N`` at most
@@ -80,12 +80,12 @@ def regime_switch(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Ef
     bend of the law takes up that effect's signature too (a TSP's bow beside a junction
     coefficient, χ²/N 99 with the coefficient: a step of 45 % over 12 K fitted it 509 lower,
     the validation set's pair temperature-coefficient+tsp-nonlinearity). Asked of the first
-    effect only (``effects`` empty): on top of others, held as fitted without it, their misfit
-    is a bend's to take up too (seed 67's draw 021 of the random validation set, an outer
+    effect only: on top of others, held as fitted without it, their misfit is a bend's to take
+    up too (seed 67's draw 021 of the random validation set, an outer
     coefficient after an averaged window, lost to a step 34 lower);
     :func:`~spicethermal.analysis.diagnose.diagnose` asks it of a coefficient named first
     once the steps end beyond the noise."""
-    if effect.name != "temperature-coefficient" or not data.cooling or effects or \
+    if effect.name != "temperature-coefficient" or not data.cooling or \
             not beyond_noise(comparison, noise) or \
             chi2(comparison, noise) > MAX_LEFT_CHI2 * len(comparison.points):
         return ""
@@ -109,13 +109,11 @@ def regime_switch(data: BundleData, ladder: Foster | Cauer, effects: Sequence[Ef
     if not t_hi > t_lo:
         return ""
     # R falls above the step where the coefficient's slope is negative
-    slope = p["exponent"] if effect.form == "power-law" else p["alpha_per_k"]
-    sign = 1.0 if slope <= 0 else -1.0
-    others = [e for e in effects if e.name != "temperature-coefficient"]
+    sign = 1.0 if size(effect) <= 0 else -1.0
     names = list(data.datasets)
 
     def build(x: np.ndarray) -> list:
-        return [*others, Switch.of(float(x[0]), float(x[1]), float(x[2]), first, last, t0)]
+        return [Switch.of(float(x[0]), float(x[1]), float(x[2]), first, last, t0)]
 
     lo, hi = [-0.9, t_lo - 5.0, 0.1], [0.9, t_hi + 10.0, 20.0]
     best: tuple[float, Comparison, list] | None = None

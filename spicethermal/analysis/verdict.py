@@ -23,11 +23,11 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .compare import Comparison
 
-__all__ = ["AT_NOISE_CHI2", "DIRECT", "MAX_LEFT_CHI2", "MAX_STEPS", "MIN_BIC_DROP", "MIN_EXPLAINED",
-           "MIN_IMPROVEMENT", "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z", "at_noise",
-           "beyond_noise", "bic_drop", "can_be_decisive", "chi2", "criterion", "decisive",
-           "early_excess", "explained_fraction", "far_left", "improvement", "partial_fit",
-           "passes", "runs_z", "structured", "unexplained", "verdict_reason"]
+__all__ = ["AT_NOISE_CHI2", "DIRECT", "MAX_LEFT_CHI2", "MAX_STEPS", "MIN_BIC_DROP",
+           "MIN_EXPLAINED", "MIN_IMPROVEMENT", "MIN_TOTAL_EXPLAINED", "RUNS_MIN", "RUNS_Z",
+           "at_noise", "beyond_noise", "bic_drop", "can_be_decisive", "chi2", "criterion",
+           "decisive", "early_excess", "explained_fraction", "far_left", "improvement",
+           "partial_fit", "passes", "runs_z", "structured", "unexplained", "verdict_reason"]
 
 #: An effect must lower the pooled RMS at least this many times ...
 MIN_IMPROVEMENT = 1.15

@@ -143,6 +143,21 @@ def law_slope(effect, t_c: float) -> float:
     return out if out.ndim else float(out)
 
 
+def size(effect) -> float:
+    """The parameter that sets how far the law moves R from R0, with its sign for the
+    catalogue's forms (0: the law is flat): the exponent of the power law, the step's drop
+    (positive when R falls), α otherwise.
+
+    >>> from spicethermal.effects import Effect
+    >>> size(Effect.create("temperature-coefficient", "power-law", exponent=1.3))
+    1.3
+    """
+    p = effect.params
+    if effect.form == "power-law":
+        return p["exponent"]
+    return p["drop"] if effect.form == SWITCH else p["alpha_per_k"]
+
+
 def _step(effect, t: np.ndarray) -> np.ndarray:
     """The logistic step ``1/(1 + e^{−(T − t_switch_c)/width_k})`` of the :data:`SWITCH` law."""
     p = effect.params

@@ -35,7 +35,7 @@ import numpy as np
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer, Foster
 from ..effects import Effect
-from ..effects.temperature_coefficient import FLOOR, SWITCH, law, law_slope
+from ..effects.temperature_coefficient import FLOOR, law, law_slope, size
 from .tcjunction import as_foster, tc_cooling_rise, tc_frozen_ladder, tc_steady_scale
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -390,9 +390,7 @@ def is_neutral(effect: Effect) -> bool:
     True
     """
     p = effect.params
-    slope = {"power-law": p["exponent"], SWITCH: p.get("drop", 0.0)}.get(effect.form,
-                                                                       p["alpha_per_k"])
-    return slope == 0 and (effect.form == "junction" or p["c_slope_per_k"] == 0)
+    return size(effect) == 0 and (effect.form == "junction" or p["c_slope_per_k"] == 0)
 
 
 def tc_frozen(ladder: Foster | Cauer, effect: Effect, tref_c: float,
