@@ -5,6 +5,7 @@ coefficient's."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -44,16 +45,23 @@ def test_a_step_of_nothing_cools_as_the_linear_ladder():
     assert np.allclose(local_cooling_rise(f, far, 25.0, 3.0, t), 3.0 * f.cooling(t), atol=1e-4)
 
 
-@pytest.mark.parametrize(("n", "seed", "name", "named"), [
+@pytest.mark.parametrize(("n", "seed", "name", "named", "after"), [
     # an outer convection that switches at 39.6 °C on an actuator: taken for a coefficient of
     # its outer layers before (100 % of the misfit, the PWM readings left at 3.6× their noise)
-    (12, 67, "011 uncatalogued/convection-switch at 39.6 degC", []),
+    (12, 67, "011 uncatalogued/convection-switch at 39.6 degC", [], ""),
+    # taken for a coefficient, then a TSP's bow mopped up what its smooth law left: the step
+    # alone fits as well as the two
+    (24, 5, "023 uncatalogued/convection-switch at 40.9 degC", [], "as well as"),
+    # taken for a junction coefficient, then a latent heat: the step needs the ladder refitted
+    # (the junction coefficient's ladder scales every layer with the junction's temperature)
+    (36, 67, "035 uncatalogued/convection-switch at 31 degC", [], "better than"),
     # a real coefficient of the inner layers, whose form leaves the PWM readings at 5.9×
     # their noise: the step fits it far worse, and it keeps its name
-    (33, 67, "032 temperature-coefficient/inner/0.012/K", ["temperature-coefficient"]),
+    (33, 67, "032 temperature-coefficient/inner/0.012/K", ["temperature-coefficient"], ""),
 ])
-def test_a_convection_switch_is_no_coefficient_and_a_coefficient_is(n, seed, name, named):
-    """Draws of ``bench/bench_validation_random.py 40 --seed 67`` (independent generator)."""
+def test_a_convection_switch_is_no_coefficient_and_a_coefficient_is(n, seed, name, named,
+                                                                     after):
+    """Draws of ``bench/bench_validation_random.py 40 --seed S`` (independent generator)."""
     from conftest import bench_script
 
     from spicethermal.analysis.diagnose import diagnose
@@ -66,3 +74,6 @@ def test_a_convection_switch_is_no_coefficient_and_a_coefficient_is(n, seed, nam
     if not named:
         assert d.candidates[0].effect.name == "temperature-coefficient"  # the one it passed for
         assert "not in the catalogue" in d.verdict_reason
+    # the effects added after the coefficient are no better than the step alone
+    assert bool(re.search(rf"{after} it does with [a-z-]+ added", d.verdict_reason)) == \
+        bool(after), d.verdict_reason

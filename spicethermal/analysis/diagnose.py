@@ -220,17 +220,15 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             cur_ladder, cur_effects, cur = last.chosen.ladder, list(last.effects), \
                 last.chosen.comparison
             cur_bic = criterion(cur, noise, sum(st.chosen.n_params for st in steps))
-        # a coefficient named first whose model stays beyond the noise may be a change of
-        # regime (:mod:`.regime`), weighed once no effect found after it took the model to
-        # the noise: a missing effect's misfit is a step's to take up too (seed 23's draw 013
-        # of the random validation set, a real coefficient beside a power transient)
-        if steps and not contradicted and not at_noise(cur, noise) and \
-                steps[0].chosen.effect.name == "temperature-coefficient":
-            c = steps[0].chosen
-            contradicted = regime_switch(data, c.ladder, c.effect, c.comparison, noise,
-                                         c.n_params)
-            if contradicted:
-                steps, cur = [], base
+    # a coefficient named first may be a change of regime (:mod:`.regime`), weighed once the
+    # steps end (a missing effect's misfit is a step's to take up too: seed 23's draw 013 of
+    # the random validation set, a real coefficient beside a power transient) and on its own
+    # budget (REGIME_BUDGET_S per start), which a diagnosis that spent its steps' budget still
+    # has (seed 101's draw 015, a convection switch at 33.2 °C)
+    if steps and not contradicted:
+        contradicted = regime_switch(data, steps, noise)
+        if contradicted:
+            steps, cur = [], base
     # an effect the cooling curves cannot tell from a linear alternative (a power, a contact
     # that changed between the curves) is named only when its model fits every data set at
     # its noise: leaving one beyond it, nothing holds it up
