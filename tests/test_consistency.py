@@ -127,3 +127,22 @@ def test_a_junction_coefficient_that_a_power_error_fits_as_well_is_named_only_at
     assert "the residual is at the noise; but the cooling curves alone do not single it out: " \
         "temperature-coefficient (junction) fits the cooling curves no more closely than the " \
         "linear ladder's shape scaled per curve" in d.verdict_reason
+
+
+def test_a_power_law_coefficient_is_weighed_on_its_converged_fit_before_it_is_refused():
+    """Seed 303's draw 032 of ``bench/bench_validation_random.py 40 --seed 303 --only effect``
+    (independent generator): a MOSFET whose layers' conductivity follows T^-2.1 (a heat
+    capacity rising with T). Within the candidate's budget the power-law form stopped at
+    n = 2.19 with its ladder unmoved, and a power per curve, fitting the cooling curves better
+    than every form as fitted, refused the coefficient; refitted until it converges, the power
+    law fits every data set and keeps its name, at the truth's exponent."""
+    from conftest import bench_script
+
+    c = bench_script("bench_validation_random").draw(33, 303, "effect")[32]
+    assert c.name == "032 temperature-coefficient/power/n=2.1"
+    d = diagnose(c.record().bundle)
+    assert d.effects == ["temperature-coefficient"], d.verdict_reason
+    first = d.steps[0].chosen.effect
+    assert first.form == "power-law"
+    assert first.params["exponent"] == pytest.approx(2.1, abs=0.1)
+    assert at_noise(d.steps[-1].chosen.comparison, d.noise_k)
