@@ -99,8 +99,9 @@ CANDIDATE_BUDGET_S = 8.0
 #: effect is often the one that needs an integration).
 LATER_BUDGET_S = 8.0
 #: Work (s, see :mod:`~spicethermal.fit.budget`) allowed to all the steps of one diagnosis together
-#: (the candidates' own budgets stop at it too): no bundle keeps the diagnosis busy for longer,
-#: whatever its fits do.
+#: (the candidates' own budgets stop at it too): no bundle keeps the steps busy for longer,
+#: whatever its fits do. The change-of-regime check after them has its own budget (four fits
+#: of at most :data:`~spicethermal.analysis.regime.REGIME_BUDGET_S` each).
 DIAGNOSIS_BUDGET_S = 50.0
 
 

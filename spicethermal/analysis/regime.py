@@ -45,7 +45,8 @@ from .verdict import MAX_LEFT_CHI2, MIN_BIC_DROP, beyond_noise, chi2, criterion
 
 __all__ = ["REGIME_BUDGET_S", "REGIME_NFEV", "Switch", "regime_switch"]
 
-#: Work (s, :mod:`~spicethermal.fit.budget`) allowed to each start of the rival law's fit ...
+#: Work (s, :mod:`~spicethermal.fit.budget`) allowed to each fit of the check (each start of
+#: the rival law with the ladder held, its refit with the ladder, the coefficient's refit) ...
 REGIME_BUDGET_S = 6.0
 #: ... and its evaluations at most (three parameters, the ladder held).
 REGIME_NFEV = 40
