@@ -55,9 +55,10 @@ from ..fit.fitters import fit_with_effects
 from ..fit.tcforward import own_cache
 from ..model import ThermalModel
 from ..report.diagnosis import write_report
-from .candidates import candidates, refit_step
+from .candidates import candidates
 from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
 from .evidence import evidence
+from .refits import refit_step
 from .regime import regime_switch
 from .residuals import comparison_of, fmt_against, localise, noise_estimates
 from .swaps import swap_dead_end, swap_first

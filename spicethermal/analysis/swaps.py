@@ -9,9 +9,10 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 
 from ..effects import Effect
 from ..fit.effectfit import BundleData
-from .candidates import candidates, refit_step
+from .candidates import candidates
 from .compare import Comparison
 from .diagnosis import Candidate, Step
+from .refits import refit_step
 from .verdict import MIN_BIC_DROP, at_noise, criterion, decisive
 
 __all__ = ["SWAPPABLE", "swap_dead_end", "swap_first"]
