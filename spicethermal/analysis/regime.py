@@ -32,14 +32,13 @@ import numpy as np
 
 from ..core.errors import FitError, SimulationError
 from ..core.ladder import Cauer, Foster
-from ..effects import Effect
 from ..effects.temperature_coefficient import LOCAL_FORMS, SWITCH, size
-from ..fit.backfit import refit_effects
 from ..fit.budget import TimeLimitError, bounded
 from ..fit.effectfit import NUMERICAL_ERRORS, BundleData, joint_fit
 from ..fit.tcforward import as_cauer, local_steady_nodes
 from .compare import Comparison
 from .diagnosis import Step
+from .refits import joint_refit
 from .residuals import comparison_of
 from .verdict import MAX_LEFT_CHI2, MIN_BIC_DROP, beyond_noise, chi2, criterion
 
@@ -161,10 +160,9 @@ def regime_switch(data: BundleData, steps: Sequence[Step], noise: Mapping[str, f
         # the coefficient's own fit did not have is no evidence (seed 67's draw 032, a real
         # coefficient of the inner layers, whose form left the PWM readings at 5.9× their
         # noise: a step of +71 % over 13 K with the ladder refitted came 16 lower)
-        rival = _refit(data, ladder, effect)
-        if rival is not None and criterion(rival, noise, c.n_params) < \
-                criterion(comparison, noise, c.n_params):
-            comparison = rival
+        rival = joint_refit(data, ladder, [effect], REGIME_BUDGET_S, comparison, noise)
+        if rival is not None:
+            comparison = rival[2]
     gap = criterion(comparison, noise, c.n_params) - bic
     if gap < MIN_BIC_DROP:
         return ""
@@ -185,12 +183,3 @@ def regime_switch(data: BundleData, steps: Sequence[Step], noise: Mapping[str, f
             f"convection or a fan that switches, a contact that opens), which the catalogue "
             f"does not hold")
 
-
-def _refit(data: BundleData, ladder: Foster | Cauer, effect: Effect) -> Comparison | None:
-    """The model of ``effect`` refitted with the ladder for
-    :data:`REGIME_BUDGET_S` of work, or ``None`` when the refit fails."""
-    try:
-        got = bounded(lambda: refit_effects(data, ladder, [effect]), REGIME_BUDGET_S, None)
-        return None if got is None else comparison_of(data, *got)
-    except (FitError, SimulationError, TimeLimitError, *NUMERICAL_ERRORS):
-        return None
