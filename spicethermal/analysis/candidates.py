@@ -159,7 +159,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
         nonlocal linear
         fit, cmp, bic = best
         within = DIRECT.get(name, ())
-        contradicted = tied = ""
+        contradicted = ""
         if fit.effect.kind == DEVICE and len(data.cooling) > 1:
             # the alternatives on the linear ladder the effect was fitted on
             if linear_ladder is not ladder:
@@ -170,7 +170,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
             # effects found before may have fitted the cooling curves where those did not)
             # (with the effect's own parameters: the ladder's are the alternatives' too)
             own = fit.n_params - 2 * (linear_ladder.order - ladder.order)
-            contradicted, tied = device_effect_contradicted(
+            contradicted = device_effect_contradicted(
                 data, linear_ladder, fit.effect, own, [*as_fitted(data, effects, scored), cmp],
                 alike)
             if contradicted and not effects and not refined:
@@ -192,7 +192,7 @@ def candidates(data: BundleData, ladder: Foster, effects: Sequence[Effect],
                                evidence(fit, data, before, cmp, noise),
                                explained_fraction(before, cmp, noise, within), spent_s,
                                contradicted, fit.facts,
-                               improvement_of(before, cmp, noise, within), model_effects, tied))
+                               improvement_of(before, cmp, noise, within), model_effects))
 
     deferred = []  # later-step fits not decisive on their own, rescued after the cheap fits
 

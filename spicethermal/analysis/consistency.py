@@ -12,9 +12,11 @@ with one free power scale per curve (the reference curve's held at 1). When it f
 cooling curves at the noise and decisively better than every form of the device effect does
 (its BIC lower by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`), the effect only mimics an
 amplitude change that its own dynamics contradict: the physics at work is not the catalogued
-one (:func:`device_effect_contradicted`). On a weak effect whose dynamics are within the noise
-both fit alike and the effect keeps its name; when the amplitudes alone leave a misfit, the
-test says nothing (an effect of another form may be at work).
+one (:func:`device_effect_contradicted`). A coefficient of the junction form scales the whole
+steady rise as a power other than the recorded one does; when its dynamics are within the
+noise, both fit alike and the data cannot tell them apart: it is not named either. When the
+amplitudes alone leave a misfit, the test says nothing (an effect of another form may be at
+work).
 
 A setup that changed between the curves is the other linear alternative
 (:func:`outer_only`): a device remounted, a thermal interface reseated or a heatsink clamped
@@ -194,11 +196,8 @@ class Alternative:
     #: Whether a device effect acts on the very element this alternative changes between the
     #: curves (when it fits them only as closely, the data cannot tell the two apart) ...
     rivals: Callable[[Effect], bool] = lambda _effect: False
-    #: ... and what the data then cannot tell apart (the verdict's words) ...
+    #: ... and what the data then cannot tell apart (the verdict's words).
     alike: str = ""
-    #: ... and whether that refuses the effect outright (else only when the model it
-    #: completes leaves a data set beyond its noise: :func:`device_effect_contradicted`).
-    outright: bool = True
 
 
 def outer_layers(effect: Effect) -> bool:
@@ -226,8 +225,10 @@ def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
         out.append(Alternative(chi2, k, "the linear ladder's shape scaled per curve, at the "
                                         "noise (a power that is not the recorded one",
                                whole_path, "a resistance that follows the junction temperature "
-                                           "from a heating power other than the recorded one",
-                               outright=False))
+                                           "from a heating power other than the recorded one "
+                                           "(a heater whose resistance, or a diode whose "
+                                           "forward voltage, changes as it warms: measure the "
+                                           "power at the cut)"))
     except (FitError, SimulationError, DataFormatError, *NUMERICAL_ERRORS):
         pass
     try:
@@ -246,24 +247,25 @@ def alternatives(data: BundleData, ladder: Foster | Cauer) -> list[Alternative]:
 
 def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect: Effect,
                                n_params: int, comparisons: Sequence[Comparison],
-                               linear: Sequence[Alternative] | None = None) -> tuple[str, str]:
-    """Why device effect ``effect`` is contradicted by the cooling dynamics, and why the
-    cooling curves cannot tell it from a linear alternative ("" when they can, or when the
-    test does not apply: a measurement effect, fewer than two cooling curves).
+                               linear: Sequence[Alternative] | None = None) -> str:
+    """Why device effect ``effect`` is refused by the cooling dynamics ("" when it is not, or
+    when the test does not apply: a measurement effect, fewer than two cooling curves).
 
-    Contradicted: a linear alternative (:func:`alternatives`: a power per curve, an outer
+    Refused when a linear alternative (:func:`alternatives`: a power per curve, an outer
     resistance per curve) fits the cooling curves at the noise (χ²/n within the white-noise
-    bound of :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`) and decisively better than
-    every form of the effect as fitted, even one switched off for the whole bundle (BIC lower
-    by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`).
-    Not told apart: an alternative that changes the effect's own element between the curves
-    (:attr:`Alternative.rivals`) fits them at the noise and within that margin. A change of
-    setup (the outer resistance) then refuses an outer layer's coefficient outright (a
-    contradiction); a power per curve refuses a junction coefficient only when the model it
-    completes leaves a data set beyond its noise (a tie, judged by
-    :func:`~spicethermal.analysis.diagnose.diagnose`): the weak coefficients of the project's
-    own scenarios, fitted in the junction form, tie with it at the noise and are real, while no
-    outer layer's coefficient in the validation draws tied with a change of setup.
+    bound of :data:`~spicethermal.analysis.verdict.AT_NOISE_CHI2`) and
+
+    * decisively better than every form of the effect as fitted, even one switched off for
+      the whole bundle (BIC lower by :data:`~spicethermal.analysis.verdict.MIN_BIC_DROP`): the
+      effect only mimics what the alternative does, and its own dynamics contradict it; or
+    * no more than that margin worse, when it changes the effect's own element between the
+      curves (:attr:`Alternative.rivals`): the cooling curves cannot tell the two apart, and
+      the effect's name would rest on the amplitudes alone, which the alternative explains as
+      well. A change of setup rivals an outer layer's coefficient (a convection that switches
+      at 33 °C was named a coefficient this way); a power other than the recorded one rivals a
+      junction coefficient, which before the cut scales the whole steady rise as that power
+      does, every later data set alike (a heater whose power falls 0.1 to 0.3 %/K of its own
+      temperature was named a coefficient this way, its every data set at the noise).
 
     Parameters
     ----------
@@ -282,12 +284,12 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
 
     Returns
     -------
-    tuple of (str, str)
-        The contradiction (the alternative that beats the effect by most) and the tie, each
-        a reason or "".
+    str
+        The reason (the alternative that beats the effect by most, else the rival it ties
+        with), or "".
     """
     if effect.kind != DEVICE or len(data.cooling) < 2 or not comparisons:
-        return "", ""
+        return ""
     kept = _kept(data)
     n = sum(int(np.sum(k)) for k in kept.values())
 
@@ -307,19 +309,18 @@ def device_effect_contradicted(data: BundleData, ladder: Foster | Cauer, effect:
         gap, alt = max(beaten, key=lambda x: x[0])
         return (f"{effect.name} would change the cooling dynamics, but the cooling curves are "
                 f"{alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with "
-                f"the effect: BIC {gap:.0f} lower)"), ""
+                f"the effect: BIC {gap:.0f} lower)")
     # an alternative that changes the effect's own element between the curves, as close:
     # the data cannot tell that element's temperature dependence from a change between them
     tied = [(gap, alt) for gap, alt in found if gap > -MIN_BIC_DROP and alt.rivals(effect)]
     if not tied:
-        return "", ""
-    gap, alt = max(tied, key=lambda x: (x[1].outright, x[0]))
+        return ""
+    gap, alt = max(tied, key=lambda x: x[0])
     layers = (f", layers {effect.params['first_layer']:.0f} outwards"
               if effect.form in LOCAL_FORMS else "")
-    why = (f"{effect.name} ({effect.form}{layers}) fits the cooling curves no more closely "
-           f"than {alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} with "
-           f"the effect: BIC within {MIN_BIC_DROP:g}): the data cannot tell {alt.alike}")
-    return (why, "") if alt.outright else ("", why)
+    return (f"{effect.name} ({effect.form}{layers}) fits the cooling curves no more closely "
+            f"than {alt.what}; χ² {alt.chi2:.0f} on {n} points against {chi2_effect:.0f} "
+            f"with the effect: BIC within {MIN_BIC_DROP:g}): the data cannot tell {alt.alike}")
 
 
 def transient_hidden(before: Comparison, effect: Effect, noise: Mapping[str, float]) -> str:

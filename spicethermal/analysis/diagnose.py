@@ -71,7 +71,6 @@ from .verdict import (
     MIN_IMPROVEMENT,
     MIN_TOTAL_EXPLAINED,
     at_noise,
-    beyond_noise,
     chi2,
     criterion,
     decisive,
@@ -231,17 +230,6 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         contradicted = regime_switch(data, steps, noise)
         if contradicted:
             steps, cur = [], base
-    # an effect the cooling curves cannot tell from a linear alternative (a power, a contact
-    # that changed between the curves) is named only when its model fits every data set at
-    # its noise: leaving one beyond it, nothing holds it up
-    tied = next((k for k, st in enumerate(steps) if st.chosen.tied), None)
-    over = beyond_noise(steps[-1].chosen.comparison, noise) if steps else {}
-    if tied is not None and over and not contradicted:
-        contradicted = (f"{steps[tied].chosen.tied}, and the model with it leaves "
-                        f"{', '.join(f'{n} at {r:.3g}×' for n, r in over.items())} its noise "
-                        f"variance")
-        steps = steps[:tied]
-        cur = steps[-1].chosen.comparison if steps else base
     where = tuple(localise(base, noise))
 
     def partial_after(k: int) -> bool:  # the first k effects leave physics they do not explain
@@ -286,9 +274,6 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         steps = []
     else:
         reason = verdict_reason(base, cur, noise, first, steps, skipped)
-        if tied is not None and tied < len(steps):  # named at the noise, but say what else fits
-            reason += (f"; but the cooling curves alone do not single it out: "
-                       f"{steps[tied].chosen.tied}")
     effect = steps[0].chosen.effect.name if steps else None
     return Diagnosis(base, model, noise, bic0, tuple(first), effect, reason, where, skipped,
                      time.perf_counter() - t_start, data.source, {}, tuple(steps))

@@ -31,8 +31,7 @@ class Candidate:
     """One candidate effect fitted to the bundle (its best form). ``improvement`` is the
     previous model's pooled RMS over this one's; ``explained`` the fraction of the previous
     model's misfit beyond the noise that the effect removes (see :func:`explained_fraction`);
-    ``contradicted`` why the data contradict its physics and ``tied`` why the cooling curves
-    cannot tell it from a linear alternative ("" when they do not / can, see
+    ``contradicted`` why the data contradict its physics ("" when they do not, see
     :mod:`spicethermal.analysis.consistency`)."""
 
     effect: Effect
@@ -55,7 +54,6 @@ class Candidate:
     #: Every effect of the model with this candidate, when they were refitted jointly with it
     #: (empty: the model's effects as they were, and this one).
     model_effects: tuple[Effect, ...] = ()
-    tied: str = ""
 
     @property
     def rms_k(self) -> float:
