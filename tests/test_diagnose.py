@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import functools
 import json
+import re
 
 import numpy as np
 import pytest
@@ -46,6 +47,19 @@ def test_hidden_effect_is_named_and_the_error_falls(name, seed):
     assert name in str(d) and "evidence:" in str(d)
     # the others do not explain it
     assert all(c.improvement < best.improvement for c in d.candidates[1:])
+
+
+def test_a_fraction_explained_within_some_data_sets_says_which():
+    """A TSP bow is judged within the calibration (``verdict.DIRECT``): its candidate line says
+    "explains N % of calibration", so that 100 % beside an RMS improvement of 1.06× on the whole
+    bundle (seed 202's draw 027 of the random validation set, a heater sag) reads as what it
+    is; the other candidates' fractions are of the whole misfit and say nothing more."""
+    lines = [ln for ln in str(_diagnosis("tsp-nonlinearity", 0)).splitlines()
+             if ln.startswith("  ") and " ΔBIC " in ln]
+    tsp = [ln for ln in lines if ln.lstrip().startswith("tsp-nonlinearity")]
+    assert len(tsp) == 1 and re.search(r"explains \d+ % of calibration  \(form", tsp[0]), tsp
+    others = [ln for ln in lines if ln not in tsp]
+    assert others and all(re.search(r"explains \d+ %  \(form", ln) for ln in others), others
 
 
 @pytest.mark.parametrize("seed", SEEDS)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .residuals import fmt_time
+from .verdict import DIRECT
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Foster
@@ -174,7 +175,9 @@ class Diagnosis:
             params = ", ".join(f"{k} = {_num(v)}" for k, v in c.effect.params.items())
             lines.append(f"  {c.effect.name:24s} ΔBIC {c.bic - self.baseline_bic:+10.1f}  "
                          f"RMS {c.rms_k:.3g} K  {c.improvement:6.2f}×  "
-                         f"explains {100 * max(c.explained, 0):.0f} %  "
+                         f"explains {100 * max(c.explained, 0):.0f} %"
+                         # an effect judged on some data sets only says which
+                         f"{''.join(f' of {d}' for d in DIRECT.get(c.effect.name, ()))}  "
                          f"(form {c.effect.form}; {params})")
         for name, why in self.skipped.items():
             lines.append(f"  {name:24s} not tried: {why}")
