@@ -51,13 +51,14 @@ def test_hidden_effect_is_named_and_the_error_falls(name, seed):
 
 def test_a_fraction_explained_within_some_data_sets_says_which():
     """A TSP bow is judged within the calibration (``verdict.DIRECT``): its candidate line says
-    "explains N % of calibration", so that 100 % beside an RMS improvement of 1.06× on the whole
-    bundle (seed 202's draw 027 of the random validation set, a heater sag) reads as what it
-    is; the other candidates' fractions are of the whole misfit and say nothing more."""
+    "explains N % in its calibration", as the verdict does, so that 100 % beside an RMS
+    improvement of 1.06× on the whole bundle (seed 202's draw 027 of the random validation
+    set, a heater sag) reads as what it is; the other candidates' fractions are of the whole
+    misfit and say nothing more."""
     lines = [ln for ln in str(_diagnosis("tsp-nonlinearity", 0)).splitlines()
              if ln.startswith("  ") and " ΔBIC " in ln]
     tsp = [ln for ln in lines if ln.lstrip().startswith("tsp-nonlinearity")]
-    assert len(tsp) == 1 and re.search(r"explains \d+ % of calibration  \(form", tsp[0]), tsp
+    assert len(tsp) == 1 and re.search(r"explains \d+ % in its calibration  \(form", tsp[0]), tsp
     others = [ln for ln in lines if ln not in tsp]
     assert others and all(re.search(r"explains \d+ %  \(form", ln) for ln in others), others
 

@@ -177,7 +177,7 @@ class Diagnosis:
                          f"RMS {c.rms_k:.3g} K  {c.improvement:6.2f}×  "
                          f"explains {100 * max(c.explained, 0):.0f} %"
                          # an effect judged on some data sets only says which
-                         f"{''.join(f' of {d}' for d in DIRECT.get(c.effect.name, ()))}  "
+                         f"{''.join(f' in its {d}' for d in DIRECT.get(c.effect.name, ()))}  "
                          f"(form {c.effect.form}; {params})")
         for name, why in self.skipped.items():
             lines.append(f"  {name:24s} not tried: {why}")
