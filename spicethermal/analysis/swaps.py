@@ -93,19 +93,20 @@ def swap_dead_end(data: BundleData, step: Step, first: Sequence[Candidate], base
                   names: Sequence[str], noise: Mapping[str, float],
                   budget_s: float) -> list[Step] | None:
     """The first step again with another device effect of :data:`SWAPPABLE` that was decisive
-    at the first step too, and a second step on top of it, or ``None``: for a first effect
-    that leaves a residual beyond the noise that no second effect lowers decisively.
+    at the first step too, alone or with a second step on top of it, or ``None``: for a first
+    effect that leaves a residual beyond the noise that no second effect lowers decisively.
 
     Each device effect can mimic the other: a latent-heat band, with its ladder refitted on
     one more stage, explained 97 % of a strong temperature coefficient on the inner layers and
-    left the rest to nothing, where the coefficient (94 %) and an electrical transient bring
-    every data set to its noise (temperature-coefficient/inner-layers/strong of the validation
-    set). The swap is taken only when the alternative alone, or with a second effect (any of
-    ``names`` but the effect it replaces, :func:`candidates` within ``budget_s`` of work),
-    leaves every data set at its noise. The replaced effect does not come back second: that
-    pair was weighed already, in the other order, and its second effect was not decisive (a
-    0.49 J plateau at a diode's node 1, 99 % of the misfit, got a junction coefficient of 56 %
-    put before it: seed 53's draw 012 of the random validation set)."""
+    left the rest to nothing, where the coefficient alone brings every data set to its noise
+    (temperature-coefficient/inner-layers/strong of the validation set; with the coefficient's
+    budget cut, an electrical transient the case does not have took up what it left). The swap
+    is taken only when the alternative alone, or with a second effect (any of ``names`` but
+    the effect it replaces, :func:`candidates` within ``budget_s`` of work), leaves every data
+    set at its noise. The replaced effect does not come back second: that pair was weighed
+    already, in the other order, and its second effect was not decisive (a 0.49 J plateau at a
+    diode's node 1, 99 % of the misfit, got a junction coefficient of 56 % put before it: seed
+    53's draw 012 of the random validation set)."""
     for alt, on_alt in _alternatives(step, first, base, noise):
         if at_noise(alt.comparison, noise):  # nothing is left for a second effect to take
             return [Step(alt, step.candidates, tuple(on_alt))]
