@@ -1,28 +1,23 @@
 """Measured versus model, point by point, over every data set of a bundle.
 
-:func:`compare` predicts what the bench would have read for each measured point and returns a
-:class:`Comparison` (immutable): the ``spicethermal-comparison/1`` document of DESIGN.md, the
-paper-style Table 2 text, and per-data-set views for the diagnosis. Data sets:
+:func:`compare` predicts what the bench would have read for each measured point through the
+one forward model (:func:`spicethermal.fit.forward.predict`: the model's device effects in
+the network, its measurement effects on the readings) and returns a :class:`Comparison`
+(immutable): the ``spicethermal-comparison/1`` document, the paper-style Table 2 text, and
+per-data-set views for the diagnosis. Data sets:
 
+* ``cooling_1``, ``cooling_2``, ... — each reading of each cooling curve (``at = {"t_s"}``):
+  the model's cooling from its steady state at the curve's power, plus the reference
+  (``tref_c`` column, else ``tref_steady_c``, else the bundle's ``ambient_c``); a record of
+  more than :data:`MAX_COOLING_POINTS` readings is compared as means over log-time bins;
+* ``steady`` — the reading just before each cut, where the bundle records one;
 * ``pwm`` — each row of ``pwm.csv`` (``at = {"freq_hz", "duty"}``): the periodic-steady-state
-  *reading* (junction temperature at the end of the power-off sample window that starts when an
-  on-phase ends) plus the row's reference temperature. The engine is ``analytic`` (closed form;
-  shooting for a model with device effects), ``ngspice`` or ``pyspice`` (the exported subcircuit
-  from the periodic steady state, :mod:`spicethermal.engines.pwmsim`); ``auto`` is analytic for
-  linear models and ngspice for models with a temperature coefficient
-  (:func:`~spicethermal.engines.pwmsim.resolve_engine`).
-* ``cooling_1``, ``cooling_2``, ... — each point of each cooling curve (``at = {"t_s"}``): the
-  model's cooling response from its steady state at the curve's power (self-consistent with the
-  device effects), plus the reference temperature (``tref_c`` column, else ``tref_steady_c``,
-  else the bundle's ``ambient_c``).
-
-Calibration and Zth tables are not temperatures the model predicts, so they are not compared.
-
-Measurement effects turn a model temperature into a reading. The model's own ones apply:
-``sample-window`` (its ``window_s`` replaces the bundle's ``sample_window_s``),
-``tsp-nonlinearity`` (reading ``T + q (T − T_cal)²``) and ``electrical-transient`` (cooling
-readings off by ``amplitude_k · exp(−5 t / masked_s)``). Any other, or a trial one, is a
-``measurement`` callable ``(dataset, at, model_c) -> reading_c`` applied last.
+  *reading* (the junction temperature at the end of the power-off sample window that starts
+  when an on-phase ends). The engine is ``analytic`` (closed form; with device effects the
+  network frozen at the mean temperatures, as the fits use it), ``ngspice`` or ``pyspice``
+  (the exported subcircuit from its periodic steady state, :mod:`spicethermal.engines.pwmsim`,
+  exact); ``auto`` is analytic;
+* ``calibration`` — what the bundle's linear calibration reads at each calibration point.
 
 ``residual_k = measured_c − model_c``.
 
@@ -39,22 +34,24 @@ readings off by ``amplitude_k · exp(−5 t / masked_s)``). Any other, or a tria
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..core.errors import DataFormatError
-from ..engines.pwmsim import SpicePwm, resolve_engine, run_parallel
-from ..fit.effectfit import transient_offset, tsp_reading, window_average_k
-from ..model import Schedule
+from ..effects.base import MeasurementEffect, scalar_params
+from ..engines.network import NetworkBatch
+from ..engines.pwmsim import ENGINES, SpicePwm, run_parallel
+from ..fit.forward import MeasurementTerm, predict
+from ..fit.measurement import BundleData, CurveData
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from ..io.bundle import Bundle, PwmTable
+    from ..io.bundle import Bundle
     from ..model import ThermalModel
 
 COMPARISON_FORMAT = "spicethermal-comparison/1"
@@ -64,10 +61,6 @@ DEFAULT_REFERENCE_C = 25.0
 MAX_COOLING_POINTS = 2000
 #: Log-time bins per decade of a long cooling curve (:func:`log_bin_means`).
 COOLING_BINS_PER_DECADE = 100
-
-#: ``measurement(dataset, at, model_c) -> reading_c``: what the bench would read.
-Measurement = Callable[[str, Mapping[str, float], float], float]
-
 
 @dataclass(frozen=True)
 class ComparisonPoint:
@@ -210,144 +203,6 @@ def _pct(d: float) -> str:
     return f"{100 * d:g}%"
 
 
-# --------------------------------------------------------------------------------------------
-# measurement effects
-# --------------------------------------------------------------------------------------------
-def _reading(model: ThermalModel, dataset: str, at: Mapping[str, float], model_c: float,
-             measurement: Measurement | None, power_w: float = 0.0) -> float:
-    """Model temperature → what the bench reads: the model's measurement effects (the one
-    measurement model of :mod:`spicethermal.fit.effectfit`, shared with fit and diagnose), then
-    the hook. ``power_w`` is the power cut before a cooling reading."""
-    value = float(tsp_reading(model_c, model.effect("tsp-nonlinearity")))
-    if "t_s" in at:
-        value += float(transient_offset(at["t_s"], model.effect("electrical-transient"),
-                                        power_w))
-    if measurement is not None:
-        value = float(measurement(dataset, at, value))
-    return value
-
-
-def _window_nodes(model: ThermalModel, window_s: float) -> tuple[list[float], list[float]]:
-    """Offsets into the sample window at which a PWM reading is taken, and their weights: its
-    end, or 4-point Gauss–Legendre over it for the ``average`` form of ``sample-window``."""
-    sw = model.effect("sample-window")
-    if sw is None or sw.form != "average" or window_s <= 0:
-        return [window_s], [1.0]
-    x, w = np.polynomial.legendre.leggauss(4)
-    return (0.5 * window_s * (1 + x)).tolist(), (w / 2).tolist()
-
-
-def sample_window_s(model: ThermalModel, table: PwmTable | None = None,
-                    window_s: float | None = None) -> float:
-    """The sample window used for PWM readings: ``window_s`` if given, else the model's
-    ``sample-window`` effect, else the bundle's ``sample_window_s`` (0 without a table)."""
-    if window_s is not None:
-        if not (math.isfinite(window_s) and window_s >= 0):
-            raise DataFormatError(f"window_s = {window_s!r}: must be >= 0 and finite")
-        return float(window_s)
-    effect = model.effect("sample-window")
-    if effect is not None:
-        return float(effect.params["window_s"])
-    return float(table.sample_window_s) if table is not None else 0.0
-
-
-# --------------------------------------------------------------------------------------------
-# data sets
-# --------------------------------------------------------------------------------------------
-def compare_pwm(model: ThermalModel, table: PwmTable, *, engine: str = "auto",
-                reference_c: float | None = None, window_s: float | None = None,
-                measurement: Measurement | None = None, dialect: str = "ngspice",
-                dataset: str = "pwm", quiet: bool = True) -> tuple[ComparisonPoint, ...]:
-    """Every row of a PWM table against the model's reading.
-
-    ``reference_c`` is the reference temperature for rows without ``tref_c`` (default
-    :data:`DEFAULT_REFERENCE_C`); ``window_s`` overrides the sample window (see
-    :func:`sample_window_s`); unless ``quiet``, ngspice runs show progress on stderr.
-
-    >>> from spicethermal.core.ladder import Foster
-    >>> from spicethermal.model import ThermalModel
-    >>> from spicethermal.io.bundle import PwmTable
-    >>> m = ThermalModel(Foster.from_tau([100.0], [10.0]))
-    >>> pts = compare_pwm(m, PwmTable([1e3, 1e3], [0.2, 0.8], [27.0, 33.0], power_w=0.1))
-    >>> [abs(round(p.residual_k, 3)) for p in pts]
-    [0.0, 0.0]
-    """
-    engine = resolve_engine(engine, model)
-    window = sample_window_s(model, table, window_s)
-    ref_default = DEFAULT_REFERENCE_C if reference_c is None else float(reference_c)
-    trefs = table.tref_c if table.tref_c is not None else np.full(table.freq_hz.size, ref_default)
-    trefs = np.asarray(trefs, dtype=float)
-    rows = list(zip(table.powers_w.tolist(), table.freq_hz.tolist(), table.duty.tolist(),
-                    trefs.tolist(), strict=True))
-    nodes, weights = _window_nodes(model, window)
-    if engine == "analytic" and model.is_linear and len(nodes) > 1:
-
-        rises = [window_average_k(model.ladder, p, f, d, window) for p, f, d, _ in rows]
-    else:
-        if engine == "analytic":
-            states = [model.pwm(p, f, d, w, tref) for p, f, d, tref in rows for w in nodes]
-        else:  # the ngspice points in parallel
-            sims = {tref: SpicePwm(model, engine, dialect, tref_c=tref)
-                    for tref in set(trefs.tolist())}
-            states = run_parallel([(sims[tref], p, f, d, w) for p, f, d, tref in rows
-                                   for w in nodes], quiet=quiet)
-        k = len(nodes)
-        rises = [sum(wt * s.reading_k for wt, s in zip(weights, states[i * k:(i + 1) * k],
-                                                         strict=True))
-                 for i in range(len(rows))]
-    points = []
-    for (p, f, d, tref), tj, rise in zip(rows, table.tj_c, rises, strict=True):
-        at = {"freq_hz": f, "duty": d}
-        model_c = _reading(model, dataset, at, tref + rise, measurement)
-        points.append(ComparisonPoint(dataset, at, float(tj), model_c,
-                                      {"power_w": p, "tref_c": tref, "window_s": window}))
-    return tuple(points)
-
-
-def cooling_rise_k(model: ThermalModel, power_w: float, t_s: ArrayLike,
-                   tref_c: float = DEFAULT_REFERENCE_C) -> NDArray:
-    """Junction rise (K) at ``t_s`` after power ``power_w`` is cut from the steady state.
-
-    Closed form for a linear model; with device effects, the self-consistent steady state
-    integrated with the power off.
-
-    >>> from spicethermal.core.ladder import Foster
-    >>> from spicethermal.model import ThermalModel
-    >>> cooling_rise_k(ThermalModel(Foster.from_tau([10.0], [1.0])), 2.0, [0.0]).tolist()
-    [20.0]
-    """
-    t = np.asarray(t_s, dtype=float)
-    if model.is_linear:
-        return power_w * model.ladder.cooling(t)
-    theta0 = model.steady_nodes(power_w, tref_c)
-    return model.simulate(t, Schedule((0.0,), (0.0,)), tref_c, theta0).tj_k
-
-
-def compare_cooling(model: ThermalModel, bundle: Bundle, index: int = 0, *,
-                    measurement: Measurement | None = None) -> tuple[ComparisonPoint, ...]:
-    """Cooling curve ``index`` of ``bundle`` (data set ``cooling_{index + 1}``) against the
-    model's cooling response at the curve's power."""
-    table = bundle.cooling[index]
-    name = f"cooling_{index + 1}"
-    measured = np.asarray(bundle.cooling_tj_c(index), dtype=float)
-    tref_rows, tref_steady = bundle.cooling_reference_c(index)
-    if tref_steady is None:
-        tref_steady = float(tref_rows[0]) if tref_rows is not None else DEFAULT_REFERENCE_C
-    trefs = np.asarray(tref_rows, dtype=float) if tref_rows is not None else \
-        np.full(measured.size, float(tref_steady))
-    rise = cooling_rise_k(model, table.power_w, table.t_s, float(tref_steady))
-    columns = (np.asarray(table.t_s, dtype=float), measured, trefs, rise)
-    if measured.size > MAX_COOLING_POINTS:  # a long record: means over log-time bins
-        columns = log_bin_means(*columns)
-    points = []
-    for t, tj, tref, r in zip(*columns, strict=True):
-        at = {"t_s": float(t)}
-        model_c = _reading(model, name, at, float(tref) + float(r), measurement, table.power_w)
-        points.append(ComparisonPoint(name, at, float(tj), model_c,
-                                      {"power_w": table.power_w, "tref_c": float(tref)}))
-    return tuple(points)
-
-
 def log_bin_means(t_s: ArrayLike, *columns: ArrayLike, per_decade: int = COOLING_BINS_PER_DECADE
                   ) -> tuple[NDArray, ...]:
     """Means of ``t_s`` and each column over bins of equal width in log t (``per_decade``).
@@ -383,20 +238,66 @@ def log_bin_means(t_s: ArrayLike, *columns: ArrayLike, per_decade: int = COOLING
                  for c in (t, *columns))
 
 
+def cooling_rise_k(model: ThermalModel, power_w: float, t_s: ArrayLike,
+                   tref_c: float = DEFAULT_REFERENCE_C) -> NDArray:
+    """Junction rise (K) at ``t_s`` after power ``power_w`` is cut from the steady state
+    (closed form for a linear model; the network with its device effects otherwise).
+
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> cooling_rise_k(ThermalModel(Foster.from_tau([10.0], [1.0])), 2.0, [0.0]).tolist()
+    [20.0]
+    """
+    t = np.asarray(t_s, dtype=float)
+    return NetworkBatch.of(model.ladder, model.effects).cooling(power_w, tref_c, t)[0]
+
+
+def _binned(data: BundleData) -> BundleData:
+    """``data`` with every cooling record longer than :data:`MAX_COOLING_POINTS` replaced by
+    its means over log-time bins."""
+    curves = []
+    for c in data.cooling:
+        if c.t_s.size > MAX_COOLING_POINTS:
+            t, tj, tref = log_bin_means(c.t_s, c.tj_c, c.tref_c)
+            c = CurveData(c.name, t, tj, tref, c.power_w, c.tref_steady_c, c.tj_steady_c,
+                          c.has_tref_column)
+        curves.append(c)
+    return replace(data, cooling=tuple(curves))
+
+
+def _spice_after_off(model: ThermalModel, data: BundleData, engine: str, dialect: str,
+                     quiet: bool):
+    """The PWM rows' junction temperature ``delay`` after an on-phase ends, each from the
+    exported subcircuit's periodic steady state in ngspice (every delay asked once)."""
+    p = data.pwm
+    sims = {tref: SpicePwm(model, engine, dialect, tref_c=tref) for tref in set(p.tref_c)}
+    cache: dict[float, NDArray] = {}
+
+    def after_off(delay: NDArray | float) -> NDArray:
+        d = float(np.asarray(delay).ravel()[0])
+        if d not in cache:
+            states = run_parallel([(sims[t], w, f, du, d) for w, f, du, t in
+                                   zip(p.power_w, p.freq_hz, p.duty, p.tref_c, strict=True)],
+                                  quiet=quiet)
+            cache[d] = np.array([[t + s.reading_k for s, t in zip(states, p.tref_c,
+                                                                   strict=True)]])
+        return cache[d]
+
+    return after_off
+
+
 def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
-            window_s: float | None = None, measurement: Measurement | None = None,
-            datasets: Sequence[str] | None = None, dialect: str = "ngspice",
-            quiet: bool = True) -> Comparison:
+            window_s: float | None = None, datasets: Sequence[str] | None = None,
+            dialect: str = "ngspice", quiet: bool = True) -> Comparison:
     """Measured vs model over every data set of ``bundle`` (or only the named ``datasets``).
 
     Parameters
     ----------
     model : ThermalModel
     bundle : Bundle
-    engine : ``auto`` (analytic if the model is linear, else ngspice), ``analytic``,
-        ``ngspice`` or ``pyspice``: how PWM readings are computed.
-    window_s : sample window overriding the model's ``sample-window`` effect and the bundle's.
-    measurement : ``(dataset, at, model_c) -> reading_c`` applied to every prediction.
+    engine : ``auto`` (analytic), ``analytic``, ``ngspice`` or ``pyspice``: how PWM
+        readings are computed.
+    window_s : sample window overriding the bundle's declared one.
     datasets : e.g. ``["pwm"]`` or ``["cooling_1"]``; default all.
     dialect : ``.lib`` dialect for the ngspice engines.
     quiet : no progress bar for the ngspice runs (shown on a terminal otherwise).
@@ -420,24 +321,48 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
         raise DataFormatError(f"{bundle.source or 'bundle'}: measured against the "
                               f"{bundle.reference} but the model's reference is "
                               f"{model.reference}")
-    engine = resolve_engine(engine, model)
-    available = (["pwm"] if bundle.pwm is not None else []) + \
-        [f"cooling_{i + 1}" for i in range(len(bundle.cooling))]
-    wanted = available if datasets is None else list(datasets)
+    engine = "analytic" if engine == "auto" else engine
+    if engine not in ENGINES:
+        raise DataFormatError(f"engine {engine!r}: expected auto or one of {', '.join(ENGINES)}")
+    data = BundleData.from_bundle(bundle)
+    available = data.datasets
+    wanted = list(available) if datasets is None else list(datasets)
     unknown = [d for d in wanted if d not in available]
     if unknown:
         raise DataFormatError(f"{bundle.source or 'bundle'}: no data set {unknown[0]!r} "
                               f"(available: {', '.join(available) or 'none'})")
     if not wanted:
-        raise DataFormatError(f"{bundle.source or 'bundle'}: nothing to compare (no pwm or "
-                              f"cooling data)")
+        raise DataFormatError(f"{bundle.source or 'bundle'}: nothing to compare (no pwm, "
+                              f"cooling or calibration data)")
+    data = _binned(data.subset(wanted))
+    if window_s is not None and data.pwm is not None:
+        if not (math.isfinite(window_s) and window_s >= 0):
+            raise DataFormatError(f"window_s = {window_s!r}: must be >= 0 and finite")
+        data = replace(data, pwm=replace(data.pwm, window_s=float(window_s)))
+    spice = (_spice_after_off(model, data, engine, dialect, quiet)
+             if engine != "analytic" and data.pwm is not None else None)
+    measures = [MeasurementTerm(e.plugin, e.form, scalar_params(e))  # type: ignore[arg-type]
+                for e in model.effects if isinstance(e.plugin, MeasurementEffect)]
+    pred = predict(data, NetworkBatch.of(model.ladder, model.effects), measures, spice)
+    info = _info(data)
     points: list[ComparisonPoint] = []
-    for name in wanted:
-        if name == "pwm":
-            points += compare_pwm(model, bundle.pwm, engine=engine, reference_c=bundle.ambient_c,
-                                  window_s=window_s, measurement=measurement, dialect=dialect,
-                                  quiet=quiet)
-        else:
-            points += compare_cooling(model, bundle, int(name.split("_")[1]) - 1,
-                                      measurement=measurement)
+    for name in data.datasets:
+        for k, (at, meas, mod) in enumerate(zip(data.coordinates(name), data.measured(name),
+                                                pred[name][0], strict=True)):
+            if not math.isfinite(float(mod)):
+                raise DataFormatError(f"{bundle.source or 'bundle'}: the model cannot be "
+                                      f"simulated at {name} {at}")
+            points.append(ComparisonPoint(name, at, float(meas), float(mod),
+                                          info.get(name, [{}] * (k + 1))[k]))
     return Comparison(tuple(points), engine)
+
+
+def _info(data: BundleData) -> dict[str, list[dict[str, float]]]:
+    """What each prediction used (power, reference, window), by data set."""
+    out = {c.name: [{"power_w": c.power_w, "tref_c": float(t)} for t in c.tref_c]
+           for c in data.cooling}
+    if data.pwm is not None:
+        p = data.pwm
+        out["pwm"] = [{"power_w": float(w), "tref_c": float(t), "window_s": p.window_s}
+                      for w, t in zip(p.power_w, p.tref_c, strict=True)]
+    return out

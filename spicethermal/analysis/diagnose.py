@@ -1,135 +1,156 @@
-"""Diagnosis: where a linear ladder fails, which catalogued effect is missing, and by how much
-the error falls when it is added.
+"""Diagnosis: where a model fails, which physical effect is missing, and by how much the error
+falls when it is added. The procedure, stated once (docs/diagnosis.md):
 
-:func:`diagnose` compares a model with every data set of a bundle (each cooling curve, the
-PWM grid, the calibration), localises the misfit (time decade, frequency, duty, temperature
-band), fits every candidate effect of the catalogue (:mod:`spicethermal.fit.effectfit`) and ranks
-them. The result (:class:`Diagnosis`) prints as a short report and serialises to the
-``spicethermal-diagnosis/2`` document (docs/diagnosis-json.md).
+1. **Baseline**: the linear ladder fitted to every data set of the bundle (cooling curves,
+   steady readings, PWM grid), its order chosen by the criterion; a model given by the user
+   instead, as it is.
+2. **Noise** of every data set from its own scatter, never from the structure under test
+   (:mod:`.noise`); the baseline and the noise are estimated twice in turn.
+3. **Candidates**: every registered effect the model lacks whose data sets are present
+   (``traits.shown_by``), each form from the plugin's ``guess()`` with its variants and
+   starts, the ladder and the other effects refitted (:func:`~spicethermal.fit.search.fit_effect`).
+   Rivals (explanations outside the catalogue) are weighed alike and never named.
+4. **Forward selection**: the candidate with the lowest BIC is added when it is decisive
+   (:func:`.rules.decisive`); candidates of other effects within :data:`.rules.DECISIVE_BIC`
+   of it are *tied*. A backward check then drops an earlier effect the model no longer needs
+   (its BIC without it within the margin). Until every data set is at its noise, nothing is
+   decisive, or :data:`.rules.MAX_EFFECTS` effects are named.
+5. **Verdict** (:func:`verdict`): *named* when the effects bring every data set to its
+   noise; *approximate* when they leave a structured residual but remove
+   :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
+   *none* otherwise, or when a rival explains the data as well. An effect whose
+   ``traits.needs`` are missing is never named alone.
 
-Criterion (stated)
-------------------
-Residuals ``r = measured − model`` in kelvin. Each data set ``d`` gets a noise estimate
-``σ_d`` that no model choice can bias: the scatter of consecutive baseline residuals (smooth
-misfits cancel in the differences; the largest 10 % are trimmed, see
-:func:`noise_estimates`), at least :data:`NOISE_FLOOR_K`. A model's criterion is
-``BIC = Σ_d RSS_d / σ_d² + k ln N`` with ``k`` the number of effect parameters fitted and
-``N`` the number of points. An effect is *found* when the best candidate (lowest BIC)
-
-1. lowers the BIC by at least :data:`MIN_BIC_DROP` (strong evidence on Kass & Raftery's scale),
-2. lowers the pooled (or the noise-weighted) RMS by at least :data:`MIN_IMPROVEMENT` ×, and
-3. explains at least :data:`MIN_EXPLAINED` of the misfit beyond the noise
-   (:func:`~spicethermal.analysis.verdict.explained_fraction`).
-
-Clean data fail (1) and (2): an effect fitted to noise gains little. An effect outside the
-catalogue fails (2) or (3): the verdict is then null and the reason says where the misfit is.
-When the baseline already fits every data set within :data:`EXPLAINED_RATIO` × its noise,
-nothing is missing.
-
-The pooled RMS (``rms_k``; ``improvement = baseline rms / candidate rms``) weighs every point
-equally, as ``spicethermal compare`` does, with the calibration points added.
-
-A table of measured vs simulated PWM readings (the paper's Table 2, :func:`diagnose_table`)
-goes through the same rule with the simulated column as the baseline; its noise is the
-scatter of one measured reading beyond an offset per frequency (see :class:`TableAnalysis`).
+The work is counted (model evaluations), never timed: the same bundle gives the same verdict
+on every machine and under any load.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from ..core.errors import DataFormatError, FitError, SimulationError
-from ..effects import CATALOGUE
-from ..fit.budget import TimeLimitError, mark, reached
-from ..fit.effectfit import (
-    NUMERICAL_ERRORS,
-    BundleData,
-    baseline_ladder,
-    time_limit,
-)
-from ..fit.fitters import fit_with_effects
-from ..fit.tcforward import own_cache
+import numpy as np
+
+from ..core.errors import DataFormatError, FitError
+from ..effects.base import CALIBRATION, EffectPlugin
+from ..effects.registry import CATALOGUE, plugin
+from ..fit.joint import ModelFit, bic, fit_baseline
+from ..fit.measurement import BundleData
+from ..fit.search import fit_effect, without
 from ..model import ThermalModel
-from ..report.diagnosis import write_report
-from .candidates import candidates
-from .diagnosis import DIAGNOSIS_FORMAT, Candidate, Diagnosis, Step
-from .evidence import evidence
-from .refits import refit_step
-from .regime import regime_switch
-from .residuals import comparison_of, fmt_against, localise, noise_estimates
-from .swaps import swap_dead_end, swap_first
-from .table2 import TableAnalysis, analyse_table, diagnose_table
-from .verdict import (
-    MAX_LEFT_CHI2,
-    MAX_STEPS,
-    MIN_BIC_DROP,
-    MIN_EXPLAINED,
-    MIN_IMPROVEMENT,
-    MIN_TOTAL_EXPLAINED,
-    at_noise,
-    chi2,
-    criterion,
+from .compare import Comparison, ComparisonPoint
+from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, Candidate, Diagnosis, Step, Verdict
+from .noise import calibration_degree, noise_estimates
+from .rules import (
+    DECISIVE_BIC,
+    MAX_EFFECTS,
+    MIN_APPROXIMATE,
+    NOISE_FLOOR_K,
+    REFINE_ROUNDS,
+    SCREEN_ROUNDS,
+    beyond_noise,
     decisive,
-    early_excess,
-    explained_fraction,
-    far_left,
-    partial_fit,
-    runs_z,
-    structured,
-    verdict_reason,
+    explained,
 )
+from .where import localise
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..io.bundle import Bundle
 
-__all__ = ["DIAGNOSIS_FORMAT", "MIN_EXPLAINED", "MIN_IMPROVEMENT", "Candidate", "Diagnosis",
-           "Step", "TableAnalysis", "analyse_table", "candidates", "comparison_of", "diagnose",
-           "diagnose_table", "evidence", "explained_fraction", "fit_with_effects", "localise",
-           "noise_estimates", "runs_z", "structured", "write_report"]
+__all__ = ["comparison_of", "diagnose", "verdict"]
 
-#: Time budget (s of work, see :func:`~spicethermal.fit.effectfit.time_limit`) of one
-#: candidate's fit at the first step; a fit past it keeps its
-#: best point so far (a fit that cannot start fails).
-CANDIDATE_BUDGET_S = 8.0
-#: ... and at later steps (their forward models carry the effects added so far; a second
-#: effect is often the one that needs an integration).
-LATER_BUDGET_S = 8.0
-#: Work (s, see :mod:`~spicethermal.fit.budget`) allowed to all the steps of one diagnosis together
-#: (the candidates' own budgets stop at it too): no bundle keeps the steps busy for longer,
-#: whatever its fits do. The change-of-regime check after them has its own budget (four fits
-#: of at most :data:`~spicethermal.analysis.regime.REGIME_BUDGET_S` each).
-DIAGNOSIS_BUDGET_S = 50.0
+RIVAL, UNSHOWN = "rival", "unshown"
 
 
-@own_cache()  # its fits' work, so where they stop, owes nothing to earlier runs
+def comparison_of(data: BundleData, predictions: dict) -> Comparison:
+    """Measured vs predicted at every point of every data set."""
+    points = []
+    for name in data.datasets:
+        for at, meas, mod in zip(data.coordinates(name), data.measured(name),
+                                 predictions[name], strict=True):
+            points.append(ComparisonPoint(name, at, float(meas), float(mod)))
+    return Comparison(tuple(points))
+
+
+def _beyond(data: BundleData, fit: ModelFit) -> dict[str, bool]:
+    return {n: beyond_noise(fit.chi2[n], data.measured(n).size,
+                            data.measured(n) - fit.predictions[n]) for n in data.datasets}
+
+
+def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, dict]:
+    """The baseline and the noise, each estimated from the other in turn."""
+    from ..fit.joint import Layout, Start, fit_starts
+
+    noise = {n: 1.0 for n in data.datasets}
+    if data.calibration is not None:
+        noise[CALIBRATION] = max(calibration_degree(data.calibration.temp_c,
+                                                    data.calibration.read_c)[1], NOISE_FLOOR_K)
+    fit = None
+    for _ in range(3):
+        if model is None:
+            fit = fit_baseline(data, noise)
+        else:
+            from ..engines.network import as_cauer
+
+            slots = tuple((e.plugin, e.form) for e in model.effects)
+            ladder = as_cauer(model.ladder)
+            got = fit_starts(data, noise, Layout(slots, ladder.order, hold_ladder=True,
+                                                 move=(False,) * len(slots)),
+                             [Start(ladder, tuple(dict(e.params) for e in model.effects))])
+            if not got:
+                raise FitError(f"{data.source}: the model does not simulate these data")
+            fit = got[0]
+        noise = noise_estimates(data, fit.predictions)
+    # the criterion's χ² under the final noise
+    assert fit is not None
+    fit = _rechi(data, fit, noise)
+    return fit, noise
+
+
+def _rechi(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
+    from dataclasses import replace
+
+    chi2 = {n: float(np.sum(((fit.predictions[n] - data.measured(n)) / noise[n]) ** 2))
+            for n in data.datasets}
+    return replace(fit, chi2=chi2)
+
+
+def _candidate(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
+               p: EffectPlugin, n_points: int, sizes: dict) -> tuple[Candidate, int] | None:
+    fits = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS)
+    if not fits:
+        return None
+    b0 = bic(current, n_points)
+    best = min(fits, key=lambda m: bic(m, n_points))
+    after = comparison_of(data, best.predictions)
+    cand = Candidate(best.effect(p.name), best, after, b0 - bic(best, n_points),
+                     explained(current.chi2, best.chi2, sizes),
+                     cmp.rms_k / max(after.rms_k, 1e-300),
+                     tuple((m.effect(p.name).form, b0 - bic(m, n_points)) for m in fits))
+    return cand, sum(m.work for m in fits)
+
+
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,
              effects: Sequence[str] | None = None,
              progress: Callable[[str], None] | None = None, quiet: bool = True) -> Diagnosis:
-    """Compare, localise, fit every candidate effect, add the decisive one, and again.
-
-    Each step fits every catalogued effect the model lacks (each of its forms) on top of the
-    model so far and adds the best when it is decisively better (:data:`MIN_BIC_DROP`,
-    :data:`MIN_IMPROVEMENT`, :data:`MIN_EXPLAINED`); the steps stop when the residual is at
-    the noise, nothing is decisive, two different effects are decisive at a later step and
-    the data cannot tell them apart (their criteria within :data:`MIN_BIC_DROP`: what they gain
-    alike comes from refitting the model, not from either effect), or after
-    :data:`MAX_STEPS`.
+    """Compare, localise, fit every candidate effect, add the decisive one, and again
+    (the module docstring states the procedure).
 
     Parameters
     ----------
-    bundle : the measurements (``spicethermal-bundle/1``).
-    model : the baseline model; default the linear ladder of the bundle's lowest-power cooling
-        curve refitted to all its cooling curves
-        (:func:`~spicethermal.fit.effectfit.baseline_ladder`).
-        Its effects stay in every candidate; the candidates are the catalogued effects it lacks.
-    effects : candidate names (default: every catalogued effect).
-    progress : called with a short text before each step.
-    quiet : no progress bar on stderr (one bar per step over the candidate fits, shown only
-        when stderr is a terminal; :mod:`spicethermal.core.progress`).
+    bundle : Bundle
+        The measurements.
+    model : ThermalModel, optional
+        The baseline (default: the linear ladder fitted to every data set). Its effects stay
+        in every candidate; the candidates are the registered effects it lacks.
+    effects : sequence of str, optional
+        Candidate names (default: every registered effect, rivals included).
+    progress : callable, optional
+        Called with a short text as each candidate is fitted.
+    quiet : bool
+        No progress bar on stderr.
 
     Returns
     -------
@@ -139,151 +160,175 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     --------
     >>> from spicethermal.analysis.scenarios import scenario_bundle
     >>> d = diagnose(scenario_bundle("sample-window", seed=0))
-    >>> d.verdict_effect, d.effects, d.best.improvement > 3
-    ('sample-window', ['sample-window'], True)
+    >>> d.verdict.cls, d.effects
+    ('named', ['sample-window'])
     """
     t_start = time.perf_counter()
     say = progress or (lambda _text: None)
     data = BundleData.from_bundle(bundle)
-    if not data.datasets:
-        raise DataFormatError(f"{data.source}: nothing to diagnose (no cooling, pwm or "
-                              f"calibration data)")
+    if not data.cooling:
+        raise DataFormatError(f"{data.source}: nothing to diagnose without a cooling curve "
+                              f"(a ladder is fitted from them)")
     if model is not None and model.reference != bundle.reference:
         raise DataFormatError(f"{data.source}: measured against the {bundle.reference} but the "
                               f"model's reference is {model.reference}")
-    say("baseline ladder")
+    say("baseline ladder and noise")
+    base, noise = _baseline(data, model)
     if model is None:
-        try:
-            ladder = baseline_ladder(data)
-        except (SimulationError, *NUMERICAL_ERRORS) as exc:
-            raise FitError(f"{data.source}: no linear ladder fits the cooling curves: "
-                           f"{exc}") from None
-        model = ThermalModel(ladder, (), bundle.reference,
+        model = ThermalModel(base.foster, (), bundle.reference,
                              {"tool": "spicethermal diagnose", "baseline": "linear ladder"})
-    else:
-        ladder = model.ladder if model.ladder.topology == "foster" else model.ladder.to_foster()
-    base = comparison_of(data, ladder, model.effects)
-    noise = noise_estimates(base)
-    data = replace(data, scales=noise)  # the fits weigh each data set by its noise
-    bic0 = criterion(base, noise, 0)
+    sizes = data.sizes()
+    n_points = sum(sizes.values())
+    base_cmp = comparison_of(data, base.predictions)
     names = list(effects) if effects is not None else list(CATALOGUE)
-    skipped: dict[str, str] = {e.name: "already in the model" for e in model.effects
-                               if e.name in names}
+    plugins = [plugin(n) for n in names]
+    skipped = {p.name: "already in the model" for p in plugins if base.effect(p.name)}
+    for p in plugins:
+        if p.name not in skipped and not p.traits.shown_by & data.kinds:
+            shown = " or ".join(sorted(p.traits.shown_by))
+            skipped[p.name] = f"no data set that can show it ({shown})"
     steps: list[Step] = []
-    first: list[Candidate] = []
-    cur_ladder, cur_effects, cur, cur_bic = ladder, list(model.effects), base, bic0
-    contradicted = ""
-    # one budget for every step: a step that finds its time spent stops the diagnosis
-    end = mark(DIAGNOSIS_BUDGET_S)
-    with time_limit(DIAGNOSIS_BUDGET_S):
-        # the first step also when the first readings stand out of a baseline otherwise at
-        # its noise (an electrical transient over a few readings)
-        while len(steps) < MAX_STEPS and not reached(end) and (
-                not at_noise(cur, noise) or
-                not steps and early_excess(cur, noise) >= MIN_BIC_DROP):
-            # the first step's candidates and skips are the report's; later ones are its steps'
+    first: tuple[Candidate, ...] = ()
+    current, cmp = base, base_cmp
+    work = base.work
+    while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
+            and any(_beyond(data, current).values()):
+        cands = []
+        for p in plugins:
+            if p.name in skipped or current.effect(p.name):
+                continue
+            say(f"step {len(steps) + 1}: {p.name}")
+            got = _candidate(data, noise, current, cmp, p, n_points, sizes)
+            if got is not None:
+                cands.append(got[0])
+                work += got[1]
+        cands.sort(key=lambda c: -c.delta_bic)
+        if not steps:
+            first = tuple(cands)
+        if not cands or not decisive(0.0, -cands[0].delta_bic, cands[0].explained):
+            break
+        chosen = cands[0]
+        tied = tuple(c for c in cands[1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
+                     and decisive(0.0, -c.delta_bic, c.explained))
+        status = _status(chosen, tied, data)
+        current = chosen.fit
+        dropped = []
+        for e in [e for e in current.effects if e.name != chosen.name]:
             try:
-                cands = candidates(data, cur_ladder, cur_effects, names, cur, noise, say,
-                                   skipped if not steps else {},
-                                   CANDIDATE_BUDGET_S if not steps else LATER_BUDGET_S,
-                                   quiet, len(steps) + 1)
-            except TimeLimitError:  # the budget ran out within the step: it is not taken
-                break
-            if not steps:
-                first = cands
-            winners = [c for c in cands if decisive(c, cur_bic)]  # best BIC first
-            if not winners and len(steps) == 1:
-                # the first effect may have mimicked the other device effect
-                swap = _unless_out_of_time(swap_dead_end, data, steps[0], first, base, names,
-                                           noise, LATER_BUDGET_S)
-                if swap is None:
-                    break
-                steps = swap
-            else:
-                if not winners:
-                    break
-                chosen = winners[0]
-                if steps and len(winners) > 1 and winners[1].bic - chosen.bic < MIN_BIC_DROP:
-                    break  # two effects gain alike on top of the model: the gain is neither's
-                contradicted = chosen.contradicted
-                if contradicted:
-                    break
-                model_effects = list(chosen.model_effects) or [*cur_effects, chosen.effect]
-                if steps and not chosen.model_effects:
-                    # the effects found before held their one-at-a-time fits: refit all
-                    chosen, model_effects = refit_step(data, chosen, model_effects, cur, noise)
-                steps.append(Step(chosen, tuple(cands), tuple(model_effects)))
-                if len(steps) == 2:
-                    steps = _unless_out_of_time(swap_first, data, steps, first, base, noise,
-                                                LATER_BUDGET_S) or steps
-            # the model so far is the last step's
-            last = steps[-1]
-            cur_ladder, cur_effects, cur = last.chosen.ladder, list(last.effects), \
-                last.chosen.comparison
-            cur_bic = criterion(cur, noise, sum(st.chosen.n_params for st in steps))
-    # a coefficient named first may be a change of regime (:mod:`.regime`), weighed once the
-    # steps end (a missing effect's misfit is a step's to take up too: seed 23's draw 013 of
-    # the random validation set, a real coefficient beside a power transient) and on its own
-    # budget (REGIME_BUDGET_S per start), which a diagnosis that spent its steps' budget still
-    # has (seed 101's draw 015, a convection switch at 33.2 °C)
-    if steps and not contradicted:
-        contradicted = regime_switch(data, steps, noise)
-        if contradicted:
-            steps, cur = [], base
-    where = tuple(localise(base, noise))
-
-    def partial_after(k: int) -> bool:  # the first k effects leave physics they do not explain
-        return partial_fit(base, steps[k - 1].chosen.comparison, noise, k)
-
-    partial = bool(steps) and partial_after(len(steps))
-    # a later effect that only mops up the misfit of an approximate first one leaves the
-    # fewer effects that hold on their own
-    kept = next((k for k in range(len(steps) - 1, 0, -1) if not partial_after(k)), 0)
-    if partial and kept and not contradicted:
-        steps = steps[:kept]
-        cur, partial = steps[-1].chosen.comparison, False
-    total = explained_fraction(base, cur, noise)
-    if contradicted:
-        located = localise(cur, noise) or localise(cur)
-        done = "".join(f"{st.chosen.effect.name} explains part of the misfit; then "
-                       for st in steps)
-        reason = (f"{done}no catalogued effect explains the misfit: {contradicted}; not in the "
-                  f"catalogue: the error sits in {'; and in '.join(located[:2])}")
-        if partial:  # what was found is no diagnosis either (see below)
-            steps = []
-    elif partial:
-        # the effects found explain part of the misfit and leave a structured residual: the
-        # physics at work is not in the catalogue (a remounted contact, a heater that sags
-        # or a convection that switches can each pass for a temperature coefficient, and
-        # several effects together for more of it)
-        tried = ", ".join(s.chosen.effect.name for s in steps)
-        located = localise(cur, noise) or localise(cur)
-        why = (f"would explain only {fmt_against(100 * total, 100 * MIN_TOTAL_EXPLAINED, 2)} % "
-               f"of it (needs "
-               f"{100 * MIN_TOTAL_EXPLAINED:.0f} % when a structured residual remains)"
-               if total < MIN_TOTAL_EXPLAINED else
-               f"would explain {100 * total:.0f} % of it but leave a structured residual above "
-               f"{math.sqrt(MAX_LEFT_CHI2):g}× the noise" if far_left(cur, noise) else
-               f"together would still leave a structured residual of "
-               f"{math.sqrt(chi2(cur, noise) / len(cur.points)):.3g}× the noise (after "
-               f"{len(steps)} effects, none is allowed)" if len(steps) >= MAX_STEPS else
-               f"together would still leave {math.sqrt(chi2(cur, noise) / len(cur.points)):.3g}× "
-               f"the noise (more than {math.sqrt(MAX_LEFT_CHI2):g}× after several effects)")
-        reason = (f"no catalogued effect explains the misfit: {tried} {why} and leave "
-                  f"{'; and '.join(located[:2])}; not in the catalogue")
-        steps = []
-    else:
-        reason = verdict_reason(base, cur, noise, first, steps, skipped)
-    effect = steps[0].chosen.effect.name if steps else None
-    return Diagnosis(base, model, noise, bic0, tuple(first), effect, reason, where, skipped,
-                     time.perf_counter() - t_start, data.source, {}, tuple(steps))
+                lighter = without(data, noise, current, e.name, REFINE_ROUNDS)
+            except (ValueError, FitError):
+                continue
+            work += lighter.work
+            if bic(lighter, n_points) - bic(current, n_points) < DECISIVE_BIC:
+                current, _ = lighter, dropped.append(e.name)
+        cmp = comparison_of(data, current.predictions)
+        steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped)))
+    result = verdict(data, base, steps, noise)
+    where = tuple(localise(base_cmp, noise, _beyond(data, base)))
+    return Diagnosis(data.source, noise, base_cmp, base, model, tuple(steps), result,
+                     first, skipped, n_points, work, time.perf_counter() - t_start, where)
 
 
-def _unless_out_of_time(swap: Callable[..., list[Step] | None], *args: Any
-                        ) -> list[Step] | None:
-    """``swap(*args)``, or ``None`` when the diagnosis's budget runs out within it (the steps
-    found so far stand)."""
-    try:
-        return swap(*args)
-    except TimeLimitError:
-        return None
+def _status(chosen: Candidate, tied: Sequence[Candidate], data: BundleData) -> str:
+    """A step's status (see :class:`~.diagnosis.Step`)."""
+    if not chosen.catalogued or any(not t.catalogued for t in tied):
+        return RIVAL
+    if not chosen.effect.plugin.traits.needs <= data.kinds:
+        return AMBIGUOUS if tied else UNSHOWN
+    return AMBIGUOUS if tied else NAMED
+
+
+def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict) -> Verdict:
+    """The verdict of the steps (the module docstring's point 5).
+
+    Parameters
+    ----------
+    data : BundleData
+    base : ModelFit
+    steps : sequence of Step
+    noise : dict
+
+    Returns
+    -------
+    Verdict
+    """
+    final = steps[-1].model if steps else base
+    kept = {e.name for e in final.effects}
+    live = [s for s in steps if s.chosen.name in kept]
+    named = [s for s in live if s.status in (NAMED, AMBIGUOUS)]
+    rivals = [s for s in live if s.status == RIVAL]
+    alternatives = tuple(dict.fromkeys(
+        c.name for s in rivals for c in (s.chosen, *s.tied) if not c.catalogued))
+    beyond = _beyond(data, final)
+    left = tuple(localise(comparison_of(data, final.predictions), noise, beyond))
+    share = explained(base.chi2, final.chi2, data.sizes())
+    if not any(_beyond(data, base).values()):
+        return Verdict(NONE, (), "the linear ladder fits every data set within its noise: no "
+                       "effect is missing")
+    if not named:
+        unshown = [s for s in live if s.status == UNSHOWN]
+        why = ("no catalogued effect lowers the criterion decisively" if not live else
+               _unshown_reason(unshown) if unshown else _rival_reason(rivals, live))
+        return Verdict(NONE, (), f"{why}; not in the catalogue: the error sits in "
+                       + ("; and in ".join(left[:2]) or "no data set beyond its noise"),
+                       alternatives, _separate(live), left)
+    effects = tuple(dict.fromkeys(
+        n for s in named for n in (s.chosen.name, *(t.name for t in s.tied))))
+    separate = _separate(named)
+    if rivals:
+        return Verdict(NONE, (), f"{', '.join(effects)} would explain part of it, and so "
+                       f"would {_rival_reason(rivals, live)}; not named", alternatives,
+                       separate, left)
+    ambiguous = any(s.status == AMBIGUOUS for s in named)
+    if not any(beyond.values()):
+        return Verdict(AMBIGUOUS if ambiguous else NAMED, effects,
+                       _named_reason(named, share, "every data set is at its noise after it"),
+                       alternatives, separate)
+    if share >= MIN_APPROXIMATE:
+        return Verdict(AMBIGUOUS if ambiguous else APPROXIMATE, effects,
+                       _named_reason(named, share, "its catalogued form is approximate: it "
+                                     "leaves " + "; and ".join(left[:2])),
+                       alternatives, separate, left)
+    return Verdict(NONE, (), f"{', '.join(effects)} would remove only {100 * share:.0f} % of "
+                   f"the misfit beyond the noise (an approximate name needs "
+                   f"{100 * MIN_APPROXIMATE:.0f} %) and leave " + "; and ".join(left[:2])
+                   + "; not in the catalogue", alternatives, separate, left)
+
+
+def _named_reason(named: Sequence[Step], share: float, tail: str) -> str:
+    parts = []
+    for s in named:
+        c = s.chosen
+        also = f" (or {', '.join(t.name for t in s.tied)}: as likely)" if s.tied else ""
+        parts.append(f"{c.name}{also} lowers the criterion by {c.delta_bic:.1f} and removes "
+                     f"{100 * max(c.explained, 0):.0f} % of the misfit beyond the noise "
+                     f"({c.evidence})")
+    return f"{'; then '.join(parts)}; together {100 * share:.0f} %; {tail}"
+
+
+def _rival_reason(rivals: Sequence[Step], live: Sequence[Step]) -> str:
+    texts = [t.evidence for s in rivals for t in (s.chosen, *s.tied) if not t.catalogued]
+    return ("an explanation outside the catalogue fits as well or better: "
+            + "; ".join(dict.fromkeys(texts))) if texts else "nothing decisive"
+
+
+def _unshown_reason(steps: Sequence[Step]) -> str:
+    parts = [f"{s.chosen.name} would explain it ({s.chosen.evidence}), but without "
+             f"{' and '.join(sorted(s.chosen.effect.plugin.traits.needs))} data the bundle "
+             f"cannot tell it from a device effect" for s in steps]
+    return "; ".join(parts)
+
+
+def _separate(steps: Sequence[Step]) -> str:
+    """What would tell tied explanations apart (their traits say)."""
+    out = []
+    for s in steps:
+        for t in s.tied:
+            a, b = s.chosen.effect.plugin, t.effect.plugin
+            how = a.traits.confusable_with.get(b.name) or b.traits.confusable_with.get(a.name)
+            out.append(f"{a.name} or {b.name}: "
+                       + (how or "a data set that shows one and not the other"))
+        if s.status == UNSHOWN:
+            needs = " and ".join(sorted(s.chosen.effect.plugin.traits.needs))
+            out.append(f"{s.chosen.name}: a {needs} over the temperatures reached")
+    return "; ".join(out)

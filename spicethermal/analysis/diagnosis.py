@@ -1,5 +1,6 @@
-"""The result of a diagnosis: the candidates weighed, the steps taken, the verdict; its text
-report and its ``spicethermal-diagnosis/2`` document (docs/diagnosis-json.md).
+"""The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
+verdict; its text report and its ``spicethermal-diagnosis/3`` document
+(docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
 from __future__ import annotations
@@ -9,190 +10,250 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from .residuals import fmt_time
-from .verdict import DIRECT
+from ..effects.base import CALIBRATION, STEADY
+from ..io.jsondoc import JsonDocument
+from .where import fmt_time
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..core.ladder import Foster
     from ..effects import Effect
+    from ..fit.joint import ModelFit
     from ..model import ThermalModel
     from .compare import Comparison
 
-__all__ = ["DIAGNOSIS_FORMAT", "WORST_POINTS", "Candidate", "Diagnosis", "Step"]
+__all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "Candidate",
+           "Diagnosis", "Step", "Verdict"]
 
-#: The document's format. Version 2 adds ``steps``, ``verdict.effects``, the candidates'
-#: ``form`` and ``explained`` (docs/diagnosis-json.md); every key of version 1 is kept.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/2"
-#: How many worst points the document lists.
+#: The document's format; version 3 adds the verdict's class, the noise, the criterion's
+#: numbers and the work (docs/diagnosis-json.md), and keeps every key of versions 1 and 2.
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/3"
+#: Verdict classes.
+NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
+#: Worst points listed.
 WORST_POINTS = 5
 
 
 @dataclass(frozen=True, eq=False)
 class Candidate:
-    """One candidate effect fitted to the bundle (its best form). ``improvement`` is the
-    previous model's pooled RMS over this one's; ``explained`` the fraction of the previous
-    model's misfit beyond the noise that the effect removes (see :func:`explained_fraction`);
-    ``contradicted`` why the data contradict its physics ("" when they do not, see
-    :mod:`spicethermal.analysis.consistency`)."""
+    """One effect (its best form) fitted onto the model of a step, with the ladder and the
+    model's other effects refitted. ``delta_bic``: the step's model's BIC minus this one's
+    (positive: better); ``explained``: the fraction of the step's model's misfit beyond the
+    noise it removes; ``improvement``: pooled RMS before over after; ``forms``: every form
+    fitted, ``(form, delta_bic)``."""
 
     effect: Effect
-    ladder: Foster
+    fit: ModelFit
     comparison: Comparison
-    n_params: int
-    bic: float
-    improvement: float
-    evidence: str
+    delta_bic: float
     explained: float
-    fit_s: float
-    contradicted: str = ""
-    #: The fit's facts behind the evidence sentence (see
-    #: :class:`~spicethermal.fit.effectfit.EffectFit`).
-    facts: Mapping[str, Any] = field(default_factory=dict)
-    #: The improvement with the noise (:func:`~spicethermal.analysis.verdict.improvement`
-    #: given the noise estimates: ``improvement`` or, when larger, the noise-weighted ratio;
-    #: ``None``: not measured, as for a Table-2 candidate).
-    noise_gain: float | None = None
-    #: Every effect of the model with this candidate, when they were refitted jointly with it
-    #: (empty: the model's effects as they were, and this one).
-    model_effects: tuple[Effect, ...] = ()
+    improvement: float
+    forms: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def name(self) -> str:
+        return self.effect.name
+
+    @property
+    def catalogued(self) -> bool:
+        return self.effect.plugin.traits.catalogued
 
     @property
     def rms_k(self) -> float:
         return self.comparison.rms_k
 
     @property
-    def gain(self) -> float:
-        """The improvement the decision weighs: ``noise_gain`` when measured, else
-        ``improvement``."""
-        return self.improvement if self.noise_gain is None else self.noise_gain
+    def evidence(self) -> str:
+        return self.effect.describe()
 
-    def to_json(self) -> dict[str, Any]:
-        return {"effect": self.effect.name, "form": self.effect.form,
-                "params": dict(self.effect.params), "rms_k": self.rms_k,
-                "improvement": self.improvement if math.isfinite(self.improvement) else None,
-                "explained": self.explained, "evidence": self.evidence}
+    def to_dict(self) -> dict[str, Any]:
+        return {"effect": self.name, "form": self.effect.form,
+                "params": dict(self.effect.form_params), "catalogued": self.catalogued,
+                "delta_bic": _finite(self.delta_bic), "rms_k": _finite(self.rms_k),
+                "improvement": _finite(self.improvement), "explained": _finite(self.explained),
+                "evidence": self.evidence,
+                "forms": [{"form": f, "delta_bic": _finite(b)} for f, b in self.forms]}
 
 
 @dataclass(frozen=True, eq=False)
 class Step:
-    """One step of the iterative diagnosis: the effect added (its candidate, with the ladder
-    refitted), the candidates that were weighed at this step, best first, and the model's
-    effects after it (from the second step on, every effect refitted jointly with the
-    ladder: :func:`~spicethermal.fit.backfit.refit_effects`)."""
+    """One step of the forward selection: the effect added (``chosen``), the candidates
+    weighed, best first, its ``status`` (``named``, ``ambiguous``: ``tied`` explain the data
+    as well; ``rival``: an explanation outside the catalogue, weighed and never named;
+    ``unshown``: an effect the data cannot show alone), the effects the backward check
+    dropped after it, and the model after it."""
 
     chosen: Candidate
     candidates: tuple[Candidate, ...]
-    effects: tuple[Effect, ...] = ()
+    status: str
+    model: ModelFit
+    comparison: Comparison
+    tied: tuple[Candidate, ...] = ()
+    dropped: tuple[str, ...] = ()
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         c = self.chosen
-        return {"effect": c.effect.name, "form": c.effect.form, "params": dict(c.effect.params),
-                "rms_k": c.rms_k, "improvement": c.improvement}
+        return {"effect": c.name, "form": c.effect.form, "params": dict(c.effect.form_params),
+                "status": self.status, "rms_k": _finite(self.comparison.rms_k),
+                "improvement": _finite(c.improvement), "delta_bic": _finite(c.delta_bic),
+                "explained": _finite(c.explained), "tied": [t.name for t in self.tied],
+                "dropped": list(self.dropped)}
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the diagnosis concludes: a class (:data:`NAMED`, :data:`APPROXIMATE`,
+    :data:`AMBIGUOUS`, :data:`NONE`), the effects named in order, the explanations outside
+    the catalogue the data also support, the reason, what would separate tied explanations,
+    and where a residual remains."""
+
+    cls: str
+    effects: tuple[str, ...]
+    reason: str
+    alternatives: tuple[str, ...] = ()
+    separate_by: str = ""
+    where: tuple[str, ...] = ()
+
+    @property
+    def effect(self) -> str | None:
+        return self.effects[0] if self.effects else None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"class": self.cls, "effect": self.effect, "effects": list(self.effects),
+                "alternatives": list(self.alternatives), "reason": self.reason,
+                "separate_by": self.separate_by, "where": list(self.where)}
 
 
 @dataclass(frozen=True, eq=False)
-class Diagnosis:
-    """What :func:`diagnose` found. ``str()`` is the human report, :meth:`to_json` the
-    ``spicethermal-diagnosis/2`` document. ``candidates`` are those of the first step (every
-    effect against the baseline); ``steps`` the effects added in turn."""
+class Diagnosis(JsonDocument):
+    """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/3`` document, :meth:`plot` the
+    figures."""
 
-    baseline: Comparison
-    baseline_model: ThermalModel
+    source: str
     noise_k: Mapping[str, float]
-    baseline_bic: float
-    candidates: tuple[Candidate, ...]
-    verdict_effect: str | None
-    verdict_reason: str
-    where: tuple[str, ...]
+    baseline: Comparison
+    baseline_fit: ModelFit
+    baseline_model: ThermalModel
+    steps: tuple[Step, ...]
+    verdict: Verdict
+    candidates: tuple[Candidate, ...] = ()
     skipped: Mapping[str, str] = field(default_factory=dict)
+    n_points: int = 0
+    work: int = 0
     elapsed_s: float = 0.0
-    source: str = ""
-    extra: Mapping[str, Any] = field(default_factory=dict)
-    steps: tuple[Step, ...] = ()
+    where: tuple[str, ...] = ()
+
+    # -- views -------------------------------------------------------------------------------
+    @property
+    def verdict_effect(self) -> str | None:
+        return self.verdict.effect
 
     @property
-    def best(self) -> Candidate | None:
-        """The verdict's candidate (None when no effect was found)."""
-        if self.verdict_effect is None:
-            return None
-        return next(c for c in self.candidates if c.effect.name == self.verdict_effect)
+    def verdict_reason(self) -> str:
+        return self.verdict.reason
 
     @property
     def effects(self) -> list[str]:
-        """Names of the effects added, in order."""
-        return [s.chosen.effect.name for s in self.steps]
+        """The effects named, in order."""
+        return list(self.verdict.effects)
 
     @property
     def final(self) -> Comparison:
-        """The comparison after the last step (the baseline when no effect was added)."""
-        return self.steps[-1].chosen.comparison if self.steps else self.baseline
+        """The comparison with the last step's model (the baseline's when none)."""
+        return self.steps[-1].comparison if self.steps else self.baseline
+
+    @property
+    def final_fit(self) -> ModelFit:
+        return self.steps[-1].model if self.steps else self.baseline_fit
+
+    @property
+    def best(self) -> Candidate | None:
+        """The first step's chosen candidate when an effect is named."""
+        return self.steps[0].chosen if self.steps and self.verdict.effects else None
 
     def model(self) -> ThermalModel:
-        """The baseline model with every effect of the steps (as refitted at the last step) and
-        the last step's ladder."""
-        if not self.steps:
-            return self.baseline_model
-        last = self.steps[-1]
-        return type(self.baseline_model)(
-            last.chosen.ladder,
-            last.effects or (*self.baseline_model.effects,
-                             *(s.chosen.effect for s in self.steps)),
-            self.baseline_model.reference, self.baseline_model.provenance)
+        """The model after the last step: its ladder (Foster) and every effect fitted."""
+        from ..model import ThermalModel
 
-    def to_json(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/2`` document."""
-        worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
-                 for p in self.baseline.worst(WORST_POINTS)]
-        return {"format": DIAGNOSIS_FORMAT,
-                "baseline": {"rms_k": self.baseline.rms_k, "max_abs_k": self.baseline.max_abs_k,
-                             "worst": worst},
-                "candidates": [c.to_json() for c in self.candidates],
-                "steps": [s.to_json() for s in self.steps],
-                "verdict": {"effect": self.verdict_effect, "effects": self.effects,
-                            "reason": self.verdict_reason}}
+        fit = self.final_fit
+        base = self.baseline_model
+        provenance = {**base.provenance, "diagnosis": self.verdict.cls,
+                      "effects": list(self.verdict.effects)}
+        return ThermalModel(fit.foster, fit.effects, base.reference, provenance)
 
     def staircase(self) -> str:
-        """The RMS after each step, e.g. ``0.38 K → +temperature-coefficient 0.05 K (7.6×)``."""
+        """The pooled RMS after each step, e.g. ``baseline 0.38 K → +temperature-coefficient
+        (junction) 0.05 K (7.6×)``."""
         parts = [f"baseline {self.baseline.rms_k:.3g} K"]
-        parts += [f"+{s.chosen.effect.name} ({s.chosen.effect.form}) {s.chosen.rms_k:.3g} K "
+        parts += [f"+{s.chosen.name} ({s.chosen.effect.form}) {s.comparison.rms_k:.3g} K "
                   f"({s.chosen.improvement:.3g}×)" for s in self.steps]
         return " → ".join(parts)
 
+    def plot(self, out_dir: str) -> list:
+        """The figures (PNG files in ``out_dir``): residuals before and after, the
+        candidates, the staircase."""
+        from ..viz.plots import diagnosis_figures
+
+        return diagnosis_figures(self, out_dir)
+
+    # -- document -------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The ``spicethermal-diagnosis/3`` document."""
+        worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
+                 for p in self.baseline.worst(WORST_POINTS)]
+        fit = self.final_fit
+        return {"format": DIAGNOSIS_FORMAT, "source": self.source,
+                "noise_k": dict(self.noise_k), "points": self.n_points,
+                "baseline": {"order": self.baseline_fit.ladder.order,
+                             "rms_k": _finite(self.baseline.rms_k),
+                             "max_abs_k": _finite(self.baseline.max_abs_k),
+                             "chi2": {k: _finite(v) for k, v in self.baseline_fit.chi2.items()},
+                             "worst": worst, "where": list(self.where)},
+                "candidates": [c.to_dict() for c in self.candidates],
+                "steps": [s.to_dict() for s in self.steps],
+                "final": {"rms_k": _finite(self.final.rms_k),
+                          "max_abs_k": _finite(self.final.max_abs_k),
+                          "chi2": {k: _finite(v) for k, v in fit.chi2.items()}},
+                "verdict": self.verdict.to_dict(),
+                "skipped": dict(self.skipped), "work": {"rows": self.work}}
+
     def __str__(self) -> str:
-        lines = [f"diagnosis of {self.source or 'the bundle'}: "
-                 f"{len(self.baseline.points)} points in {', '.join(self.baseline.datasets)}",
-                 f"baseline (linear {self.baseline_model.ladder.order}-stage ladder"
-                 + (f" + {', '.join(e.name for e in self.baseline_model.effects)}"
-                    if self.baseline_model.effects else "")
+        b = self.baseline_fit
+        sets = ", ".join(f"{n} ({len(self.baseline.dataset(n).points)})"
+                         for n in self.baseline.datasets)
+        lines = [f"diagnosis of {self.source}: {self.n_points} points in {sets}",
+                 "noise (from each data set's own scatter): "
+                 + ", ".join(f"{n} {v:.3g} K" for n, v in self.noise_k.items()),
+                 f"baseline (linear {b.ladder.order}-stage ladder fitted to every data set"
+                 + (f" + {', '.join(e.name for e in b.effects)}" if b.effects else "")
                  + f"): RMS {self.baseline.rms_k:.3g} K, worst {self.baseline.max_abs_k:.3g} K",
                  "where it fails:"]
         lines += [f"  {s}" for s in self.where] or ["  nowhere beyond the noise"]
         lines.append("worst points:")
         for p in self.baseline.worst(WORST_POINTS):
             lines.append(f"  {p.dataset:12s} {_at_text(p.at):24s} {p.residual_k:+8.3f} K")
-        lines.append("candidates (best first; ΔBIC vs baseline, RMS, improvement):")
+        if self.candidates:
+            lines.append("candidates (best first; ΔBIC against the baseline, positive is "
+                         "better; pooled RMS; share of the misfit beyond the noise removed):")
         for c in self.candidates:
-            params = ", ".join(f"{k} = {_num(v)}" for k, v in c.effect.params.items())
-            lines.append(f"  {c.effect.name:24s} ΔBIC {c.bic - self.baseline_bic:+10.1f}  "
-                         f"RMS {c.rms_k:.3g} K  {c.improvement:6.2f}×  "
-                         f"explains {100 * max(c.explained, 0):.0f} %"
-                         # an effect judged on some data sets only says which
-                         f"{''.join(f' in its {d}' for d in DIRECT.get(c.effect.name, ()))}  "
-                         f"(form {c.effect.form}; {params})")
+            kind = "" if c.catalogued else " [not in the catalogue: never named]"
+            lines.append(f"  {c.name:24s} ΔBIC {c.delta_bic:+9.1f}  RMS {c.rms_k:.3g} K  "
+                         f"{c.improvement:5.2f}×  explains {100 * max(c.explained, 0):3.0f} %  "
+                         f"form {c.effect.form}: {c.evidence}{kind}")
         for name, why in self.skipped.items():
             lines.append(f"  {name:24s} not tried: {why}")
-        table = self.extra.get("table2")
-        if table is not None:
-            lines.append("findings (measured vs simulated table):")
-            lines += [f"  - {x}" for x in table.findings.values()]
+        for i, s in enumerate(self.steps, 1):
+            tied = (f" (as well: {', '.join(t.name for t in s.tied)})" if s.tied else "")
+            dropped = (f"; {', '.join(s.dropped)} no longer needed" if s.dropped else "")
+            lines.append(f"step {i}: +{s.chosen.name} ({s.chosen.effect.form}) {s.status}"
+                         f"{tied}, ΔBIC {s.chosen.delta_bic:+.1f}, explains "
+                         f"{100 * max(s.chosen.explained, 0):.0f} %{dropped}")
         lines.append(f"RMS staircase: {self.staircase()}")
-        lines.append(f"verdict: {', '.join(self.effects) or self.verdict_effect or 'none'} — "
-                     f"{self.verdict_reason}")
-        best = self.best
-        if best is not None:
-            for i, st in enumerate(self.steps):
-                lines.append(f"evidence{f' (step {i + 1})' if i else ''}: "
-                             f"{st.chosen.evidence}")
+        v = self.verdict
+        lines.append(f"verdict: {v.cls}" + (f" — {', '.join(v.effects)}" if v.effects else "")
+                     + f": {v.reason}")
+        if v.separate_by:
+            lines.append(f"to tell them apart: {v.separate_by}")
+        if self.steps:
             final = self.final
             lines.append(f"error before → after: RMS {self.baseline.rms_k:.3g} → "
                          f"{final.rms_k:.3g} K, worst {self.baseline.max_abs_k:.3g} → "
@@ -200,17 +261,20 @@ class Diagnosis:
             for name, sub in self.baseline.by_dataset().items():
                 lines.append(f"  {name:12s} {sub.rms_k:8.3f} → "
                              f"{final.dataset(name).rms_k:8.3f} K")
-        lines.append(f"({self.elapsed_s:.1f} s)")
+        lines.append(f"(work: {self.work} model evaluations, {self.elapsed_s:.1f} s)")
         return "\n".join(lines)
 
 
-def _num(v: float) -> str:
-    return f"{v:.4g}"
+def _finite(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
 
 
 def _at_text(at: Mapping[str, float]) -> str:
     if "freq_hz" in at:
         return f"{at['freq_hz'] / 1e3:g} kHz, D = {100 * at['duty']:g} %"
     if "temp_c" in at:
-        return f"{at['temp_c']:g} °C"
+        return f"{at['temp_c']:g} °C ({CALIBRATION})"
+    if "power_w" in at:
+        return f"{at['power_w']:.3g} W ({STEADY})"
     return f"t = {fmt_time(at['t_s'])}"

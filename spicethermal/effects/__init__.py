@@ -1,10 +1,10 @@
-"""The catalogue of physical effects and measurement artefacts: a registry of plugins.
+"""The catalogue of physical effects and measurement artefacts: typed plugins in a registry.
 
-Every effect is one module: its :class:`EffectSpec` (name, kind, parameters with units and
-bounds, the forms it takes, and its device physics hooks) registered with :func:`register`.
-The built-in effects below register themselves on import; third-party packages register
-theirs through the entry-point group ``spicethermal.effects`` (each entry point names a
-module or an :class:`EffectSpec`), loaded the first time the catalogue is read.
+Every effect is one class in one module (:mod:`spicethermal.effects.base` says what it owns),
+registered through the entry-point group ``spicethermal.effects``, the built-in ones in the
+package's own ``pyproject.toml`` as a third-party package declares its own. *Rivals* are
+plugins too: explanations outside the catalogue (a heating power other than the recorded one,
+a drifting reference) that the diagnosis weighs and never names.
 
 >>> known_names()[:2]
 ['electrical-transient', 'phase-change']
@@ -12,26 +12,33 @@ module or an :class:`EffectSpec`), loaded the first time the catalogue is read.
 'quadratic'
 """
 
-from . import (  # built-in effects register themselves on import
-    electrical_transient,
-    phase_change,
-    sample_window,
-    temperature_coefficient,
-    tsp_nonlinearity,
-)
-from .catalogue import (
-    CATALOGUE,
+from .base import (
+    CALIBRATION,
+    COOLING,
     DEVICE,
-    ENTRY_POINT_GROUP,
+    KINDS,
     MEASUREMENT,
-    Effect,
-    EffectSpec,
+    PWM,
+    STEADY,
+    DeviceEffect,
+    EffectPlugin,
+    Evidence,
+    MeasurementEffect,
+    Observation,
     Param,
+    Traits,
+)
+from .registry import (
+    CATALOGUE,
+    ENTRY_POINT_GROUP,
+    Effect,
     known_names,
+    plugin,
     register,
-    spec,
+    rival_names,
 )
 
-__all__ = ["CATALOGUE", "DEVICE", "ENTRY_POINT_GROUP", "MEASUREMENT", "Effect", "EffectSpec",
-           "Param", "electrical_transient", "known_names", "phase_change", "register",
-           "sample_window", "spec", "temperature_coefficient", "tsp_nonlinearity"]
+__all__ = ["CALIBRATION", "CATALOGUE", "COOLING", "DEVICE", "ENTRY_POINT_GROUP", "KINDS",
+           "MEASUREMENT", "PWM", "STEADY", "DeviceEffect", "Effect", "EffectPlugin", "Evidence",
+           "MeasurementEffect", "Observation", "Param", "Traits", "known_names", "plugin",
+           "register", "rival_names"]

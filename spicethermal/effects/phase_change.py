@@ -1,178 +1,133 @@
 """``phase-change`` (device): latent heat absorbed across a temperature band at one node.
 
-Latent heat ``latent_j`` absorbed across a band centred at ``t_c`` adds heat capacity from
-node ``node`` (0 = junction; the fit tries every node) to the reference. A node ``k > 0`` is
-layer ``k`` of the ladder's exact Cauer form (a Foster ladder's inner nodes are no physical
-layers): a model with such a band is simulated and exported on that form
-(:func:`physical_nodes`). The band's shape is the effect's form; in each the extra capacity
-``c(T)`` is the derivative of the heat ``H(T)`` absorbed up to ``T``, ``H(−∞) = 0`` and
-``H(+∞) = latent_j``:
+Latent heat ``latent_j`` absorbed across a band centred at ``t_c`` adds heat capacity at node
+``node`` (0 = junction) of the ladder's Cauer form (a Foster ladder's inner nodes are no
+physical layers: a model with a band at ``node > 0`` is simulated and exported on its Cauer
+form). The band's shape is the effect's form; in each the extra capacity ``c(T)`` is the
+derivative of the heat ``H(T)`` absorbed up to ``T``, ``H(−∞) = 0`` and ``H(+∞) = latent_j``:
 
 * ``logistic`` (the default): standard deviation ``width_k``,
   ``H = L / (1 + e^{−(T − t_c)/s})`` with ``s = width_k·√3/π``;
-* ``gaussian``: standard deviation ``width_k``, ``H = L Φ((T − t_c)/width_k)`` (the normal
-  CDF, exact through :func:`math.erf`; a melting range spread by impurities or by a
-  temperature gradient across the layer);
-* ``plateau``: a flat-topped band of full width ``width_k`` (between its edges' midpoints,
-  ``a = t_c − width_k/2`` and ``b = t_c + width_k/2``) whose edges are logistic steps of
-  scale ``edge_k``: ``c = (L/width_k)(σ((T − a)/e) − σ((T − b)/e))`` and
-  ``H = (L e/width_k)(sp((T − a)/e) − sp((T − b)/e))`` with ``sp(x) = ln(1 + eˣ)`` (boiling
-  in a cavity or a eutectic that melts at constant rate over its range).
+* ``gaussian``: standard deviation ``width_k``, ``H = L Φ((T − t_c)/width_k)`` (a melting
+  range spread by impurities or by a temperature gradient across the layer);
+* ``plateau``: a flat-topped band of full width ``width_k`` whose edges are logistic steps of
+  scale ``edge_k``: ``c = (L/width_k)(σ((T − a)/e) − σ((T − b)/e))``, ``a, b = t_c ∓
+  width_k/2`` (boiling in a cavity, a eutectic that melts over its range).
 
-Written without overflow far from the band. The SPICE renderings (``spice_stored_heat``,
-charge ``H`` whose ``ddt`` is the element's current, which keeps ngspice stable where
-``C(V)·ddt(V)`` is not) use ``EXP``, ``LOG`` (natural in ngspice, PSpice and LTspice),
-``MAX`` and ``MIN``: the logistic and plateau forms are exact; SPICE has no erf, so the
-gaussian form uses the logistic-cubic approximation of the normal CDF
-``Φ(z) ≈ 1/(1 + e^{−(1.5976 z + 0.070566 z³)})`` (Bowling et al. 2009; |error| below
-:data:`GAUSSIAN_SPICE_ERROR` of ``L``, checked in the tests) on ``z`` clipped to ±8.
-
-Forms were added in a backward compatible way: a model file without ``form`` is logistic,
-``edge_k`` defaults to a tenth of the default width and only the plateau reads it.
+The SPICE renderings give the stored heat ``H`` as a charge whose ``ddt`` is the element's
+current (stable in ngspice where ``C(V)·ddt(V)`` is not) with ``EXP``, ``LOG``, ``MAX`` and
+``MIN``: the logistic and plateau forms are exact; SPICE has no erf, so the gaussian form uses
+the logistic-cubic approximation ``Φ(z) ≈ 1/(1 + e^{−(1.5976 z + 0.070566 z³)})`` (Bowling et
+al. 2009; error below :data:`GAUSSIAN_SPICE_ERROR` of ``L``) on ``z`` clipped to ±8.
 
 >>> from spicethermal.effects import Effect
 >>> e = Effect.create("phase-change", t_c=60.0, width_k=1.0, latent_j=2.0, node=1)
->>> e.latent_heat(1, 60.0), e.latent_heat(0, 60.0), e.latent_heat(1, -1e9)
-(1.0, 0.0, 0.0)
+>>> [round(x, 6) for x in heat(e, [0.0, 60.0], 1)]
+[0.0, 1.0]
 >>> g = Effect.create("phase-change", "gaussian", t_c=60.0, width_k=1.0, latent_j=2.0)
->>> round(g.latent_heat(0, 61.0), 6), round(g.extra_capacitance(0, 60.0), 6)
+>>> round(heat(g, [61.0])[0], 6), round(capacity(g, [60.0])[0], 6)
 (1.682689, 0.797885)
 >>> p = Effect.create("phase-change", "plateau", t_c=60.0, width_k=4.0, edge_k=0.1,
 ...                   latent_j=2.0)
->>> round(p.extra_capacitance(0, 60.0), 6), round(p.latent_heat(0, 60.0), 6)
+>>> round(capacity(p, [60.0])[0], 6), round(heat(p, [60.0])[0], 6)
 (0.5, 1.0)
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
-from .catalogue import DEVICE, EffectSpec, Param, register
+import numpy as np
+from scipy.special import expit, log_expit, ndtr
+
+from .base import COOLING, PWM, STEADY, DeviceEffect, Evidence, Param, Traits, scalar_params
 from .spice import number
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import ArrayLike, NDArray
+
+    from .registry import Effect
 
 #: Bound on |Φ_SPICE(z) − Φ(z)| of the gaussian form's SPICE rendering (fraction of L).
 GAUSSIAN_SPICE_ERROR = 1.5e-4
 #: Coefficients of that approximation, ``Φ(z) ≈ 1/(1 + exp(−(a z + b z³)))``.
 GAUSSIAN_LOGIT = (1.5976, 0.070566)
-#: The band's capacity is below 1e-6 of its peak further than these many scales from it
-#: (logistic: 4 e^{−15.3} < 1e-6 in logistic scales; gaussian: e^{−z²/2} at 5.3 σ).
-REACH_LOGISTIC_SCALES, REACH_GAUSSIAN_SIGMAS = 15.3, 5.3
+#: Where a fit's first starts put the band: these fractions of the node's hottest rise.
+START_FRACTIONS = (0.4, 0.75)
 
 
-def _sigmoid(x: float) -> float:
-    return 0.5 * (1.0 + math.tanh(0.5 * max(-700.0, min(700.0, x))))
-
-
-def _softplus(x: float) -> float:
+def _softplus(x: NDArray) -> NDArray:
     """``ln(1 + eˣ)`` without overflow."""
-    return max(x, 0.0) + math.log1p(math.exp(-abs(x)))
+    return -log_expit(-x)
 
 
-def _edges(effect) -> tuple[float, float, float]:
-    p = effect.params
-    return p["t_c"] - 0.5 * p["width_k"], p["t_c"] + 0.5 * p["width_k"], p["edge_k"]
+def _band(form: str, p: Mapping[str, NDArray], t: NDArray) -> tuple[NDArray, NDArray]:
+    """``(H, dH/dT)`` of the band at temperatures ``t`` (any node)."""
+    latent, mid, width = p["latent_j"], p["t_c"], p["width_k"]
+    if form == "gaussian":
+        z = (t - mid) / width
+        return latent * ndtr(z), latent * np.exp(-0.5 * np.minimum(z * z, 1e4)) / (
+            width * math.sqrt(2 * math.pi))
+    if form == "plateau":
+        e = p["edge_k"]
+        lo, hi = (t - (mid - 0.5 * width)) / e, (t - (mid + 0.5 * width)) / e
+        h = latent * e / width * (_softplus(lo) - _softplus(hi))
+        return np.minimum(h, latent), latent / width * (expit(lo) - expit(hi))
+    s = width * math.sqrt(3.0) / math.pi
+    x = expit((t - mid) / s)
+    return latent * x, latent * x * (1.0 - x) / s
 
 
-def band(effect) -> tuple[float, float]:
-    """Temperatures (°C) outside which the band's extra capacity is below 1e-6 of its peak.
+def heat(effect: Effect, t_c: ArrayLike, node: int = 0) -> list[float]:
+    """Heat (J) the band of ``effect`` holds at node ``node`` at each temperature (°C).
 
     Parameters
     ----------
     effect : Effect
-        A ``phase-change`` effect (any form).
+    t_c : array_like
+    node : int
 
     Returns
     -------
-    tuple of float
-        ``(low, high)``.
-
-    >>> from spicethermal.effects import Effect
-    >>> band(Effect.create("phase-change", "gaussian", t_c=50.0, width_k=2.0))
-    (39.4, 60.6)
+    list of float
     """
-    p = effect.params
-    if effect.form == "plateau":
-        a, b, e = _edges(effect)
-        return a - REACH_LOGISTIC_SCALES * e, b + REACH_LOGISTIC_SCALES * e
-    if effect.form == "gaussian":
-        reach = REACH_GAUSSIAN_SIGMAS * p["width_k"]
-    else:
-        reach = REACH_LOGISTIC_SCALES * effect.logistic_scale_k
-    return p["t_c"] - reach, p["t_c"] + reach
-
-
-def latent_heat(effect, node: int, t_c: float, _c_node: float = 0.0) -> float:
-    """Heat (J) absorbed at ``node`` up to ``t_c`` (the form's ``H``)."""
+    t = np.asarray(t_c, dtype=float)[None, :]
     if node != int(effect.params["node"]):
-        return 0.0
-    p = effect.params
-    if effect.form == "gaussian":
-        return p["latent_j"] * 0.5 * math.erfc(-(t_c - p["t_c"]) / (p["width_k"] * math.sqrt(2)))
-    if effect.form == "plateau":
-        a, b, e = _edges(effect)
-        lo, hi = (t_c - a) / e, (t_c - b) / e
-        if hi > 30.0:  # both edges passed: L minus the (tiny) tail beyond the upper one
-            return p["latent_j"] * (1.0 - e / p["width_k"] * (_softplus(-hi) - _softplus(-lo)))
-        return p["latent_j"] * e / p["width_k"] * (_softplus(lo) - _softplus(hi))
-    return p["latent_j"] * _sigmoid((t_c - p["t_c"]) / effect.logistic_scale_k)
+        return [0.0] * t.size
+    return [float(x) for x in _band(effect.form, scalar_params(effect), t)[0][0]]
 
 
-def extra_capacitance(effect, node: int, t_c: float, _c_node: float = 0.0) -> float:
-    """Its derivative (J/K)."""
-    if node != int(effect.params["node"]):
-        return 0.0
-    return capacity_law(effect)(t_c)
+def capacity(effect: Effect, t_c: ArrayLike, node: int = 0) -> list[float]:
+    """Extra heat capacity (J/K) of the band at node ``node`` at each temperature (°C).
 
+    Parameters
+    ----------
+    effect : Effect
+    t_c : array_like
+    node : int
 
-def capacity_law(effect) -> Callable[[float], float]:
-    """The band's extra capacity (J/K) at its own node as a function of that node's
-    temperature (°C), with the form's constants computed once: the inner loop of the
-    integrations calls it at every right-hand side.
-
-    >>> from spicethermal.effects import Effect
-    >>> e = Effect.create("phase-change", "gaussian", t_c=50.0, width_k=2.0, latent_j=1.0)
-    >>> round(capacity_law(e)(50.0) * 2.0 * math.sqrt(2 * math.pi), 12)
-    1.0
+    Returns
+    -------
+    list of float
     """
-    p = effect.params
-    latent, t_mid, width = p["latent_j"], p["t_c"], p["width_k"]
-    if effect.form == "gaussian":
-        norm = width * math.sqrt(2 * math.pi)
-
-        def gaussian(t_c: float) -> float:
-            z = (t_c - t_mid) / width
-            if abs(z) > 40.0:
-                return 0.0
-            return latent * math.exp(-0.5 * z * z) / norm
-        return gaussian
-    if effect.form == "plateau":
-        a, b, e = _edges(effect)
-        height = latent / width
-
-        def plateau(t_c: float) -> float:
-            return height * (_sigmoid((t_c - a) / e) - _sigmoid((t_c - b) / e))
-        return plateau
-    s = effect.logistic_scale_k
-
-    def logistic(t_c: float) -> float:
-        x = math.exp(-abs((t_c - t_mid) / s))
-        return latent * x / (s * (1.0 + x) ** 2)
-    return logistic
+    t = np.asarray(t_c, dtype=float)[None, :]
+    if node != int(effect.params["node"]):
+        return [0.0] * t.size
+    return [float(x) for x in _band(effect.form, scalar_params(effect), t)[1][0]]
 
 
 def gaussian_cdf_spice(z: str) -> str:
-    """The SPICE approximation of ``Φ(z)`` (see the module docstring) for expression ``z``.
+    """The SPICE approximation of ``Φ(z)`` for the expression ``z``.
 
     Parameters
     ----------
     z : str
-        A SPICE expression.
 
     Returns
     -------
     str
-        A dialect-neutral expression.
 
     >>> gaussian_cdf_spice("V(A)")
     '1/(1+EXP(-(1.5976*MAX(-8,MIN(8,V(A)))+0.070566*PWR(MAX(-8,MIN(8,V(A))),3))))'
@@ -182,42 +137,88 @@ def gaussian_cdf_spice(z: str) -> str:
     return f"1/(1+EXP(-({a}*{zc}+{b}*PWR({zc},3))))"
 
 
-def spice_stored_heat(effect, node: int, t_node: str, _c_node: float = 0.0) -> str | None:
-    """The heat absorbed up to ``t_node`` as a SPICE expression (``None`` at other nodes)."""
-    if node != int(effect.params["node"]):
-        return None
-    p = effect.params
-    if effect.form == "gaussian":
-        z = f"({t_node}-({number(p['t_c'])}))/({number(p['width_k'])})"
-        return f"({number(p['latent_j'])})*{gaussian_cdf_spice(z)}"
-    if effect.form == "plateau":
-        a, b, e = _edges(effect)
+class PhaseChange(DeviceEffect):
+    """Latent heat over a temperature band at one node (see the module docstring)."""
 
-        def sp(edge: float) -> str:  # ln(1 + eˣ) without overflow
-            x = f"(({t_node})-({number(edge)}))/({number(e)})"
-            return f"(MAX({x},0)+LOG(1+EXP(MIN({x},-{x}))))"
+    name = "phase-change"
+    summary = ("latent heat (cavity fluid, solder, TIM): extra heat capacity over a "
+               "temperature band")
+    forms = ("logistic", "gaussian", "plateau")
+    params = {
+        "t_c": Param("°C", 64.7, -273.15, 1000.0, "centre of the band (methanol boils at "
+                     "64.7 °C)", typical=10.0),
+        "width_k": Param("K", 2.0, 0.05, 100.0, "standard deviation of the band (logistic, "
+                         "gaussian) or its full width (plateau)", log=True),
+        "latent_j": Param("J", 0.0, 0.0, 1e6, "latent heat absorbed across the band",
+                          log=True),
+        "node": Param("", 0, 0, 1000, "ladder node holding the latent heat (0 = junction)",
+                      fitted=False),
+        "edge_k": Param("K", 0.2, 0.005, 100.0, "logistic scale of the plateau's edges "
+                        "(form plateau)", ("plateau",), log=True),
+    }
+    traits = Traits(frozenset({COOLING, STEADY, PWM}), cost=6.0,
+                    confusable_with={"temperature-coefficient": "cooling curves at more "
+                                     "powers, some below and some above the band"})
 
-        return (f"({number(p['latent_j'] * e / p['width_k'])})*({sp(a)}-{sp(b)})")
-    return (f"({number(p['latent_j'])})/(1+EXP(-({t_node}-({number(p['t_c'])}))"
-            f"/({number(effect.logistic_scale_k)})))")
+    def stored_heat(self, form: str, p: Mapping[str, NDArray], t_node_c: NDArray,
+                    c_node: NDArray) -> tuple[NDArray, NDArray] | None:
+        at = np.arange(t_node_c.shape[1])[None, :] == p["node"]
+        h, c = _band(form, p, t_node_c)
+        return np.where(at, h, 0.0), np.where(at, c, 0.0)
 
+    def physical_nodes(self, effect: Effect) -> bool:
+        return int(effect.params["node"]) > 0
 
-def physical_nodes(effect) -> bool:
-    """True for a band away from the junction: it sits at a layer of the Cauer ladder."""
-    return int(effect.params["node"]) > 0
+    def check(self, effect: Effect) -> None:
+        from ..core.errors import DataFormatError
 
+        if effect.params["node"] != math.floor(effect.params["node"]):
+            raise DataFormatError(f"effect phase-change: node = {effect.params['node']!r} is "
+                                  f"not a node index")
 
-SPEC = register(EffectSpec(
-    "phase-change", DEVICE,
-    "latent heat (cavity fluid, solder, TIM): extra heat capacity over a temperature band",
-    {"t_c": Param("°C", 64.7, -273.15, 1000.0, "centre of the band (methanol boils at 64.7 °C)"),
-     "width_k": Param("K", 2.0, 0.05, 100.0, "standard deviation of the band (logistic, "
-                      "gaussian) or its full width (plateau)"),
-     "latent_j": Param("J", 0.0, 0.0, 1e6, "latent heat absorbed across the band"),
-     "node": Param("", 0, 0, 1000, "ladder node holding the latent heat (0 = junction)",
-                   fitted=False),
-     "edge_k": Param("K", 0.2, 0.005, 100.0, "logistic scale of the plateau's edges "
-                     "(form plateau)")},
-    ("logistic", "gaussian", "plateau"), extra_capacitance=extra_capacitance,
-    latent_heat=latent_heat, spice_stored_heat=spice_stored_heat, physical_nodes=physical_nodes,
-    fit="spicethermal.fit.pcfit:fit_phase_change"))
+    def variants(self, form: str, evidence: Evidence) -> Sequence[Mapping[str, float]]:
+        return tuple({"node": float(k)} for k in range(evidence.n_nodes))
+
+    def guess(self, form: str, fixed: Mapping[str, float],
+              evidence: Evidence) -> Sequence[Mapping[str, float]]:
+        node = int(fixed.get("node", 0))
+        tops = [float(c.nodes_c[node]) for c in evidence.cooling if node < c.nodes_c.size]
+        if not tops:
+            return ()
+        tref = min(c.tref_c for c in evidence.cooling)
+        rise = max(max(tops) - tref, 1e-3)
+        c_node = (evidence.node_c_j_per_k[node] if node < len(evidence.node_c_j_per_k)
+                  else 0.0)
+        latent = max(0.1 * c_node * rise, 1e-12)
+        width = 0.06 * rise
+        return tuple({"t_c": tref + f * rise, "width_k": width, "latent_j": latent,
+                      **({"edge_k": 0.1 * width} if form == "plateau" else {})}
+                     for f in START_FRACTIONS)
+
+    def spice_stored_heat(self, effect: Effect, node: int, t_node: str,
+                          c_node: float) -> str | None:
+        if node != int(effect.params["node"]):
+            return None
+        p = effect.params
+        if effect.form == "gaussian":
+            z = f"({t_node}-({number(p['t_c'])}))/({number(p['width_k'])})"
+            return f"({number(p['latent_j'])})*{gaussian_cdf_spice(z)}"
+        if effect.form == "plateau":
+            e = p["edge_k"]
+
+            def sp(edge: float) -> str:  # ln(1 + eˣ) without overflow
+                x = f"(({t_node})-({number(edge)}))/({number(e)})"
+                return f"(MAX({x},0)+LOG(1+EXP(MIN({x},-{x}))))"
+
+            a, b = p["t_c"] - 0.5 * p["width_k"], p["t_c"] + 0.5 * p["width_k"]
+            return f"({number(p['latent_j'] * e / p['width_k'])})*({sp(a)}-{sp(b)})"
+        s = p["width_k"] * math.sqrt(3.0) / math.pi
+        return (f"({number(p['latent_j'])})/(1+EXP(-({t_node}-({number(p['t_c'])}))"
+                f"/({number(s)})))")
+
+    def describe(self, effect: Effect) -> str:
+        p = effect.params
+        where = "the junction" if int(p["node"]) == 0 else f"node {int(p['node'])}"
+        return (f"{p['latent_j']:.3g} J of latent heat at {where} over a {effect.form} band "
+                f"at {p['t_c']:.4g} °C ({'full width' if effect.form == 'plateau' else 'σ'} "
+                f"{p['width_k']:.3g} K)")

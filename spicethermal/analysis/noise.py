@@ -1,0 +1,203 @@
+"""Noise of every data set, estimated so that no structure under test can inflate it.
+
+* a **cooling curve**: the scatter of the model's residuals about their own local quadratic in
+  ``log t`` (7 readings at a time, each residual divided by ``√(1 − h)`` with ``h`` its
+  leverage, robust: 1.4826 × the median absolute deviation): a smooth misfit, which is what a
+  missing effect leaves, is absorbed by the local quadratic; a kink or a transient over a
+  few readings is ignored by the median;
+* the **steady readings**: the sensor's noise, the median of the curves';
+* the **PWM grid**: the scatter of the residuals about a quadratic in ``log f`` for each duty
+  (four frequencies or more per duty), at most the sensor's; else the sensor's;
+* the **calibration**: the scatter of its readings about the polynomial in T of the lowest
+  degree that a higher degree does not improve (F-test, :data:`~.rules.POLY_P`): a TSP's bow
+  is the structure under test and never counts as noise;
+
+each at least :data:`~.rules.NOISE_FLOOR_K` and the readings' resolution over √12 (a reading
+quantised in steps of ``q`` scatters by at least ``q/√12``).
+
+>>> rng = np.random.default_rng(1)
+>>> t = np.geomspace(1e-4, 100, 80)
+>>> r = 0.05 * rng.standard_normal(80) + 0.3 * np.log10(t) ** 2  # a smooth misfit
+>>> round(curve_noise(t, r, r), 2)
+0.05
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..effects.base import CALIBRATION, PWM, STEADY
+from ..fit.measurement import BundleData
+from .rules import LOCAL_WINDOW, NOISE_FLOOR_K, POLY_MAX_DEGREE, POLY_P
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+__all__ = ["calibration_degree", "curve_noise", "noise_estimates", "resolution"]
+
+#: Residuals used at most per curve (evenly thinned): the estimate needs no more.
+MAX_POINTS = 2000
+
+
+def resolution(readings: NDArray) -> float:
+    """The step ``q`` of quantised readings (0 when they are not quantised).
+
+    Parameters
+    ----------
+    readings : ndarray
+
+    Returns
+    -------
+    float
+
+    >>> resolution(np.array([1.0, 1.25, 1.5, 2.0, 1.25]))
+    0.25
+    """
+    u = np.unique(np.asarray(readings, dtype=float))
+    if u.size < 3:
+        return 0.0
+    d = np.diff(u)
+    q = float(np.min(d))
+    if q <= 0:
+        return 0.0
+    ratio = d / q
+    # quantised: every gap a whole number of steps, and most of them few steps
+    if np.all(np.abs(ratio - np.round(ratio)) < 0.02 * ratio) and np.median(ratio) < 20:
+        return q
+    return 0.0
+
+
+def _floor(readings: NDArray) -> float:
+    return max(NOISE_FLOOR_K, resolution(readings) / math.sqrt(12.0))
+
+
+def _local_quadratic_residuals(x: NDArray, r: NDArray, window: int) -> NDArray:
+    """Each residual minus the quadratic fitted to its window, over ``√(1 − h)``."""
+    n = x.size
+    out = np.empty(n)
+    for i in range(n):
+        a = max(0, min(i - window // 2, n - window))
+        xs = x[a:a + window] - x[i]
+        v = np.vander(xs, 3)
+        coef, *_ = np.linalg.lstsq(v, r[a:a + window], rcond=None)
+        h = float(v[i - a] @ np.linalg.pinv(v.T @ v) @ v[i - a])
+        out[i] = (r[i] - float(v[i - a] @ coef)) / math.sqrt(max(1.0 - h, 1e-3))
+    return out
+
+
+def curve_noise(t_s: NDArray, residual_k: NDArray, readings: NDArray) -> float:
+    """Noise (K) of one cooling curve from its model residuals (module docstring).
+
+    Parameters
+    ----------
+    t_s, residual_k, readings : ndarray
+        Times, residuals and the readings themselves (for their resolution).
+
+    Returns
+    -------
+    float
+    """
+    t = np.asarray(t_s, dtype=float)
+    r = np.asarray(residual_k, dtype=float)
+    if t.size > MAX_POINTS:
+        keep = np.linspace(0, t.size - 1, MAX_POINTS).astype(int)
+        t, r = t[keep], r[keep]
+    floor = _floor(readings)
+    if t.size < LOCAL_WINDOW:
+        return max(float(np.std(r)) if r.size > 1 else floor, floor)
+    e = _local_quadratic_residuals(np.log(t), r, LOCAL_WINDOW)
+    return max(1.4826 * float(np.median(np.abs(e - np.median(e)))), floor)
+
+
+def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
+    """The degree of the calibration's law in T that the points support, and the scatter
+    (K) about it: the lowest degree that the next one does not improve at significance
+    :data:`~.rules.POLY_P` (F-test), at most :data:`~.rules.POLY_MAX_DEGREE`.
+
+    Parameters
+    ----------
+    temp_c, read_c : ndarray
+
+    Returns
+    -------
+    tuple of int and float
+
+    >>> t = np.linspace(20, 100, 9)
+    >>> calibration_degree(t, t + 1e-3 * (t - 60) ** 2)[0]
+    2
+    """
+    from scipy.stats import f as fisher
+
+    t = np.asarray(temp_c, dtype=float)
+    y = np.asarray(read_c, dtype=float)
+    x = (t - t.mean()) / max(float(np.ptp(t)), 1e-9)
+    n = t.size
+
+    def rss(d: int) -> float:
+        return float(np.sum((y - np.polyval(np.polyfit(x, y, d), x)) ** 2))
+
+    degree = 1
+    while degree < POLY_MAX_DEGREE and n - degree - 2 >= 1:
+        a, b = rss(degree), rss(degree + 1)
+        dof = n - degree - 2
+        if b <= 0:
+            degree += 1
+            break
+        if fisher.sf((a - b) / (b / dof), 1, dof) >= POLY_P:
+            break
+        degree += 1
+    dof = n - degree - 1
+    scatter = math.sqrt(rss(degree) / dof) if dof > 0 else 0.0
+    return degree, scatter
+
+
+def _pwm_noise(data: BundleData, residual: NDArray, sensor: float) -> float:
+    p = data.pwm
+    parts, dof = [], 0
+    for d in np.unique(p.duty):
+        on = p.duty == d
+        if np.unique(p.freq_hz[on]).size < 4:
+            continue
+        x = np.log(p.freq_hz[on])
+        r = residual[on]
+        parts.append(float(np.sum((r - np.polyval(np.polyfit(x, r, 2), x)) ** 2)))
+        dof += int(on.sum()) - 3
+    floor = _floor(p.tj_c)
+    if dof < 3:
+        return max(sensor, floor)
+    return max(min(math.sqrt(sum(parts) / dof), sensor), floor)
+
+
+def noise_estimates(data: BundleData, predictions: Mapping[str, NDArray]) -> dict[str, float]:
+    """Noise (K) of every data set of ``data`` given a model's ``predictions``.
+
+    Parameters
+    ----------
+    data : BundleData
+    predictions : mapping of data set name to the model's predictions
+
+    Returns
+    -------
+    dict of str to float
+    """
+    out: dict[str, float] = {}
+    for c in data.cooling:
+        out[c.name] = curve_noise(c.t_s, c.tj_c - predictions[c.name], c.tj_c)
+    curves = [out[c.name] for c in data.cooling]
+    sensor = float(np.median(curves)) if curves else NOISE_FLOOR_K
+    if data.steady_curves:
+        out[STEADY] = max(sensor, NOISE_FLOOR_K)
+    if data.pwm is not None:
+        out[PWM] = _pwm_noise(data, data.pwm.tj_c - predictions[PWM],
+                              sensor if curves else math.inf)
+        if not math.isfinite(out[PWM]):
+            out[PWM] = max(float(np.std(data.pwm.tj_c - predictions[PWM])), NOISE_FLOOR_K)
+    if data.calibration is not None:
+        cal = data.calibration
+        out[CALIBRATION] = max(calibration_degree(cal.temp_c, cal.read_c)[1],
+                               _floor(cal.read_c))
+    return out

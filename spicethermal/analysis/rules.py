@@ -1,0 +1,148 @@
+"""Every threshold of the diagnosis, with its reason, and the statistics it is applied to.
+
+The diagnosis compares models by one criterion, ``BIC = χ² + k ln N`` (χ² weighted by each
+data set's noise, ``k`` parameters fitted, ``N`` points), and names an effect by one rule
+(:func:`decisive`): its model lowers the criterion by :data:`DECISIVE_BIC` and removes at
+least :data:`MIN_EXPLAINED` of the misfit beyond the noise. Nothing here refers to a case.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+__all__ = ["AT_NOISE_Z", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS", "MIN_APPROXIMATE",
+           "MIN_EXPLAINED", "NOISE_FLOOR_K", "POLY_MAX_DEGREE", "POLY_P", "REFINE_ROUNDS",
+           "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "decisive",
+           "excess", "explained", "runs_z"]
+
+# -- noise ------------------------------------------------------------------------------------
+#: No bench reads better than this (K): a floor on every noise estimate.
+NOISE_FLOOR_K = 0.005
+#: A cooling curve's noise is its residuals' scatter about a local quadratic in log t over
+#: this many readings: wide enough for a stable scatter, narrow enough that a smooth misfit
+#: (what a missing effect leaves) is a quadratic over it.
+LOCAL_WINDOW = 7
+#: The calibration's law is a polynomial whose degree is raised while the next degree lowers
+#: the residual at this significance (F-test; one chance in a hundred of taking noise for a
+#: bow) ...
+POLY_P = 0.01
+#: ... up to this degree (a TSP is smooth in T).
+POLY_MAX_DEGREE = 3
+
+# -- naming -------------------------------------------------------------------------------------
+#: A model is decisively better than another when its BIC is lower by this much: "very strong"
+#: evidence on Kass & Raftery's scale (a Bayes factor above 150). The same margin says two
+#: candidates cannot be told apart.
+DECISIVE_BIC = 10.0
+#: An effect must also remove this fraction of the misfit beyond the noise of the model it is
+#: added to: on a badly misspecified model any flexible term lowers χ² by tens, and that is
+#: no evidence of its physics. 0.4 lets each of two effects of similar size pass in turn.
+MIN_EXPLAINED = 0.4
+#: Effects that leave a structured residual are named as *approximate* only when together they
+#: remove this fraction of the baseline's misfit beyond the noise: the closest catalogued
+#: effect is then still the user's best next step; below it the physics is elsewhere.
+MIN_APPROXIMATE = 0.9
+#: A data set is at its noise when its χ² is within this many standard deviations of its
+#: number of points (χ² of n points of white noise: n ± √(2n)) ...
+AT_NOISE_Z = 3.0
+#: ... and its residual has no runs structure: a runs test on the signs below this z (three
+#: standard deviations too few runs) ...
+RUNS_Z = -3.0
+#: ... which needs this many residuals.
+RUNS_MIN = 8
+#: Effects named at most (forward selection stops there).
+MAX_EFFECTS = 3
+
+# -- work (counted, never timed) ----------------------------------------------------------------
+#: Levenberg–Marquardt rounds of a candidate's first fit (its own parameters, the rest held).
+SCREEN_ROUNDS = 15
+#: Rounds of a candidate's joint refit with the ladder and every other effect.
+REFINE_ROUNDS = 30
+
+
+def runs_z(residuals: NDArray) -> float:
+    """Wald–Wolfowitz runs test on the signs of ``residuals`` in data order: the z of the
+    number of runs (very negative: too few runs, a structured residual).
+
+    Parameters
+    ----------
+    residuals : ndarray
+
+    Returns
+    -------
+    float
+        0 for fewer than :data:`RUNS_MIN` residuals or one sign only.
+
+    >>> runs_z(np.array([1.0] * 10 + [-1.0] * 10)) < -3
+    True
+    """
+    r = np.asarray(residuals, dtype=float)
+    r = r[r != 0]
+    pos = int(np.sum(r > 0))
+    neg = r.size - pos
+    if r.size < RUNS_MIN or pos == 0 or neg == 0:
+        return 0.0
+    runs = 1 + int(np.sum(np.diff(np.sign(r)) != 0))
+    n = r.size
+    mu = 2.0 * pos * neg / n + 1
+    var = (mu - 1) * (mu - 2) / (n - 1)
+    return float((runs - mu) / math.sqrt(var)) if var > 0 else 0.0
+
+
+def beyond_noise(chi2: float, n: int, residuals: NDArray) -> bool:
+    """Whether one data set's residual is beyond its noise: χ² above ``n + 3√(2n)`` or a
+    runs structure (:data:`RUNS_Z`).
+
+    Parameters
+    ----------
+    chi2 : float
+    n : int
+    residuals : ndarray
+
+    Returns
+    -------
+    bool
+    """
+    return chi2 > n + AT_NOISE_Z * math.sqrt(2 * n) or runs_z(residuals) < RUNS_Z
+
+
+def at_noise(chi2: Mapping[str, float], residuals: Mapping[str, NDArray]) -> bool:
+    """Whether every data set is at its noise (:func:`beyond_noise`)."""
+    return not any(beyond_noise(chi2[n], residuals[n].size, residuals[n]) for n in chi2)
+
+
+def excess(chi2: Mapping[str, float], sizes: Mapping[str, int]) -> float:
+    """The misfit beyond the noise: ``Σ max(χ²_d − n_d, 0)``."""
+    return float(sum(max(chi2[n] - sizes[n], 0.0) for n in chi2))
+
+
+def explained(before: Mapping[str, float], after: Mapping[str, float],
+              sizes: Mapping[str, int]) -> float:
+    """The fraction of ``before``'s misfit beyond the noise that ``after`` removes (1 when
+    nothing was beyond it and nothing got worse).
+
+    >>> explained({"a": 30.0}, {"a": 12.0}, {"a": 10})
+    0.9
+    """
+    e = excess(before, sizes)
+    gain = sum(before.values()) - sum(after.values())
+    if e <= 0:
+        return 1.0 if gain >= 0 else 0.0
+    return float(min(1.0, gain / e))
+
+
+def decisive(bic_before: float, bic_after: float, fraction: float) -> bool:
+    """The naming rule: the criterion falls by :data:`DECISIVE_BIC` and the effect removes
+    :data:`MIN_EXPLAINED` of the misfit beyond the noise.
+
+    >>> decisive(200.0, 150.0, 0.6), decisive(200.0, 195.0, 0.9)
+    (True, False)
+    """
+    return bic_before - bic_after >= DECISIVE_BIC and fraction >= MIN_EXPLAINED

@@ -1,0 +1,228 @@
+"""The effect registry and :class:`Effect`, a configured effect (name, form, parameter values).
+
+Every effect, built-in or third-party, is found through the entry-point group
+``spicethermal.effects`` (:data:`ENTRY_POINT_GROUP`): each entry point names an
+:class:`~spicethermal.effects.base.EffectPlugin` subclass (or instance). The built-in effects
+are declared in the package's own ``pyproject.toml`` exactly as another package declares its
+own. :func:`register` adds one at run time (tests, notebooks).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from ..core.errors import DataFormatError
+from .base import DEVICE, EffectPlugin
+
+__all__ = ["CATALOGUE", "ENTRY_POINT_GROUP", "Effect", "known_names", "plugin", "register",
+           "rival_names"]
+
+#: Entry-point group through which every effect is registered.
+ENTRY_POINT_GROUP = "spicethermal.effects"
+
+_REGISTRY: dict[str, EffectPlugin] = {}
+_LOADED = False
+
+
+def register(effect: EffectPlugin | type[EffectPlugin]) -> EffectPlugin:
+    """Add an effect (a plugin class or instance) to the registry, replacing one of the same
+    name; returns the instance.
+
+    Parameters
+    ----------
+    effect : EffectPlugin subclass or instance
+
+    Returns
+    -------
+    EffectPlugin
+    """
+    instance = effect() if isinstance(effect, type) else effect
+    if not isinstance(instance, EffectPlugin):
+        raise DataFormatError(f"{effect!r} is not an effect plugin (spicethermal.effects."
+                              f"base.EffectPlugin)")
+    _REGISTRY[instance.name] = instance
+    return instance
+
+
+def _load() -> None:
+    """Register every entry point of :data:`ENTRY_POINT_GROUP` once."""
+    global _LOADED
+    if _LOADED:
+        return
+    _LOADED = True
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        obj = ep.load()
+        if isinstance(obj, EffectPlugin) or (isinstance(obj, type)
+                                             and issubclass(obj, EffectPlugin)):
+            register(obj)
+
+
+class _Catalogue(Mapping):
+    """Read-only view of the registry (plugins loaded on first use), catalogued effects and
+    rivals alike."""
+
+    def __getitem__(self, name: str) -> EffectPlugin:
+        _load()
+        return _REGISTRY[name]
+
+    def __iter__(self) -> Iterator[str]:
+        _load()
+        return iter(sorted(_REGISTRY))
+
+    def __len__(self) -> int:
+        _load()
+        return len(_REGISTRY)
+
+
+#: Every registered plugin by name.
+CATALOGUE: Mapping[str, EffectPlugin] = _Catalogue()
+
+
+def known_names() -> list[str]:
+    """Names of the catalogued effects (those a diagnosis may name and ``--effect`` takes).
+
+    Returns
+    -------
+    list of str
+        Sorted.
+
+    >>> "sample-window" in known_names()
+    True
+    """
+    return sorted(n for n, p in CATALOGUE.items() if p.traits.catalogued)
+
+
+def rival_names() -> list[str]:
+    """Names of the registered rivals (explanations the diagnosis weighs, never names).
+
+    Returns
+    -------
+    list of str
+    """
+    return sorted(n for n, p in CATALOGUE.items() if not p.traits.catalogued)
+
+
+def plugin(name: str) -> EffectPlugin:
+    """The plugin registered as ``name``; a clear error for an unknown name.
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    EffectPlugin
+    """
+    try:
+        return CATALOGUE[name]
+    except KeyError:
+        raise DataFormatError(
+            f"unknown effect {name!r}; known effects: {', '.join(known_names())}") from None
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One effect with validated parameters (defaults filled in) and form: what a model file
+    holds. Its physics are its plugin's (:attr:`plugin`).
+
+    >>> Effect.create("temperature-coefficient", alpha_per_k=-0.003).params["t0_c"]
+    25.0
+    >>> Effect.create("electrical-transient", form="ringing").to_dict()["form"]
+    'ringing'
+    """
+
+    name: str
+    params: Mapping[str, float] = field(default_factory=dict)
+    form: str = ""
+
+    def __post_init__(self) -> None:
+        p = plugin(self.name)
+        values = {}
+        for key, value in self.params.items():
+            if key not in p.params:
+                raise DataFormatError(f"effect {self.name}: unknown parameter {key!r}; "
+                                      f"expected {', '.join(p.params)}")
+            spec = p.params[key]
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                raise DataFormatError(
+                    f"effect {self.name}: parameter {key} = {value!r} is not a number") from None
+            if not (math.isfinite(v) and spec.low <= v <= spec.high):
+                raise DataFormatError(f"effect {self.name}: parameter {key} = {value!r} "
+                                      f"outside [{spec.low}, {spec.high}] {spec.unit}".rstrip())
+            values[key] = v
+        for key, spec in p.params.items():
+            values.setdefault(key, float(spec.default))
+        form = self.form or p.forms[0]
+        if form not in p.forms:
+            raise DataFormatError(f"effect {self.name}: form {form!r}; expected one of "
+                                  f"{', '.join(p.forms)}")
+        object.__setattr__(self, "params", MappingProxyType(values))
+        object.__setattr__(self, "form", form)
+        p.check(self)
+
+    @classmethod
+    def create(cls, name: str, form: str = "", **params: float) -> Effect:
+        """Named constructor: ``Effect.create("sample-window", window_s=1e-4)``."""
+        return cls(name, params, form)
+
+    @classmethod
+    def from_dict(cls, data: Mapping) -> Effect:
+        """From the model-file form ``{"name": ..., "params": {...}, "form": ...}`` (form
+        optional)."""
+        if not isinstance(data, Mapping) or "name" not in data:
+            raise DataFormatError("effect entry needs a 'name'")
+        params = data.get("params", {})
+        if not isinstance(params, Mapping):
+            raise DataFormatError(f"effect {data['name']}: 'params' must be an object")
+        form = data.get("form", "")
+        if not isinstance(form, str):
+            raise DataFormatError(f"effect {data['name']}: 'form' must be a string")
+        return cls(str(data["name"]), dict(params), form)
+
+    def to_dict(self) -> dict:
+        """The model-file form; ``form`` only when it is not the default."""
+        out: dict = {"name": self.name, "params": self.form_params}
+        if self.form != self.plugin.forms[0]:
+            out["form"] = self.form
+        return out
+
+    def with_params(self, **params: float) -> Effect:
+        """The same effect with some parameters changed."""
+        return Effect(self.name, {**self.params, **params}, self.form)
+
+    @property
+    def plugin(self) -> EffectPlugin:
+        """The effect's plugin (its physics)."""
+        return plugin(self.name)
+
+    @property
+    def form_params(self) -> dict[str, float]:
+        """The parameters that the effect's form uses (what files and headers show).
+
+        >>> Effect.create("temperature-coefficient", alpha_per_k=1e-3).form_params
+        {'alpha_per_k': 0.001, 't0_c': 25.0}
+        """
+        specs = self.plugin.params
+        return {k: v for k, v in self.params.items() if specs[k].used_by(self.form)}
+
+    @property
+    def kind(self) -> str:
+        """``"device"`` or ``"measurement"``."""
+        return self.plugin.kind
+
+    @property
+    def physical_nodes(self) -> bool:
+        """True when the effect needs physical node temperatures (a Cauer ladder)."""
+        p = self.plugin
+        return p.kind == DEVICE and p.physical_nodes(self)  # type: ignore[attr-defined]
+
+    def describe(self) -> str:
+        """One sentence: what the effect says physically."""
+        return self.plugin.describe(self)

@@ -1,0 +1,345 @@
+"""The one network simulator: a Cauer ladder with its device effects, many at a time.
+
+A batch holds ``B`` Cauer ladders of ``n`` nodes (node 0 the junction, layer ``i`` from node
+``i`` to node ``i + 1``, the last layer to the reference, every node's heat capacity ``c_i``
+to the thermal ground) and the device effects of the model, each with ``B`` parameter sets
+(:mod:`spicethermal.effects.base`: a factor on each layer's resistance, heat stored at each
+node beyond its linear capacity). A fit evaluates its trial points side by side in one batch;
+:class:`~spicethermal.model.ThermalModel` is a batch of one.
+
+The network, node rises ``θ`` over the reference at ``tref``, temperatures ``T = tref + θ``::
+
+    d/dt (c_i θ_i + H_i(T_i)) = P·[i = 0] + q_{i−1} − q_i,   q_i = (θ_i − θ_{i+1}) / (R_i s_i(T))
+
+* **steady state** (:meth:`NetworkBatch.steady`): every layer carries the whole power, so
+  ``θ_i = Σ_{j ≥ i} P R_j s_j(T)``, solved by Newton's method (exact);
+* **transients** (:meth:`NetworkBatch.response`): exponential steps. Over a step the network
+  is linear with its resistances frozen at the step's mean temperature and each node's
+  capacity at the *secant* of its stored heat between the step's ends (so the heat a band
+  absorbs is conserved whatever the step), solved exactly in its modes; a predictor (the
+  network at the start) and a corrector (at the mean of both ends) give the step's error,
+  and a step whose error exceeds :data:`TOL_REL` of the largest rise is halved. A linear
+  network is one exact step;
+* **PWM** (:meth:`NetworkBatch.frozen_foster`): the periodic steady state of the network
+  frozen at the mean temperatures under the mean power (resistances there, capacities at the
+  secant over each node's ripple), in closed form; exact for a linear ladder, quasi-static
+  (first order in the ripple) otherwise.
+
+A linear network's Foster form (:meth:`NetworkBatch.foster`) comes from the same modes:
+``τ_k = 1/λ_k``, ``R_k = v_{0k}² / (c_0 λ_k)``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.errors import SimulationError
+from ..core.ladder import Cauer, Foster
+from ..effects.base import DeviceEffect, scalar_params
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+    from ..effects import Effect
+
+__all__ = ["TOL_REL", "DeviceTerm", "NetworkBatch", "as_cauer"]
+
+#: A transient step is accepted when its predictor and corrector agree within this fraction
+#: of the largest node rise (and :data:`TOL_ABS_K`).
+TOL_REL = 3e-5
+TOL_ABS_K = 1e-6
+#: Newton iterations of the steady state, and its tolerance (fraction of the rise).
+STEADY_ITER, STEADY_TOL = 40, 1e-12
+#: Steps of one transient before the simulation gives up, and the most a step may grow.
+MAX_STEPS, GROWTH = 20000, 4.0
+
+
+@dataclass(frozen=True, eq=False)
+class DeviceTerm:
+    """One device effect of a batch: its plugin, form and ``B`` parameter sets ``(B, 1)``."""
+
+    plugin: DeviceEffect
+    form: str
+    params: Mapping[str, NDArray]
+
+    def repeat(self, k: int) -> DeviceTerm:
+        """Each parameter set repeated ``k`` times in a row (a batch ``k`` times longer)."""
+        return DeviceTerm(self.plugin, self.form,
+                          {n: np.repeat(v, k, axis=0) for n, v in self.params.items()})
+
+
+def as_cauer(ladder: Foster | Cauer) -> Cauer:
+    """``ladder`` as a Cauer ladder with a heat capacity at every node (exact).
+
+    Parameters
+    ----------
+    ladder : Foster or Cauer
+
+    Returns
+    -------
+    Cauer
+    """
+    return (ladder if isinstance(ladder, Cauer) else ladder.to_cauer()).with_capacitances()
+
+
+def _reverse_cumsum(x: NDArray) -> NDArray:
+    return np.flip(np.cumsum(np.flip(x, axis=-1), axis=-1), axis=-1)
+
+
+class NetworkBatch:
+    """``B`` Cauer ladders (``r``, ``c``: ``(B, n)``) with their device effects.
+
+    >>> net = NetworkBatch.of(Foster.from_tau([2.0, 3.0], [1e-3, 1.0]))
+    >>> r, tau = net.foster()
+    >>> np.round(r[0], 9).tolist(), np.round(tau[0], 9).tolist()
+    ([2.0, 3.0], [0.001, 1.0])
+    """
+
+    def __init__(self, r: NDArray, c: NDArray, terms: Sequence[DeviceTerm] = ()) -> None:
+        self.r = np.atleast_2d(np.asarray(r, dtype=float))
+        self.c = np.atleast_2d(np.asarray(c, dtype=float))
+        self.terms = tuple(terms)
+        self.size, self.n = self.r.shape
+        self._scaled = any(t.plugin.resistance_scale.__func__ is not  # type: ignore[attr-defined]
+                           DeviceEffect.resistance_scale for t in self.terms)
+        self._stores = any(t.plugin.stored_heat.__func__ is not  # type: ignore[attr-defined]
+                           DeviceEffect.stored_heat for t in self.terms)
+
+    @classmethod
+    def of(cls, ladder: Foster | Cauer, effects: Sequence[Effect] = ()) -> NetworkBatch:
+        """A batch of one: ``ladder`` (its Cauer form, exact) with the device effects of
+        ``effects``."""
+        cauer = as_cauer(ladder)
+        terms = [DeviceTerm(e.plugin, e.form, scalar_params(e))  # type: ignore[arg-type]
+                 for e in effects if isinstance(e.plugin, DeviceEffect)]
+        return cls(np.array([cauer.r]), np.array([cauer.c]), terms)
+
+    @property
+    def linear(self) -> bool:
+        """True without device effects (every response in closed form)."""
+        return not self.terms
+
+    def repeat(self, k: int) -> NetworkBatch:
+        """Each ladder repeated ``k`` times in a row."""
+        return NetworkBatch(np.repeat(self.r, k, axis=0), np.repeat(self.c, k, axis=0),
+                            [t.repeat(k) for t in self.terms])
+
+    # -- the effects' terms ---------------------------------------------------------------
+    def scale(self, theta: NDArray, tref: NDArray | float) -> NDArray:
+        """Factor on every layer's resistance ``(B, n)`` at node rises ``theta``."""
+        if not self._scaled:
+            return np.ones_like(theta)
+        t = tref + theta
+        t_next = np.concatenate([t[:, 1:], np.broadcast_to(tref, (t.shape[0], 1))], axis=1)
+        layer = 0.5 * (t + t_next)
+        out = np.ones_like(theta)
+        for term in self.terms:
+            s = term.plugin.resistance_scale(term.form, term.params, layer, t[:, :1])
+            if s is not None:
+                out = out * s
+        return out
+
+    def stored(self, temps: NDArray) -> tuple[NDArray, NDArray]:
+        """Heat stored beyond the linear capacities and its derivative, ``(B, n)`` each."""
+        h, dh = np.zeros_like(temps), np.zeros_like(temps)
+        for term in self.terms:
+            got = term.plugin.stored_heat(term.form, term.params, temps, self.c)
+            if got is not None:
+                h, dh = h + got[0], dh + got[1]
+        return h, dh
+
+    def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
+        """Capacity ``(B, n)``: the linear one plus the secant of the stored heat (NaN for a
+        member whose capacity falls to zero or below: a capacity slope too steep for the
+        temperatures reached)."""
+        if not self._stores:
+            return self.c
+        h_a, dh_a = self.stored(t_a)
+        h_b, dh_b = self.stored(t_b)
+        d = t_b - t_a
+        small = np.abs(d) < 1e-9
+        sec = np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
+        cap = self.c + sec
+        return np.where(cap > 0, cap, np.nan)
+
+    # -- linear algebra of one frozen network ----------------------------------------------
+    def _modes(self, scale: NDArray, cap: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """``(λ, V, √cap)`` of ``S = cap^{-1/2} G cap^{-1/2}``: ``(B, n)``, ``(B, n, n)``;
+        NaN for a member whose resistances or capacities are not positive and finite."""
+        g = 1.0 / (self.r * scale)
+        bad = ~(np.all(np.isfinite(g) & (g > 0), axis=1) & np.all(np.isfinite(cap) & (cap > 0),
+                                                                 axis=1))
+        if np.any(bad):
+            g = np.where(bad[:, None], 1.0, g)
+            cap = np.where(bad[:, None], 1.0, cap)
+        diag = g.copy()
+        diag[:, 1:] += g[:, :-1]
+        root = np.sqrt(cap)
+        s = np.zeros((self.size, self.n, self.n))
+        idx = np.arange(self.n)
+        s[:, idx, idx] = diag / cap
+        if self.n > 1:
+            off = -g[:, :-1] / (root[:, :-1] * root[:, 1:])
+            s[:, idx[:-1], idx[1:]] = off
+            s[:, idx[1:], idx[:-1]] = off
+        lam, v = np.linalg.eigh(s)
+        bad |= ~np.all(lam > 0, axis=1)
+        if np.any(bad):
+            lam = np.where(bad[:, None], np.nan, lam)
+        return lam, v, root
+
+    def foster(self, scale: NDArray | None = None,
+               cap: NDArray | None = None) -> tuple[NDArray, NDArray]:
+        """Foster stages ``(R, τ)``, ``(B, n)`` each, of the network (frozen at ``scale`` and
+        ``cap`` when given), fastest first."""
+        lam, v, root = self._modes(np.ones_like(self.r) if scale is None else scale,
+                                   self.c if cap is None else cap)
+        return v[:, 0, :] ** 2 / (root[:, :1] ** 2 * lam), 1.0 / lam
+
+    def _frozen(self, theta: NDArray, dt: NDArray, power: NDArray, scale: NDArray,
+                cap: NDArray) -> NDArray:
+        """The frozen network's exact states ``(B, m, n)`` at the delays ``dt`` ``(m,)`` from
+        ``theta`` at ``power`` ``(B, 1)``."""
+        lam, v, root = self._modes(scale, cap)
+        z = np.einsum("bji,bj->bi", v, root * theta)
+        src = (v[:, 0, :] / root[:, :1]) * power / lam
+        zz = src[:, None, :] + (z - src)[:, None, :] * np.exp(-lam[:, None, :]
+                                                              * dt[None, :, None])
+        return np.einsum("bij,bmj->bmi", v, zz) / root[:, None, :]
+
+    # -- steady state ----------------------------------------------------------------------
+    def steady(self, power: NDArray | float, tref: NDArray | float) -> NDArray:
+        """Node rises ``(B, n)`` under constant ``power`` (W, scalar or ``(B, 1)``)."""
+        p = np.broadcast_to(np.asarray(power, dtype=float), (self.size, 1))
+        theta = _reverse_cumsum(p * self.r)
+        if not self._scaled:
+            return theta
+        n = self.n
+        eye = np.eye(n)
+        big = self.repeat(n)
+        tref_big = np.repeat(np.broadcast_to(tref, (self.size, 1)), n, axis=0) \
+            if np.ndim(tref) else tref
+        top = max(float(np.nanmax(np.abs(theta), initial=0.0)), 1e-12)
+        for _ in range(STEADY_ITER):
+            s = self.scale(theta, tref)
+            f = theta - _reverse_cumsum(p * self.r * s)
+            if np.all(np.isfinite(f)) and np.max(np.abs(f)) <= STEADY_TOL * top:
+                return theta
+            delta = 1e-7 * (1.0 + np.abs(theta))
+            pert = np.repeat(theta, n, axis=0) + (np.tile(eye, (self.size, 1))
+                                                  * np.repeat(delta, n, axis=0))
+            ds = (big.scale(pert, tref_big).reshape(self.size, n, n) - s[:, None, :]) \
+                / delta[:, :, None]
+            # J[i, j] = δ_ij − Σ_{k ≥ i} P r_k ∂s_k/∂θ_j
+            dq = p[:, :, None] * self.r[:, None, :] * ds  # (B, j, k)
+            jac = eye[None] - np.flip(np.cumsum(np.flip(np.swapaxes(dq, 1, 2), 1), 1), 1)
+            ok = np.all(np.isfinite(jac), axis=(1, 2)) & np.all(np.isfinite(f), axis=1)
+            jac = np.where(ok[:, None, None], jac, eye)
+            step = np.linalg.solve(jac, np.where(ok[:, None], f, 0.0)[:, :, None])[:, :, 0]
+            theta = np.where(ok[:, None], theta - step, np.nan)
+        s = self.scale(theta, tref)
+        f = theta - _reverse_cumsum(p * self.r * s)
+        # a member that does not converge (thermal runaway) is NaN, the others stand
+        ok = np.all(np.isfinite(f), axis=1) & (np.max(np.abs(np.nan_to_num(f, nan=np.inf)),
+                                                      axis=1) <= 1e-8 * top)
+        return np.where(ok[:, None], theta, np.nan)
+
+    # -- transients ------------------------------------------------------------------------
+    def response(self, theta0: NDArray, t_s: NDArray, power: NDArray | float,
+                 tref: NDArray | float) -> NDArray:
+        """Node rises ``(B, N, n)`` at the sorted times ``t_s`` (s, from 0, ≥ 0) from the
+        state ``theta0`` ``(B, n)`` under constant ``power`` (W, scalar or ``(B, 1)``).
+
+        Steps grow and shrink with the predictor–corrector error (second order: a step's
+        error scales as its length squared); the readings within a step are the corrector's
+        frozen network at their delays, so the steps need not stop at them.
+        """
+        t = np.asarray(t_s, dtype=float)
+        p = np.broadcast_to(np.asarray(power, dtype=float), (self.size, 1))
+        if self.linear:
+            return self._frozen(theta0, t, p, np.ones_like(self.r), self.c)
+        top = max(float(np.nanmax(np.abs(theta0), initial=0.0)),
+                  float(np.nanmax(p * np.sum(self.r, axis=1, keepdims=True), initial=0.0)),
+                  1e-12)
+        tol = max(TOL_REL * top, TOL_ABS_K)
+        out = np.empty((self.size, t.size, self.n))
+        theta, a = np.array(theta0, dtype=float), 0.0
+        k = int(np.searchsorted(t, 0.0, side="right"))
+        out[:, :k] = theta[:, None, :]
+        h = float(t[k]) if k < t.size else 0.0
+        steps = 0
+        while k < t.size:
+            b = min(a + h, float(t[-1]))
+            if b >= t[-1] * (1 - 1e-12):
+                b = float(t[-1])
+            temps = tref + theta
+            pred = self._frozen(theta, np.array([b - a]), p, self.scale(theta, tref),
+                                self._secant(temps, temps))[:, 0]
+            scale, cap = self.scale(0.5 * (theta + pred), tref), self._secant(temps,
+                                                                             tref + pred)
+            inside = int(np.searchsorted(t, b, side="right"))
+            dts = np.append(t[k:inside] - a, b - a)
+            states = self._frozen(theta, dts, p, scale, cap)
+            err = np.abs(states[:, -1] - pred)
+            err_max = float(np.nanmax(err)) if np.any(np.isfinite(err)) else 0.0
+            steps += 1
+            if steps > MAX_STEPS:
+                raise SimulationError(f"the transient does not resolve near t = {a:g} s")
+            ratio = math.sqrt(tol / err_max) if err_max > 0 else GROWTH
+            if err_max <= tol:
+                out[:, k:inside] = states[:, :-1]
+                h = (b - a) * min(GROWTH, 0.9 * ratio)
+                theta, a, k = states[:, -1], b, inside
+            else:
+                h = (b - a) * max(0.2, 0.9 * ratio)
+        return out
+
+    def cooling(self, power: NDArray | float, tref: NDArray | float, t_s: NDArray,
+                theta0: NDArray | None = None) -> NDArray:
+        """Junction rise ``(B, N)`` at ``t_s`` after cutting ``power`` held until the steady
+        state (``theta0``, :meth:`steady`, when already known)."""
+        if theta0 is None:
+            theta0 = self.steady(power, tref)
+        if self.linear:
+            r, tau = self.foster()
+            p = np.broadcast_to(np.asarray(power, dtype=float), (self.size, 1))
+            return p * np.einsum("bk,bnk->bn", r, np.exp(-np.asarray(t_s)[None, :, None]
+                                                         / tau[:, None, :]))
+        return self.response(theta0, t_s, 0.0, tref)[:, :, 0]
+
+    # -- PWM -------------------------------------------------------------------------------
+    def frozen_foster(self, power: NDArray, freq_hz: NDArray, duty: NDArray,
+                      tref: NDArray) -> tuple[NDArray, NDArray]:
+        """Foster stages ``(R, τ)``, ``(B, N, n)``, of the network frozen at each of ``N``
+        PWM rows (power, frequency, duty, reference): resistances at the steady state under
+        the mean power, capacities at the secant over each node's ripple."""
+        rows = len(power)
+        if self.linear:
+            r, tau = self.foster()
+            return (np.broadcast_to(r[:, None, :], (self.size, rows, self.n)),
+                    np.broadcast_to(tau[:, None, :], (self.size, rows, self.n)))
+        big = self.repeat(rows)
+        p_mean = np.tile(np.asarray(power * duty, float), self.size)[:, None]
+        tr = np.tile(np.asarray(tref, float), self.size)[:, None]
+        theta = big.steady(p_mean, tr)
+        scale = big.scale(theta, tr)
+        cap = big._secant(tr + theta, tr + theta)
+        if big._stores:
+            # the ripple of every node in the network frozen at its mean: each mode swings
+            # by its peak minus valley, seen at every node through the mode's shape
+            lam, v, root = big._modes(scale, cap)
+            period = np.tile(1.0 / np.asarray(freq_hz, float), self.size)[:, None]
+            d = np.tile(np.asarray(duty, float), self.size)[:, None]
+            pw = np.tile(np.asarray(power, float), self.size)[:, None]
+            amp = pw * (v[:, 0, :] / root[:, :1]) / lam
+            on, off = -np.expm1(-lam * d * period), -np.expm1(-lam * (1 - d) * period)
+            swing = amp * on * off / -np.expm1(-lam * period)
+            half = 0.5 * np.einsum("bij,bj->bi", np.abs(v), np.abs(swing)) / root
+            cap = big._secant(tr + theta - half, tr + theta + half)
+        r, tau = big.foster(scale, cap)
+        return r.reshape(self.size, rows, self.n), tau.reshape(self.size, rows, self.n)

@@ -1,0 +1,305 @@
+"""Joint fits of a ladder and its effects to every data set of a bundle.
+
+One problem layout (:class:`Layout`): the Cauer ladder's ``log R`` and ``log C`` (unless the
+ladder is held) and the fitted parameters of each effect (on a log scale where the parameter
+says so), the other parameters held at each start's values. Residuals are each data set's
+readings minus the forward model's (:func:`~spicethermal.fit.forward.predict`) over the data
+set's noise, so ``2·cost`` is the noise-weighted χ². Many starts (and discrete variants such as
+a node or a layer subset) are fitted side by side (:func:`~spicethermal.fit.lm.levenberg_marquardt`).
+
+:func:`fit_baseline` is the linear ladder fitted to every data set, its order chosen by the
+Bayesian information criterion.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.errors import DataFormatError, FitError
+from ..core.ladder import Cauer, Foster
+from ..effects.base import DeviceEffect, EffectPlugin, MeasurementEffect
+from ..effects.registry import Effect
+from ..engines.network import DeviceTerm, NetworkBatch, as_cauer
+from ..identify.curves import ZthCurve
+from .forward import MeasurementTerm, predict
+from .ladder import fit_foster
+from .lm import MAX_ROUNDS, levenberg_marquardt
+from .measurement import BundleData
+
+if TYPE_CHECKING:  # pragma: no cover
+    from numpy.typing import NDArray
+
+__all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts"]
+
+#: The baseline's order is searched up to this many stages ...
+MAX_ORDER = 8
+#: ... and stops after this many orders in a row that do not lower the criterion.
+ORDER_PATIENCE = 2
+#: Bounds of a ladder's ``log R`` and ``log C`` in a fit.
+LOG_BOUND = 60.0
+
+
+@dataclass(frozen=True, eq=False)
+class ModelFit:
+    """A fitted model: its Cauer ladder, its effects, its predictions and residuals by data
+    set, the noise-weighted χ² by data set, the number of parameters fitted, and the work
+    (forward-model rows) it cost."""
+
+    ladder: Cauer
+    effects: tuple[Effect, ...]
+    predictions: Mapping[str, NDArray]
+    chi2: Mapping[str, float]
+    n_params: int
+    work: int = 0
+    converged: bool = True
+
+    @property
+    def chi2_total(self) -> float:
+        return float(sum(self.chi2.values()))
+
+    @property
+    def foster(self) -> Foster:
+        return self.ladder.to_foster()
+
+    def effect(self, name: str) -> Effect | None:
+        return next((e for e in self.effects if e.name == name), None)
+
+
+def bic(fit: ModelFit, n_points: int) -> float:
+    """``χ² + k ln N``: the criterion every comparison of models uses.
+
+    Parameters
+    ----------
+    fit : ModelFit
+    n_points : int
+
+    Returns
+    -------
+    float
+    """
+    return fit.chi2_total + fit.n_params * math.log(max(n_points, 2))
+
+
+@dataclass(frozen=True)
+class Start:
+    """One start: a Cauer ladder and the values of every parameter of each effect."""
+
+    ladder: Cauer
+    values: tuple[Mapping[str, float], ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Layout:
+    """Which parameters a fit moves: the ladder's (unless ``hold_ladder``), and for each slot
+    ``(plugin, form)`` its fitted parameters (``move[i]`` false holds slot ``i``)."""
+
+    slots: tuple[tuple[EffectPlugin, str], ...]
+    n_nodes: int
+    hold_ladder: bool = False
+    move: tuple[bool, ...] = ()
+    names: tuple[tuple[str, ...], ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        move = self.move or (True,) * len(self.slots)
+        object.__setattr__(self, "move", tuple(move))
+        object.__setattr__(self, "names", tuple(
+            p.fitted_names(f) if m else () for (p, f), m in zip(self.slots, move, strict=True)))
+
+    @property
+    def ladder_size(self) -> int:
+        return 0 if self.hold_ladder else 2 * self.n_nodes
+
+    @property
+    def size(self) -> int:
+        return self.ladder_size + sum(len(n) for n in self.names)
+
+    def pack(self, start: Start) -> NDArray:
+        x = [] if self.hold_ladder else [np.log(start.ladder.r), np.log(start.ladder.c)]
+        for (p, _f), names, values in zip(self.slots, self.names, start.values, strict=True):
+            x.append([_to_fit(p.params[n], values[n]) for n in names])
+        return np.concatenate([np.asarray(v, dtype=float) for v in x]) if x else np.zeros(0)
+
+    def bounds(self) -> tuple[NDArray, NDArray, NDArray]:
+        """``(lo, hi, typical)`` in fit space."""
+        lo = [-LOG_BOUND] * self.ladder_size
+        hi = [LOG_BOUND] * self.ladder_size
+        typ = [1.0] * self.ladder_size
+        for (p, _f), names in zip(self.slots, self.names, strict=True):
+            for n in names:
+                spec = p.params[n]
+                a, b = _to_fit(spec, spec.low), _to_fit(spec, spec.high)
+                lo.append(a)
+                hi.append(b)
+                typ.append(1.0 if spec.log else spec.typical)
+        return np.array(lo), np.array(hi), np.array(typ)
+
+
+def _to_fit(spec, value: float) -> float:
+    if spec.log:
+        return math.log(max(value, 1e-300)) if value > 0 else -700.0
+    return float(value)
+
+
+def _from_fit(spec, x: NDArray) -> NDArray:
+    return np.exp(x) if spec.log else x
+
+
+class _Problem:
+    """The residual function of one layout over a set of starts."""
+
+    def __init__(self, data: BundleData, noise: Mapping[str, float], layout: Layout,
+                 starts: Sequence[Start]) -> None:
+        self.data, self.layout = data, layout
+        self.names = data.datasets
+        self.measured = np.concatenate([data.measured(n) for n in self.names])
+        self.weight = np.concatenate([np.full(data.measured(n).size, 1.0 / noise[n])
+                                      for n in self.names])
+        self.ladders_r = np.array([s.ladder.r for s in starts])
+        self.ladders_c = np.array([s.ladder.c for s in starts])
+        self.values = [{k: np.array([s.values[i][k] for s in starts], dtype=float)
+                        for k in p.params} for i, (p, _f) in enumerate(layout.slots)]
+
+    def network(self, x: NDArray, rows: NDArray) -> tuple[NDArray, NDArray, list, list]:
+        lay = self.layout
+        if lay.hold_ladder:
+            r, c = self.ladders_r[rows], self.ladders_c[rows]
+        else:
+            n = lay.n_nodes
+            r, c = np.exp(x[:, :n]), np.exp(x[:, n:2 * n])
+        col = lay.ladder_size
+        devices, measures = [], []
+        for (p, form), names, values in zip(lay.slots, lay.names, self.values, strict=True):
+            params = {k: v[rows][:, None] for k, v in values.items()}
+            for k in names:
+                params[k] = _from_fit(p.params[k], x[:, col:col + 1])
+                col += 1
+            if isinstance(p, DeviceEffect):
+                devices.append(DeviceTerm(p, form, params))
+            else:
+                measures.append(MeasurementTerm(p, form, params))  # type: ignore[arg-type]
+        return r, c, devices, measures
+
+    def residuals(self, x: NDArray, rows: NDArray) -> NDArray:
+        r, c, devices, measures = self.network(x, rows)
+        with np.errstate(all="ignore"):
+            pred = predict(self.data, NetworkBatch(r, c, devices), measures)
+            out = (np.concatenate([pred[n] for n in self.names], axis=1) - self.measured) \
+                * self.weight
+        return np.where(np.isfinite(out), out, np.nan)
+
+    def model(self, x: NDArray, row: int, noise: Mapping[str, float], k: int, work: int,
+              converged: bool) -> ModelFit:
+        r, c, devices, measures = self.network(x[None, :], np.array([row]))
+        pred = predict(self.data, NetworkBatch(r, c, devices), measures)
+        preds = {n: np.asarray(pred[n][0]) for n in self.names}
+        chi2 = {n: float(np.sum(((preds[n] - self.data.measured(n)) / noise[n]) ** 2))
+                for n in self.names}
+        effects = []
+        for (p, form), values in zip(self.layout.slots, self.values, strict=True):
+            term = next(t for t in devices + measures if t.plugin is p)
+            effects.append(Effect(p.name, {k: float(np.asarray(term.params[k]).ravel()[0])
+                                           if k in term.params else float(values[k][row])
+                                           for k in p.params}, form))
+        return ModelFit(Cauer(r[0], c[0]), tuple(effects), preds, chi2, k, work, converged)
+
+
+def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
+               starts: Sequence[Start], rounds: int = MAX_ROUNDS,
+               n_ladder_params: int | None = None) -> list[ModelFit]:
+    """Fit ``layout`` from every start, side by side; one :class:`ModelFit` per start (its
+    ``n_params`` counts the ladder's ``2n`` and every fitted effect parameter, or
+    ``n_ladder_params`` for the ladder when given).
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to its noise (K)
+    layout : Layout
+    starts : sequence of Start
+    rounds : int
+        Levenberg–Marquardt rounds at most.
+    n_ladder_params : int, optional
+
+    Returns
+    -------
+    list of ModelFit
+    """
+    if not starts:
+        return []
+    prob = _Problem(data, noise, layout, starts)
+    x0 = np.array([layout.pack(s) for s in starts])
+    lo, hi, typ = layout.bounds()
+    k_ladder = 2 * layout.n_nodes if n_ladder_params is None else n_ladder_params
+    k = k_ladder + sum(len(p.fitted_names(f)) for p, f in layout.slots)
+    if x0.shape[1] == 0:
+        res_x, work, conv = x0, 0, np.ones(len(starts), dtype=bool)
+    else:
+        res = levenberg_marquardt(prob.residuals, x0, lo, hi, typ, rounds)
+        res_x, work, conv = res.x, res.rows, res.converged
+    out = []
+    for i in range(len(starts)):
+        try:
+            out.append(prob.model(res_x[i], i, noise, k, work // len(starts), bool(conv[i])))
+        except (DataFormatError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+            continue
+    return [m for m in out if math.isfinite(m.chi2_total)]
+
+
+def start_ladders(data: BundleData, orders: Sequence[int]) -> dict[int, Cauer]:
+    """Linear ladders of each order fitted to the Zth of the lowest-power cooling curve (the
+    transient masked and extrapolated by √t), as Cauer ladders: the baseline's starts."""
+    c = data.reference_curve
+    curve = ZthCurve.from_cooling(c.t_s, c.tj_c, c.power_w, c.tj_steady_c,
+                                  c.tref_c if c.has_tref_column else None, c.tref_steady_c,
+                                  label=c.name)
+    out = {}
+    for m in orders:
+        try:
+            f = fit_foster(curve.t_s, curve.zth_k_per_w, order=m,
+                           rth_k_per_w=curve.rth_k_per_w).foster
+            out[m] = as_cauer(f)
+        except (FitError, DataFormatError, ValueError, ArithmeticError):
+            continue
+    return out
+
+
+def fit_baseline(data: BundleData, noise: Mapping[str, float],
+                 max_order: int = MAX_ORDER) -> ModelFit:
+    """The linear ladder fitted to every data set (cooling curves, steady readings, PWM
+    grid), its order the one with the lowest ``χ² + 2m ln N``.
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to its noise (K)
+    max_order : int
+
+    Returns
+    -------
+    ModelFit
+    """
+    n_points = sum(data.sizes().values())
+    starts = start_ladders(data, range(1, max_order + 1))
+    if not starts:
+        raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
+    best: ModelFit | None = None
+    worse = 0
+    for m, ladder in sorted(starts.items()):
+        fits = fit_starts(data, noise, Layout((), ladder.order), [Start(ladder)])
+        if not fits:
+            continue
+        fit = fits[0]
+        if best is None or bic(fit, n_points) < bic(best, n_points):
+            best, worse = fit, 0
+        else:
+            worse += 1
+            if worse >= ORDER_PATIENCE:
+                break
+    if best is None:
+        raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
+    return best
