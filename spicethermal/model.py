@@ -11,7 +11,7 @@ current state), which needs a handful of periods instead of the thousands a cold
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
@@ -23,6 +23,7 @@ from .core.errors import DataFormatError, SimulationError
 from .core.ladder import Cauer, Foster
 from .core.network import Network, Schedule, Trajectory, linear_response
 from .effects import DEVICE, Effect
+from .engines.network import NetworkBatch, as_cauer
 from .engines.pwm import PwmState, check_drive, steady_state
 from .io.files import atomic_write_text, dumps_json, read_json
 
@@ -66,9 +67,10 @@ class ThermalModel:
         if len(set(names)) != len(names):
             raise DataFormatError(f"model: an effect appears twice in {names}")
         for e in effects:
-            if e.name == "phase-change" and int(e.params["node"]) >= self.ladder.order:
-                raise DataFormatError(f"effect phase-change: node {int(e.params['node'])} does "
-                                      f"not exist in a {self.ladder.order}-stage ladder")
+            node = e.params.get("node")
+            if node is not None and int(node) >= self.ladder.order:
+                raise DataFormatError(f"effect {e.name}: node {int(node)} does not exist in a "
+                                      f"{self.ladder.order}-stage ladder")
         object.__setattr__(self, "effects", effects)
         object.__setattr__(self, "provenance", MappingProxyType(dict(self.provenance)))
 
@@ -106,64 +108,52 @@ class ThermalModel:
 
     # -- nonlinear network ----------------------------------------------------------------
     def network(self) -> Network:
-        """The nodal network simulated: the ladder's, or its exact Cauer equivalent when a
-        device effect needs physical node temperatures (a local temperature coefficient, a
-        latent-heat band away from the junction)."""
-        if isinstance(self.ladder, Foster) and any(e.physical_nodes for e in self.effects):
-            return Network.of(self.ladder.to_cauer())
-        return Network.of(self.ladder)
+        """The nodal network simulated: the ladder's own for a linear model, its exact Cauer
+        form with device effects (the effects' physics is written on physical layers)."""
+        if self.is_linear:
+            return Network.of(self.ladder)
+        return Network.of(as_cauer(self.ladder))
+
+    def batch(self) -> NetworkBatch:
+        """The model as a batch of one of the network simulator
+        (:class:`~spicethermal.engines.network.NetworkBatch`): its Cauer form and device
+        effects."""
+        return NetworkBatch.of(self.ladder, self.device_effects)
 
     def _matrices(self, theta: NDArray, tref_c: float, net: Network) -> tuple[NDArray, NDArray]:
-        """``(Cm(θ), G(θ))``: each branch's resistance scaled by every device effect at the
-        branch's mean temperature (the reference node at ``tref_c``) and the junction's; each
-        node's capacity plus the effects' extra capacity at the node's temperature."""
-        temps = tref_c + np.append(theta, 0.0)
-        scales = np.ones(len(net.branches_r))
-        cm = net.capacitance()
-        c_node = net.node_capacitance()
-        for e in self.device_effects:
-            for k, (a, b, _) in enumerate(net.branches_r):
-                scales[k] *= e.resistance_scale(k, 0.5 * (temps[a] + temps[b]), temps[0])
-            for node in range(net.n):
-                extra = e.extra_capacitance(node, temps[node], c_node[node])
-                if extra:
-                    cm[node, node] += extra
-        if np.any(np.diag(cm) <= 0):
+        """``(Cm(θ), G(θ))`` of the network at node rises ``θ``: each layer's resistance scaled
+        by the device effects, each node's capacity plus the effects' (the tangent of the heat
+        they store)."""
+        if self.is_linear:
+            return net.capacitance(), net.conductance()
+        batch = self.batch()
+        x = np.asarray(theta, dtype=float)[None, :]
+        scale = batch.scale(x, tref_c)[0]
+        cap = batch.c[0] + batch.stored(tref_c + x)[1][0]
+        if np.any(cap <= 0):
             raise SimulationError("a heat capacity falls to zero or below (capacity slope "
                                   "too steep for the temperatures reached)")
-        return cm, net.conductance(scales)
-
-    def _rhs(self, net: Network, tref_c: float, power: float) -> Callable:
-        b = np.zeros(net.n)
-        b[0] = 1.0
-
-        def f(_t: float, theta: NDArray) -> NDArray:
-            cm, g = self._matrices(theta, tref_c, net)
-            return np.linalg.solve(cm, b * power - g @ theta)
-
-        return f
+        return np.diag(cap), net.conductance(scale)
 
     def _integrate(self, net: Network, theta0: NDArray,
                    segments: Sequence[tuple[float, float, float]], tref_c: float,
                    t_eval: NDArray | None = None, rtol: float = 1e-9,
                    atol: float = 1e-10) -> tuple[NDArray, list[NDArray]]:
-        """Integrate piece by piece; returns the end state and (t, θ) rows at ``t_eval``."""
-        from scipy.integrate import solve_ivp
-
+        """Integrate piece by piece (the network simulator's steps, its tolerance ``rtol``
+        of the largest rise); returns the end state and (t, θ) rows at ``t_eval``."""
+        batch = self.batch()
+        batch.tol_rel = max(rtol, 1e-9)
         theta = np.asarray(theta0, dtype=float)
         rows: list[NDArray] = []
         for t0, t1, p in segments:
-            sol = solve_ivp(self._rhs(net, tref_c, p), (t0, t1), theta, method="Radau",
-                            dense_output=t_eval is not None, rtol=rtol, atol=atol,
-                            first_step=min(1e-7, (t1 - t0) / 10))
-            if not sol.success:
-                raise SimulationError(
-                    f"nonlinear integration failed at t = {t0:g} s: {sol.message}")
-            if t_eval is not None:
-                ev = t_eval[(t_eval >= t0) & (t_eval <= t1)]
-                if ev.size:
-                    rows.append(np.column_stack([ev, sol.sol(ev).T]))
-            theta = sol.y[:, -1]
+            ev = np.empty(0) if t_eval is None else t_eval[(t_eval >= t0) & (t_eval <= t1)]
+            times = np.append(ev - t0, t1 - t0)
+            states = batch.response(theta[None, :], times, p, tref_c)[0]
+            if not np.all(np.isfinite(states)):
+                raise SimulationError(f"nonlinear integration failed after t = {t0:g} s")
+            if ev.size:
+                rows.append(np.column_stack([ev, states[:-1]]))
+            theta = states[-1]
         return theta, rows
 
     # -- simulation ----------------------------------------------------------------------
@@ -171,7 +161,8 @@ class ThermalModel:
                  theta0: ArrayLike | None = None) -> Trajectory:
         """Node rises at times ``t_s`` under a piecewise-constant power ``schedule``.
 
-        Starts from ``theta0`` (node rises, default 0: the model at the reference temperature).
+        Starts from ``theta0`` (node rises of :meth:`network`, default 0: the model at the
+        reference temperature).
 
         Examples
         --------
@@ -195,30 +186,18 @@ class ThermalModel:
         return Trajectory(t, theta)
 
     def steady_nodes(self, power_w: float, tref_c: float = 25.0) -> NDArray:
-        """Node rises under constant ``power_w`` (solved self-consistently with the effects).
-
-        Solves ``G(θ)·θ = e0·P`` by a hybrid Newton method from the linear solution; a strong
-        negative temperature coefficient makes plain fixed-point iteration oscillate.
-        """
-        from scipy.optimize import root
-
+        """Node rises of :meth:`network` under constant ``power_w`` (solved self-consistently
+        with the effects)."""
         net = self.network()
-        b = np.zeros(net.n)
-        b[0] = power_w
-        theta = np.linalg.solve(net.conductance(), b)
         if self.is_linear:
-            return theta
-
-        def residual(x: NDArray) -> NDArray:
-            return self._matrices(x, tref_c, net)[1] @ x - b
-
-        sol = root(residual, theta, method="hybr", tol=1e-12)
-        # success is judged on the heat balance itself: hybr may stop "without progress" at
-        # machine precision
-        if np.max(np.abs(residual(sol.x))) > 1e-8 * max(power_w, 1e-30):
-            raise SimulationError(f"steady state at {power_w:g} W did not converge "
-                                  f"({sol.message}); is the temperature coefficient too strong?")
-        return sol.x
+            b = np.zeros(net.n)
+            b[0] = power_w
+            return np.linalg.solve(net.conductance(), b)
+        theta = self.batch().steady(power_w, tref_c)[0]
+        if not np.all(np.isfinite(theta)):
+            raise SimulationError(f"steady state at {power_w:g} W did not converge; is the "
+                                  f"temperature coefficient strong enough for thermal runaway?")
+        return theta
 
     def pwm(self, power_w: float, freq_hz: float, duty: float, window_s: float = 0.0,
             tref_c: float = 25.0, tol_k: float = 1e-6) -> PwmState:
@@ -366,13 +345,14 @@ class ThermalModel:
                         data.get("reference", "ambient"), provenance, float(case_c))
         except DataFormatError as exc:
             raise DataFormatError(f"{source}: {exc}") from None
-        band = next((e for e in model.effects if e.name == "phase-change" and e.physical_nodes),
-                    None)
-        if band is not None and topology == "foster" and data["format"] != MODEL_FORMAT:
+        placed = next((e for e in model.effects if e.physical_nodes and "node" in e.params),
+                      None)
+        if placed is not None and topology == "foster" and data["format"] != MODEL_FORMAT:
             raise DataFormatError(
-                f"{source}: {data['format']} puts the phase-change band at node "
-                f"{int(band.params['node'])} of the Foster network, which is no physical layer "
-                f"({MODEL_FORMAT} puts it at that layer of the Cauer form): fit the model again")
+                f"{source}: {data['format']} puts the {placed.name} at node "
+                f"{int(placed.params['node'])} of the Foster network, which is no physical "
+                f"layer ({MODEL_FORMAT} puts it at that layer of the Cauer form): fit the model "
+                f"again")
         return model
 
     def save(self, path: str | Path) -> Path:

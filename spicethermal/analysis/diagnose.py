@@ -96,12 +96,11 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
 
             slots = tuple((e.plugin, e.form) for e in model.effects)
             ladder = as_cauer(model.ladder)
-            got = fit_starts(data, noise, Layout(slots, ladder.order, hold_ladder=True,
+            fit = fit_starts(data, noise, Layout(slots, ladder.order, hold_ladder=True,
                                                  move=(False,) * len(slots)),
-                             [Start(ladder, tuple(dict(e.params) for e in model.effects))])
-            if not got:
+                             [Start(ladder, tuple(dict(e.params) for e in model.effects))])[0]
+            if fit is None:
                 raise FitError(f"{data.source}: the model does not simulate these data")
-            fit = got[0]
         noise = noise_estimates(data, fit.predictions)
     # the criterion's χ² under the final noise
     assert fit is not None

@@ -92,7 +92,8 @@ def _reverse_cumsum(x: NDArray) -> NDArray:
 
 
 class NetworkBatch:
-    """``B`` Cauer ladders (``r``, ``c``: ``(B, n)``) with their device effects.
+    """``B`` Cauer ladders (``r``, ``c``: ``(B, n)``) with their device effects; transients
+    accept a step within ``tol_rel`` of the largest rise.
 
     >>> net = NetworkBatch.of(Foster.from_tau([2.0, 3.0], [1e-3, 1.0]))
     >>> r, tau = net.foster()
@@ -100,7 +101,9 @@ class NetworkBatch:
     ([2.0, 3.0], [0.001, 1.0])
     """
 
-    def __init__(self, r: NDArray, c: NDArray, terms: Sequence[DeviceTerm] = ()) -> None:
+    def __init__(self, r: NDArray, c: NDArray, terms: Sequence[DeviceTerm] = (),
+                 tol_rel: float = TOL_REL) -> None:
+        self.tol_rel = tol_rel
         self.r = np.atleast_2d(np.asarray(r, dtype=float))
         self.c = np.atleast_2d(np.asarray(c, dtype=float))
         self.terms = tuple(terms)
@@ -127,7 +130,7 @@ class NetworkBatch:
     def repeat(self, k: int) -> NetworkBatch:
         """Each ladder repeated ``k`` times in a row."""
         return NetworkBatch(np.repeat(self.r, k, axis=0), np.repeat(self.c, k, axis=0),
-                            [t.repeat(k) for t in self.terms])
+                            [t.repeat(k) for t in self.terms], self.tol_rel)
 
     # -- the effects' terms ---------------------------------------------------------------
     def scale(self, theta: NDArray, tref: NDArray | float) -> NDArray:
@@ -147,25 +150,34 @@ class NetworkBatch:
     def stored(self, temps: NDArray) -> tuple[NDArray, NDArray]:
         """Heat stored beyond the linear capacities and its derivative, ``(B, n)`` each."""
         h, dh = np.zeros_like(temps), np.zeros_like(temps)
+        if not self._stores:
+            return h, dh
         for term in self.terms:
             got = term.plugin.stored_heat(term.form, term.params, temps, self.c)
             if got is not None:
                 h, dh = h + got[0], dh + got[1]
         return h, dh
 
-    def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
-        """Capacity ``(B, n)``: the linear one plus the secant of the stored heat (NaN for a
-        member whose capacity falls to zero or below: a capacity slope too steep for the
-        temperatures reached)."""
+    def _capacity(self, heat_a: tuple[NDArray, NDArray], heat_b: tuple[NDArray, NDArray],
+                  dtheta: NDArray | float) -> NDArray:
+        """Capacity ``(B, n)`` over a step: the linear one plus the secant of the stored heat
+        between its ends (``heat_a``, ``heat_b``: :meth:`stored` there; ``dtheta`` the change
+        of temperature); NaN for a member whose capacity falls to zero or below (a capacity
+        slope too steep for the temperatures reached)."""
         if not self._stores:
             return self.c
-        h_a, dh_a = self.stored(t_a)
-        h_b, dh_b = self.stored(t_b)
-        d = t_b - t_a
+        (h_a, dh_a), (h_b, dh_b) = heat_a, heat_b
+        d = np.broadcast_to(dtheta, self.c.shape)
         small = np.abs(d) < 1e-9
         sec = np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
         cap = self.c + sec
         return np.where(cap > 0, cap, np.nan)
+
+    def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
+        """:meth:`_capacity` between the temperatures ``t_a`` and ``t_b``."""
+        if not self._stores:
+            return self.c
+        return self._capacity(self.stored(t_a), self.stored(t_b), t_b - t_a)
 
     # -- linear algebra of one frozen network ----------------------------------------------
     def _modes(self, scale: NDArray, cap: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -201,11 +213,12 @@ class NetworkBatch:
                                    self.c if cap is None else cap)
         return v[:, 0, :] ** 2 / (root[:, :1] ** 2 * lam), 1.0 / lam
 
-    def _frozen(self, theta: NDArray, dt: NDArray, power: NDArray, scale: NDArray,
-                cap: NDArray) -> NDArray:
-        """The frozen network's exact states ``(B, m, n)`` at the delays ``dt`` ``(m,)`` from
-        ``theta`` at ``power`` ``(B, 1)``."""
-        lam, v, root = self._modes(scale, cap)
+    @staticmethod
+    def _frozen(modes: tuple[NDArray, NDArray, NDArray], theta: NDArray, dt: NDArray,
+                power: NDArray) -> NDArray:
+        """The frozen network's (``modes``, :meth:`_modes`) exact states ``(B, m, n)`` at the
+        delays ``dt`` ``(m,)`` from ``theta`` at ``power`` ``(B, 1)``."""
+        lam, v, root = modes
         z = np.einsum("bji,bj->bi", v, root * theta)
         src = (v[:, 0, :] / root[:, :1]) * power / lam
         zz = src[:, None, :] + (z - src)[:, None, :] * np.exp(-lam[:, None, :]
@@ -262,29 +275,31 @@ class NetworkBatch:
         t = np.asarray(t_s, dtype=float)
         p = np.broadcast_to(np.asarray(power, dtype=float), (self.size, 1))
         if self.linear:
-            return self._frozen(theta0, t, p, np.ones_like(self.r), self.c)
+            return self._frozen(self._modes(np.ones_like(self.r), self.c), theta0, t, p)
         top = max(float(np.nanmax(np.abs(theta0), initial=0.0)),
                   float(np.nanmax(p * np.sum(self.r, axis=1, keepdims=True), initial=0.0)),
                   1e-12)
-        tol = max(TOL_REL * top, TOL_ABS_K)
+        tol = max(self.tol_rel * top, TOL_ABS_K)
         out = np.empty((self.size, t.size, self.n))
         theta, a = np.array(theta0, dtype=float), 0.0
         k = int(np.searchsorted(t, 0.0, side="right"))
         out[:, :k] = theta[:, None, :]
         h = float(t[k]) if k < t.size else 0.0
+        heat_a = self.stored(tref + theta)
+        # the predictor runs on the last accepted corrector's network (at the start: the
+        # network at the start state)
+        guess = self._modes(self.scale(theta, tref), self._capacity(heat_a, heat_a, 0.0))
         steps = 0
         while k < t.size:
             b = min(a + h, float(t[-1]))
             if b >= t[-1] * (1 - 1e-12):
                 b = float(t[-1])
-            temps = tref + theta
-            pred = self._frozen(theta, np.array([b - a]), p, self.scale(theta, tref),
-                                self._secant(temps, temps))[:, 0]
-            scale, cap = self.scale(0.5 * (theta + pred), tref), self._secant(temps,
-                                                                             tref + pred)
+            pred = self._frozen(guess, theta, np.array([b - a]), p)[:, 0]
+            heat_b = self.stored(tref + pred)
+            modes = self._modes(self.scale(0.5 * (theta + pred), tref),
+                                self._capacity(heat_a, heat_b, pred - theta))
             inside = int(np.searchsorted(t, b, side="right"))
-            dts = np.append(t[k:inside] - a, b - a)
-            states = self._frozen(theta, dts, p, scale, cap)
+            states = self._frozen(modes, theta, np.append(t[k:inside] - a, b - a), p)
             err = np.abs(states[:, -1] - pred)
             err_max = float(np.nanmax(err)) if np.any(np.isfinite(err)) else 0.0
             steps += 1
@@ -294,7 +309,8 @@ class NetworkBatch:
             if err_max <= tol:
                 out[:, k:inside] = states[:, :-1]
                 h = (b - a) * min(GROWTH, 0.9 * ratio)
-                theta, a, k = states[:, -1], b, inside
+                theta, a, k, guess = states[:, -1], b, inside, modes
+                heat_a = self.stored(tref + theta)
             else:
                 h = (b - a) * max(0.2, 0.9 * ratio)
         return out

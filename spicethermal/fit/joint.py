@@ -24,7 +24,7 @@ from ..core.errors import DataFormatError, FitError
 from ..core.ladder import Cauer, Foster
 from ..effects.base import DeviceEffect, EffectPlugin, MeasurementEffect
 from ..effects.registry import Effect
-from ..engines.network import DeviceTerm, NetworkBatch, as_cauer
+from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch, as_cauer
 from ..identify.curves import ZthCurve
 from .forward import MeasurementTerm, predict
 from .ladder import fit_foster
@@ -153,8 +153,8 @@ class _Problem:
     """The residual function of one layout over a set of starts."""
 
     def __init__(self, data: BundleData, noise: Mapping[str, float], layout: Layout,
-                 starts: Sequence[Start]) -> None:
-        self.data, self.layout = data, layout
+                 starts: Sequence[Start], tol_rel: float = TOL_REL) -> None:
+        self.data, self.layout, self.tol_rel = data, layout, tol_rel
         self.names = data.datasets
         self.measured = np.concatenate([data.measured(n) for n in self.names])
         self.weight = np.concatenate([np.full(data.measured(n).size, 1.0 / noise[n])
@@ -187,7 +187,7 @@ class _Problem:
     def residuals(self, x: NDArray, rows: NDArray) -> NDArray:
         r, c, devices, measures = self.network(x, rows)
         with np.errstate(all="ignore"):
-            pred = predict(self.data, NetworkBatch(r, c, devices), measures)
+            pred = predict(self.data, NetworkBatch(r, c, devices, self.tol_rel), measures)
             out = (np.concatenate([pred[n] for n in self.names], axis=1) - self.measured) \
                 * self.weight
         return np.where(np.isfinite(out), out, np.nan)
@@ -210,10 +210,11 @@ class _Problem:
 
 def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
                starts: Sequence[Start], rounds: int = MAX_ROUNDS,
-               n_ladder_params: int | None = None) -> list[ModelFit]:
-    """Fit ``layout`` from every start, side by side; one :class:`ModelFit` per start (its
-    ``n_params`` counts the ladder's ``2n`` and every fitted effect parameter, or
-    ``n_ladder_params`` for the ladder when given).
+               n_ladder_params: int | None = None,
+               tol_rel: float = TOL_REL) -> list[ModelFit | None]:
+    """Fit ``layout`` from every start, side by side; one :class:`ModelFit` per start (None
+    where the model cannot be evaluated; its ``n_params`` counts the ladder's ``2n`` and every
+    fitted effect parameter, or ``n_ladder_params`` for the ladder when given).
 
     Parameters
     ----------
@@ -224,14 +225,18 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
     rounds : int
         Levenberg–Marquardt rounds at most.
     n_ladder_params : int, optional
+    tol_rel : float
+        Tolerance of the network's transients (a screen may take a coarser one than the
+        default; the models returned are evaluated at the default).
 
     Returns
     -------
-    list of ModelFit
+    list of ModelFit or None
+        In the order of ``starts``.
     """
     if not starts:
         return []
-    prob = _Problem(data, noise, layout, starts)
+    prob = _Problem(data, noise, layout, starts, tol_rel)
     x0 = np.array([layout.pack(s) for s in starts])
     lo, hi, typ = layout.bounds()
     k_ladder = 2 * layout.n_nodes if n_ladder_params is None else n_ladder_params
@@ -241,13 +246,14 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
     else:
         res = levenberg_marquardt(prob.residuals, x0, lo, hi, typ, rounds)
         res_x, work, conv = res.x, res.rows, res.converged
-    out = []
+    out: list[ModelFit | None] = []
     for i in range(len(starts)):
         try:
-            out.append(prob.model(res_x[i], i, noise, k, work // len(starts), bool(conv[i])))
+            m = prob.model(res_x[i], i, noise, k, work // len(starts), bool(conv[i]))
         except (DataFormatError, ValueError, ArithmeticError, np.linalg.LinAlgError):
-            continue
-    return [m for m in out if math.isfinite(m.chi2_total)]
+            m = None
+        out.append(m if m is not None and math.isfinite(m.chi2_total) else None)
+    return out
 
 
 def start_ladders(data: BundleData, orders: Sequence[int]) -> dict[int, Cauer]:
@@ -290,10 +296,9 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
     best: ModelFit | None = None
     worse = 0
     for m, ladder in sorted(starts.items()):
-        fits = fit_starts(data, noise, Layout((), ladder.order), [Start(ladder)])
-        if not fits:
+        fit = fit_starts(data, noise, Layout((), ladder.order), [Start(ladder)])[0]
+        if fit is None:
             continue
-        fit = fits[0]
         if best is None or bic(fit, n_points) < bic(best, n_points):
             best, worse = fit, 0
         else:

@@ -12,9 +12,11 @@ Data sets, by name:
   each calibration point, against the thermocouple's.
 
 Cooling curves recorded in volts are converted through that same linear calibration, so a
-curvature of the TSP shows the same way in every data set and is never absorbed twice; the
-calibration points are then kept (``line_temps_c``) so the measurement model can read through
-that line.
+curvature of the TSP shows the same way in every data set and is never absorbed twice. The
+calibration points are kept (``line_temps_c``) so the measurement model can read through
+their least-squares line: the conversion of readings in volts, and the most likely one of
+readings a bench converted to °C itself (which may also have followed the TSP's law;
+:mod:`spicethermal.effects.tsp_nonlinearity` tries both).
 """
 
 from __future__ import annotations
@@ -98,9 +100,11 @@ class BundleData:
     calibration: CalData | None = None
     ambient_c: float = 25.0
     source: str = "bundle"
-    #: Calibration points whose least-squares line the readings went through (curves in
-    #: volts); None: readings in °C, modelled as through the TSP's tangent.
+    #: The calibration points (their least-squares line converts readings); None without
+    #: calibration points (readings through the TSP's tangent).
     line_temps_c: NDArray | None = None
+    #: Whether the cooling curves came in volts (converted here through that line).
+    in_volts: bool = False
 
     @classmethod
     def from_bundle(cls, bundle: Bundle) -> BundleData:
@@ -137,7 +141,7 @@ class BundleData:
                           np.asarray(line.temperature(bundle.calibration.v_tsp_v), float))
         in_volts = bool(bundle.cooling) and all(c.tj_c is None for c in bundle.cooling)
         return cls(tuple(curves), pwm, cal, float(ambient), bundle.source or "bundle",
-                   np.asarray(points, float) if in_volts and points is not None else None)
+                   np.asarray(points, float) if cal is not None else None, in_volts)
 
     # -- views -------------------------------------------------------------------------------
     @property

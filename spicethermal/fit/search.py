@@ -25,7 +25,14 @@ from .measurement import BundleData
 if TYPE_CHECKING:  # pragma: no cover
     pass
 
-__all__ = ["evidence", "fit_effect", "refit", "without"]
+__all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "evidence", "fit_effect", "refit", "without"]
+
+#: A screen only ranks starts: its transients may be coarser than the network's own tolerance
+#: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
+SCREEN_TOL_REL = 1e-4
+#: The first form of an effect locates its discrete variants (a node, a subset of layers);
+#: the other forms that take the same variants are screened on this many of the best only.
+VARIANTS_KEPT = 2
 
 
 def evidence(data: BundleData, model: ModelFit, noise: Mapping[str, float]) -> Evidence:
@@ -60,7 +67,7 @@ def evidence(data: BundleData, model: ModelFit, noise: Mapping[str, float]) -> E
                     calibration=cal, rth_k_per_w=foster.rth, n_nodes=model.ladder.order,
                     node_c_j_per_k=tuple(model.ladder.c), tau_s=tuple(sorted(foster.tau)),
                     reference_c=data.reference_c, noise_k=dict(noise),
-                    in_volts=data.line_temps_c is not None)
+                    in_volts=data.in_volts)
 
 
 def _slots(model: ModelFit) -> tuple[tuple[EffectPlugin, str], ...]:
@@ -88,10 +95,8 @@ def refit(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     ModelFit
     """
     layout = Layout(_slots(model), model.ladder.order)
-    got = fit_starts(data, noise, layout, [Start(model.ladder, _values(model))], rounds)
-    if got and got[0].chi2_total <= model.chi2_total:
-        return got[0]
-    return model
+    got = fit_starts(data, noise, layout, [Start(model.ladder, _values(model))], rounds)[0]
+    return got if got is not None and got.chi2_total <= model.chi2_total else model
 
 
 def without(data: BundleData, noise: Mapping[str, float], model: ModelFit, name: str,
@@ -113,10 +118,10 @@ def without(data: BundleData, noise: Mapping[str, float], model: ModelFit, name:
     keep = tuple(e for e in model.effects if e.name != name)
     slots = tuple((e.plugin, e.form) for e in keep)
     got = fit_starts(data, noise, Layout(slots, model.ladder.order),
-                     [Start(model.ladder, tuple(dict(e.params) for e in keep))], rounds)
-    if not got:
+                     [Start(model.ladder, tuple(dict(e.params) for e in keep))], rounds)[0]
+    if got is None:
         raise ValueError(f"the model without {name} does not fit")
-    return got[0]
+    return got
 
 
 def _clip(plugin: EffectPlugin, values: Mapping[str, float]) -> dict[str, float]:
@@ -148,28 +153,39 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         One per form fitted, in the plugin's order of forms.
     """
     ev = evidence(data, model, noise)
-    n = model.ladder.order
     slots, values = _slots(model), _values(model)
     defaults = {k: p.default for k, p in plugin.params.items()}
+    ranked: dict[frozenset[str], list[Mapping[str, float]]] = {}
     out = []
     for form in forms or plugin.forms:
+        variants = list(plugin.variants(form, ev))
+        keys = frozenset().union(*(v.keys() for v in variants))
+        if keys and keys in ranked:
+            variants = [v for v in ranked[keys] if v in variants][:VARIANTS_KEPT] or variants
+        pairs = [(v, s) for v in variants for s in plugin.guess(form, v, ev)]
+        if not pairs:
+            continue
         starts = [Start(model.ladder, (*values, _clip(plugin, {**defaults, **v, **s})))
-                  for v in plugin.variants(form, ev) for s in plugin.guess(form, v, ev)]
-        if not starts:
-            continue
-        screen = Layout((*slots, (plugin, form)), n, hold_ladder=True,
+                  for v, s in pairs]
+        screen = Layout((*slots, (plugin, form)), model.ladder.order, hold_ladder=True,
                         move=(False,) * len(slots) + (True,))
-        screened = fit_starts(data, noise, screen, starts, screen_rounds)
-        if not screened:
+        got = fit_starts(data, noise, screen, starts, screen_rounds, tol_rel=SCREEN_TOL_REL)
+        done = [i for i, m in enumerate(got) if m is not None]
+        if not done:
             continue
-        best = min(screened, key=lambda m: m.chi2_total)
-        full = Layout((*slots, (plugin, form)), n)
+        done.sort(key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
+        if keys and keys not in ranked:
+            ranked[keys] = [dict(v) for v in dict.fromkeys(
+                tuple(sorted(pairs[i][0].items())) for i in done)]
+        best = got[done[0]]
+        assert best is not None
+        full = Layout((*slots, (plugin, form)), model.ladder.order)
         refined = fit_starts(data, noise, full,
                              [Start(best.ladder, tuple(dict(e.params) for e in best.effects))],
-                             refine_rounds)
-        work = sum(m.work for m in screened)
-        pick = refined[0] if refined and refined[0].chi2_total <= best.chi2_total else best
+                             refine_rounds)[0]
+        work = sum(m.work for m in got if m is not None) + (refined.work if refined else 0)
+        pick = refined if refined is not None and refined.chi2_total <= best.chi2_total \
+            else best
         out.append(ModelFit(pick.ladder, pick.effects, pick.predictions, pick.chi2,
-                            pick.n_params, work + (refined[0].work if refined else 0),
-                            pick.converged))
+                            pick.n_params, work, pick.converged))
     return out
