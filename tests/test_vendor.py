@@ -143,7 +143,6 @@ def test_foster_chain_with_a_pure_resistance_is_its_exact_cauer(tmp_path):
 @pytest.mark.parametrize("body, line, words", [
     ("R1 Tj n1 1\nR2 n1 Tc {zz}\nC1 n1 0 1\n", 4, "R2 is in the thermal network from Tj but "
                                                    "unknown parameter 'zz'"),
-    ("R1 Tj n1 1 TC=0.004\nR2 n1 Tc 1\nC1 n1 0 1\n", 3, "temperature coefficient"),
     ("R1 Tj n1 -1\nR2 n1 Tc 1\nC1 n1 0 1\n", 3, "must be > 0"),
     ("R1 Tj n1 {V(Tj)}\nR2 n1 Tc 1\nC1 n1 0 1\n", 3, "depends on a node voltage"),
     ("R1 Tj n1 1\nR2 n1 Tc 1\nC1 n1 0 Q=1m*V(n1)\n", 5, "a charge Q=: not a linear C"),
@@ -160,6 +159,19 @@ def test_what_cannot_be_represented_is_one_line_naming_the_line(tmp_path, capsys
     assert main(["import", str(lib), "-o", str(out)]) == 2 and not out.exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"line {line}" in err[0]
+
+
+def test_a_temperature_coefficient_is_taken_at_the_simulator_temperature(tmp_path):
+    lib = _write(tmp_path, ".subckt D Tj Tc\nR1 Tj n1 1 TC=0.004,1e-5\nR2 n1 Tc 1 TC1=0 TC2=0\n"
+                           "C1 n1 0 1\nC2 Tj 0 1 IC=0\n.ends\n")
+    nominal = import_model(lib)
+    assert nominal.ladder.r == (1.0, 1.0)
+    line = nominal.provenance["extraction"]
+    assert "R1: TC=0.004,1e-05 taken at TNOM = 27 degC, the value as written" in line
+    assert "options that change nothing: TC1=0, TC2=0, IC=0" in line
+    hot = import_model(lib, params={"TEMP": "127"})
+    assert hot.ladder.r == pytest.approx((1 + 0.004 * 100 + 1e-5 * 100 ** 2, 1.0), rel=1e-12)
+    assert "R1: TC=0.004,1e-05 evaluated at TEMP = 127 degC" in hot.provenance["extraction"]
 
 
 @pytest.mark.parametrize("body, words", [
@@ -197,8 +209,8 @@ C2 n1 0 3m IC=0
     assert prov["elements"]["taken"] == ["R1", "C1", "R2", "C2"]
     assert prov["elements"]["heat_sources"] == ["B1"]
     line = prov["extraction"]
-    assert line == ("took 4 (R1, C1, R2, C2); heat source B1; left 4 electrical (G1, X1.R1, Vs, "
-                    "Ci_d)")
+    assert line == ("took 4 (R1, C1, R2, C2); heat source B1; options that change nothing: "
+                    "TC=0,0 ×2, IC=0; left 4 electrical (G1, X1.R1, Vs, Ci_d)")
     assert "\n" not in line
 
 

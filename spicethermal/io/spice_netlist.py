@@ -244,7 +244,10 @@ def _instance(lib: Library, parent: Subckt, line: Line, name_of, prefix: str, sc
     inst, pins, subname = plain[0], plain[1:-1], plain[-1]
     child = lib.find(subname, parent)
     mapped = tuple(name_of(p) for p in pins)
-    if child is None or len(child.pins) != len(pins):
+    if child is not None and len(pins) < len(child.pins) and \
+            all(p.lower() in child.optional for p in child.pins[len(pins):]):
+        mapped += tuple(node(child.optional[p.lower()]) for p in child.pins[len(pins):])
+    if child is None or len(child.pins) != len(mapped):
         why = ("is not in this library" if child is None else
                f"has {len(child.pins)} pins, the instance {len(pins)}")
         net.notes.append(f"{line.where}: {inst}: subcircuit {subname} {why}: its inside is not "
@@ -277,6 +280,35 @@ class Linear:
     rser: float | None = None
     cpar: float = 0.0
     ignored: tuple[str, ...] = ()
+    note: str = ""
+
+
+#: The simulators' nominal temperature (degC), where a temperature coefficient changes nothing.
+TNOM = 27.0
+
+
+def _temperature_coefficient(el: Element, value: float, opts: dict[str, str]) -> tuple[float, str]:
+    """``value`` at the simulator temperature: ``TC=tc1[,tc2]`` (or ``TC1=``, ``TC2=``) scale
+    it by ``1 + tc1·ΔT + tc2·ΔT²`` with ``ΔT = TEMP − TNOM``; without ``--param TEMP`` it is
+    taken at ``TNOM``, where it is the value as written (said in the note)."""
+    funcs = el.scope.functions()
+    tc = [0.0, 0.0]
+    if "tc" in opts:
+        parts = [x for x in re.split(r"[,\s]+", unwrap(opts.pop("tc")).strip("()")) if x]
+        for k, x in enumerate(parts[:2]):
+            tc[k] = evaluate(x, el.scope, funcs)
+    for k, key in enumerate(("tc1", "tc2")):
+        if key in opts:
+            tc[k] = evaluate(opts.pop(key), el.scope, funcs)
+    if not any(tc):
+        return value, ""
+    tnom = evaluate(opts["tnom"], el.scope, funcs) if "tnom" in opts else TNOM
+    if "temp" not in el.scope:
+        return value, (f"{el.name}: TC={tc[0]:g},{tc[1]:g} taken at TNOM = {tnom:g} degC, the "
+                       "value as written (--param TEMP=... evaluates it at another temperature)")
+    dt = el.scope["temp"] - tnom
+    return value * (1 + tc[0] * dt + tc[1] * dt * dt), \
+        f"{el.name}: TC={tc[0]:g},{tc[1]:g} evaluated at TEMP = {el.scope['temp']:g} degC"
 
 
 _HARMLESS = {"ic", "temp", "dtemp", "noiseless", "tnom"}
@@ -332,18 +364,16 @@ def linear_value(el: Element) -> Linear:
     bad = [f for f in flags if f.lower() not in _HARMLESS]
     if bad:
         raise ValueError(f"cannot represent {el.tail!r} ({bad[0]!r})")
-    tc = [opts.pop(k) for k in ("tc", "tc1", "tc2") if k in opts]
-    coeffs = [unwrap(x) for t in tc for x in re.split(r"[,\s]+", unwrap(t).strip("()")) if x]
-    if any(evaluate(x, el.scope, funcs) != 0 for x in coeffs):
-        raise ValueError(f"cannot represent {el.tail!r}: a temperature coefficient TC changes "
-                         "the value with the simulator temperature")
+    value, note = _temperature_coefficient(el, value, opts)
+    if note:
+        ignored = [w for w in ignored if w.split("=")[0].lower() not in ("tc", "tc1", "tc2")]
     extra = {k: evaluate(v, el.scope, funcs) for k, v in opts.items() if k not in _HARMLESS}
     m = extra.pop("m", 1.0)
     if m <= 0:
         raise ValueError(f"multiplier M={m!r} must be > 0")
     lser = extra.pop("lser", 0.0)
     out = Linear(value / m if letter == "r" else value * m, extra.pop("rpar", None),
-                 extra.pop("rser", None) or None, extra.pop("cpar", 0.0), tuple(ignored))
+                 extra.pop("rser", None) or None, extra.pop("cpar", 0.0), tuple(ignored), note)
     if lser:
         raise ValueError(f"cannot represent {el.tail!r}: Lser={lser!r} is an inductance")
     if extra:

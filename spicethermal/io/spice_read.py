@@ -56,6 +56,8 @@ class Subckt:
     defaults: dict[str, str] = field(default_factory=dict)
     body: list[Line] = field(default_factory=list)
     parent: Subckt | None = None
+    #: PSpice ``OPTIONAL:`` pins (lower case) and the node an instance that omits one uses
+    optional: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -251,13 +253,17 @@ class _Reader:
     def subckt(self, line: Line) -> None:
         m = re.search(r"\s+params?\s*:", line.text, re.I)
         head, defaults = (line.text[:m.start()], line.text[m.end():]) if m else (line.text, "")
+        opt = re.search(r"\s+optional\s*:", head, re.I)
+        optional = assignments(head[opt.end():]) if opt else {}
+        names = tuple(re.findall(r"([a-z_][\w$]*)\s*=", head[opt.end():], re.I)) if opt else ()
+        head = head[:opt.start()] if opt else head
         words = re.sub(r"\s*=\s*", "=", head).split()
         if len(words) < 2:
             raise DataFormatError(f"{line.where}: .SUBCKT without a name")
         pins = tuple(w for w in words[2:] if "=" not in w)
         extra = " ".join(w for w in words[2:] if "=" in w)
-        sub = Subckt(words[1], pins, line, assignments(f"{extra} {defaults}"),
-                     parent=self.stack[-1] if self.stack else None)
+        sub = Subckt(words[1], pins + names, line, assignments(f"{extra} {defaults}"),
+                     parent=self.stack[-1] if self.stack else None, optional=optional)
         self.stack.append(sub)
         self.lib.subckts.append(sub)
 

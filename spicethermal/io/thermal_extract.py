@@ -143,7 +143,8 @@ def extract(c: Circuit, junction: str, to: str | None = None) -> Found:
     sub = c.net.sub
     at = f"{sub.line.file}, .SUBCKT {sub.name} (line {sub.line.number})"
     j = junction
-    driver = next((e.name for e in c.net.elements if e.kind in "veh" and j in e.nodes), None)
+    driver = next((e.name for e in c.elements if e.kind in "veh" and j in e.nodes
+                   and c.kinds.get(e.name) != "short (0 V)"), None)
     if driver is not None:
         raise DataFormatError(f"{at}: {c.spelled(j)} is driven by {driver} (a voltage source: its "
                               "temperature is imposed, not computed): no thermal network")
@@ -166,6 +167,11 @@ def extract(c: Circuit, junction: str, to: str | None = None) -> Found:
     ref = _reference(c, j, reached, held, branches, to)
     branches = _drop_thevenin(c, j, ref, held, branches, left, notes)
     branches = _drop_dead_ends(c, j, held, branches, left, notes)
+    at_j = [b for b in branches if j in (b.a, b.b)]
+    if c.pin_role(j) is None and len(at_j) == 1 and at_j[0].kind == "r":
+        notes.append(f"{at_j[0].name}: a series resistor at the junction {c.spelled(j)} without "
+                     f"heat storage: kept (the heat enters at {c.spelled(j)}; no Tj pin reads "
+                     "past it)")
     rth = _rth(j, ref, held, branches)
     branches = _drop_guarded(c, j, held, branches, rth, left, notes)
     others = sorted({n for b in branches if b.kind == "r" for n in (b.a, b.b)
@@ -176,6 +182,7 @@ def extract(c: Circuit, junction: str, to: str | None = None) -> Found:
     case = [b for b in c.branches if b.kind == "c" and b.value and ref != GROUND
             and ref in (b.a, b.b) and c.thermal_ground(b.other(ref))]
     _past_reference(c, j, ref, held, nodes, case, left)
+    notes += sorted({c.notes[b.element.name] for b in branches if b.element.name in c.notes})
     ladder, shape = _ladder(j, ref, held, branches, at)
     heat = sorted({s for n in nodes for s in c.heat.get(n, [])})
     return Found(j, ref, branches, ladder, sum(b.value for b in case), shape, left, notes, heat,

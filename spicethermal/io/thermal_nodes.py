@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .spice_expr import NotConstant, evaluate
 from .spice_netlist import GROUND, Element, Netlist, linear_value, split_words
 
-JUNCTION = re.compile(r"t_?j(unc(tion)?)?\d*|junction|die|t_?die|tjunc\w*", re.I)
+JUNCTION = re.compile(r"t?_?j(unc(tion)?)?\d*|t?_?die|tjunc\w*", re.I)
 CASE = re.compile(r"t_?c(ase)?\d*|case|t_?case\w*|t_?mb|t_?sp|t_?sol(der)?\w*|t_?foot|t_?lead|"
                   r"t_?tab|t_?hs|t_?sink|tref|t_?board|t_?pcb", re.I)
 AMBIENT = re.compile(r"t_?a(mb(ient|iant)?)?\d*|amb(ient|iant)?|t_?amb\w*|t_?air", re.I)
@@ -57,13 +57,22 @@ class Circuit:
     electrical: set[str] = field(default_factory=set)
     ignored: dict[str, list[str]] = field(default_factory=dict)  # element -> options ignored
     kinds: dict[str, str] = field(default_factory=dict)        # element -> role
+    notes: dict[str, str] = field(default_factory=dict)        # element -> what was assumed
+    elements: list[Element] = field(default_factory=list)      # the netlist's, shorts merged
+    alias: dict[str, str] = field(default_factory=dict)        # node -> node it is shorted to
 
     @classmethod
     def of(cls, net: Netlist) -> Circuit:
         """Sort the netlist's elements (see the module docstring)."""
         c = cls(net)
+        c.alias = _shorts(net)
+        c.elements = [replace(el, nodes=tuple(c.alias.get(n, n) for n in el.nodes))
+                      for el in net.elements]
         sources = []
-        for el in net.elements:
+        for el in c.elements:
+            if el.kind == "v" and el.nodes[0] == el.nodes[1]:
+                c.kinds[el.name] = "short (0 V)"
+                continue
             if el.kind in "rc":
                 c._add_rc(el)
             elif el.kind in "vehgfib":
@@ -117,6 +126,8 @@ class Circuit:
             return
         if lin.ignored:
             self.ignored[el.name] = list(lin.ignored)
+        if lin.note:
+            self.notes[el.name] = lin.note
         if el.kind == "c" and lin.rser:
             mid = f"{el.name.lower()}#rser"
             self.branches += [Branch(f"{el.name}(Rser)", "r", a, mid, lin.rser, el),
@@ -173,7 +184,7 @@ class Circuit:
         return False
 
     def _resistive_only(self, node: str, source: Element) -> bool:
-        others = [e for e in self.net.elements if node in e.nodes and e is not source]
+        others = [e for e in self.elements if node in e.nodes and e is not source]
         return bool(others) and all(e.kind == "r" for e in others)
 
     def _constant(self, el: Element) -> bool:
@@ -191,6 +202,43 @@ class Circuit:
         except (ValueError, KeyError):
             return False
         return True
+
+
+def _shorts(net: Netlist) -> dict[str, str]:
+    """Nodes joined by a 0 V source (an ammeter), each to the node it is merged into (a pin
+    or ground when one side is one)."""
+    alias: dict[str, str] = {}
+
+    def find(n: str) -> str:
+        while n in alias:
+            n = alias[n]
+        return n
+
+    def fixed(n: str) -> bool:
+        return n == GROUND or n in net.pins
+
+    for el in net.elements:
+        if el.kind != "v" or not _zero(el):
+            continue
+        a, b = (find(n) for n in el.nodes)
+        if a == b or (fixed(a) and fixed(b)):
+            continue
+        if fixed(b):
+            a, b = b, a
+        alias[b] = a
+    return {n: find(n) for n in alias}
+
+
+def _zero(el: Element) -> bool:
+    words = [w for w in split_words(el.tail) if w.lower() != "dc"]
+    if not words:
+        return True
+    if len(words) > 1 and words[1].lower() != "ac":
+        return False
+    try:
+        return evaluate(words[0], _WithTemp(el.scope), el.scope.functions()) == 0
+    except (ValueError, KeyError):
+        return False
 
 
 class _WithTemp(Mapping[str, float]):

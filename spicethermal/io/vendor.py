@@ -129,8 +129,9 @@ def _thermal(c: Circuit, found: list[Found]) -> tuple[list[Found], list[str]]:
     keep = []
     for f in found:
         others = set().union(*(g.nodes | {g.reference} for g in found if g is not f))
-        sources = [e for e in c.net.elements if e.name in f.heat]
-        if sources and others and all(e.reads() & others - f.nodes for e in sources):
+        sources = [e for e in c.elements if e.name in f.heat]
+        reads = [{c.alias.get(n, n) for n in e.reads()} for e in sources]
+        if sources and others and all(r & (others - f.nodes - f.held) for r in reads):
             notes.append(f"{c.spelled(f.junction)} is left: a readout ({', '.join(f.heat)} "
                          "computes it from another network's temperatures), not a network")
         else:
@@ -199,6 +200,13 @@ def summary(c: Circuit, f: Found) -> str:
                   and c.kinds.get(e.name) != "ambient source"]
     if electrical:
         left.append(f"{len(electrical)} electrical ({_names(electrical)})")
+    options: dict[str, int] = {}
+    for name in taken:
+        for word in c.ignored.get(name, []):
+            options[word] = options.get(word, 0) + 1
+    if options:
+        parts.append("options that change nothing: " + ", ".join(
+            f"{k}{f' ×{n}' if n > 1 else ''}" for k, n in options.items()))
     out = "; ".join(parts)
     return out + ("; left " + ", ".join(left) if left else "") + \
         ("; " + "; ".join(f.notes) if f.notes else "")
