@@ -146,7 +146,14 @@ def parse_func(line: Line) -> tuple[str, Function]:
 
 
 def global_scope(lib: Library, overrides: Mapping[str, str] = ()) -> Scope:
-    """The library's ``.PARAM`` and ``.FUNC`` lines as the outermost scope."""
+    """The library's ``.PARAM`` and ``.FUNC`` lines as the outermost scope (``overrides``:
+    values given for some of them, ``--param``).
+
+    >>> from spicethermal.io.spice_read import Library
+    >>> lib = Library("f", [], [Line("f", 1, ".param a=2 b={a*3}")])
+    >>> global_scope(lib)["b"], global_scope(lib, {"a": "1"})["b"]
+    (6.0, 3.0)
+    """
     defs = {}
     for line in lib.params:
         defs.update({k: Definition(v, line.where) for k, v in _params(line).items()})

@@ -84,8 +84,20 @@ def _component(c: Circuit, start: str, held: set[str]) -> tuple[set[str], list[B
 
 
 def held_nodes(c: Circuit, junction: str, to: str | None) -> set[str]:
-    """The nodes held for the network from ``junction``: ground, the pins, the nodes ambient or
-    Thevenin sources drive; with ``to``, that node, the case pins becoming free."""
+    """The nodes held for the network from ``junction``: ground, the pins but the junction
+    pins (another die's junction is inside the network), the nodes ambient or Thevenin sources
+    drive; with ``to``, that node, the other pins but the ambient ones becoming free.
+
+    >>> from spicethermal.io.spice_read import read_library
+    >>> from spicethermal.io.spice_netlist import flatten
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "v.lib"
+    >>> _ = p.write_text(".SUBCKT D d Tj Tc Ta\\nR1 Tj Tc 1\\nC1 Tj Ta 1m\\n.ENDS\\n")
+    >>> lib = read_library(p)
+    >>> c = Circuit.of(flatten(lib, lib.get("D")))
+    >>> sorted(held_nodes(c, "tj", None)), sorted(held_nodes(c, "tj", "ta"))
+    (['0', 'd', 'ta', 'tc'], ['0', 'ta'])
+    """
     held = {GROUND, *c.net.pins, *c.ambient, *c.thevenin}
     held -= {p for p in c.net.pins if c.pin_role(p) == "junction"}  # other dies: inside
     if to is not None:
@@ -134,11 +146,37 @@ def _steady(j: str, held: set[str], branches: list[Branch]) -> tuple[float, dict
 def extract(c: Circuit, junction: str, to: str | None = None) -> Found:
     """The network from ``junction`` (see the module docstring).
 
+    Parameters
+    ----------
+    c : Circuit
+        The subcircuit's thermal reading.
+    junction : str
+        Where the heat enters (a node, lower case).
+    to : str, optional
+        The reference node, instead of the one the rules choose.
+
+    Returns
+    -------
+    Found
+
     Raises
     ------
     DataFormatError
         No network there, or an element of it that is not a linear R or C (named with its
         file and line).
+
+    Examples
+    --------
+    >>> from spicethermal.io.spice_read import read_library
+    >>> from spicethermal.io.spice_netlist import flatten
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "v.lib"
+    >>> _ = p.write_text(".SUBCKT D Tj Tc\\nR1 Tj n 1\\nC1 Tj 0 1m\\nR2 n Tc 2\\nC2 n 0 3m\\n"
+    ...                  "Rx n x 5\\n.ENDS\\n")
+    >>> lib = read_library(p)
+    >>> f = extract(Circuit.of(flatten(lib, lib.get("D"))), "tj")
+    >>> f.reference, f.shape, f.ladder.r, f.left
+    ('tc', 'cauer', (1.0, 2.0), {'dead end without heat storage (carries no heat)': ['Rx']})
     """
     sub = c.net.sub
     at = f"{sub.line.file}, .SUBCKT {sub.name} (line {sub.line.number})"
@@ -380,7 +418,16 @@ def _general(j: str, held: set[str], rs: dict[frozenset[str], float],
 
 
 def reference_label(c: Circuit, ref: str) -> str:
-    """``ambient`` for ground, an ambient pin or an ambient source's node; else ``case``."""
+    """``ambient`` for ground, an ambient pin or an ambient source's node; else ``case``.
+
+    >>> from spicethermal.io.spice_read import Line, Subckt
+    >>> from spicethermal.io.spice_netlist import Netlist
+    >>> from spicethermal.io.spice_expr import Scope
+    >>> c = Circuit(Netlist(Subckt("D", ("Tj", "Tamb"), Line("f", 1, "")), ("tj", "tamb"),
+    ...                     [], Scope()))
+    >>> reference_label(c, "tamb"), reference_label(c, "0"), reference_label(c, "tmb")
+    ('ambient', 'ambient', 'case')
+    """
     if ref == GROUND or ref in c.ambient or AMBIENT.fullmatch(ref):
         return "ambient"
     return "case"

@@ -63,7 +63,19 @@ class Circuit:
 
     @classmethod
     def of(cls, net: Netlist) -> Circuit:
-        """Sort the netlist's elements (see the module docstring)."""
+        """Sort the netlist's elements (see the module docstring).
+
+        >>> import tempfile, pathlib
+        >>> from spicethermal.io.spice_read import read_library
+        >>> from spicethermal.io.spice_netlist import flatten
+        >>> p = pathlib.Path(tempfile.mkdtemp()) / "v.lib"
+        >>> _ = p.write_text(".SUBCKT D d s Tj Tc\\nM1 d g s s NM\\nG1 0 Tj VALUE={V(d,s)}\\n"
+        ...                  "VA Ta 0 25\\nR1 Tj Tc 2 TC=0,0\\n.ENDS\\n")
+        >>> lib = read_library(p)
+        >>> c = Circuit.of(flatten(lib, lib.get("D")))
+        >>> c.heat, c.ambient, c.kinds["M1"], c.ignored, c.pin_role("tc")
+        ({'tj': ['G1']}, {'ta': 'VA'}, 'electrical', {'R1': ['TC=0,0']}, 'case')
+        """
         c = cls(net)
         c.alias = _shorts(net)
         c.elements = [replace(el, nodes=tuple(c.alias.get(n, n) for n in el.nodes))

@@ -52,18 +52,14 @@ class Extraction:
 
 def networks(lib: Library, name: str | None = None, params: Mapping[str, str] | None = None,
              to: str | None = None) -> Extraction:
-    """Every thermal network of subcircuit ``name``.
+    """Every thermal network of subcircuit ``name``: from each junction pin, else from each
+    node a heat source feeds (a readout pin, a network no pin reaches while others are, an R/C
+    without pins or thermal names are left, and said so in the networks' notes).
 
     Parameters
     ----------
-    lib : Library
-        From :func:`read_library`.
-    name : str, optional
-        Subcircuit name (any case); may be omitted when the library holds one.
-    params : mapping of str to str, optional
-        Parameter values replacing the library's (``--param``).
-    to : str, optional
-        A reference node farther than the case pin (``--to``).
+    lib, name, params, to
+        As in :func:`import_subckt`.
 
     Returns
     -------
@@ -73,6 +69,16 @@ def networks(lib: Library, name: str | None = None, params: Mapping[str, str] | 
     ------
     DataFormatError
         No thermal network (the reason of the most likely junction), or bad input.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "v.lib"
+    >>> _ = p.write_text(".SUBCKT TWO P TJA TJF\\nG1 0 TJA VALUE={V(P)}\\nR1 TJA 0 30\\n"
+    ...                  "C1 TJA 0 1\\nG2 0 TJF VALUE={V(P)}\\nR2 TJF 0 2\\nC2 TJF 0 1\\n.ENDS\\n")
+    >>> ex = networks(read_library(p))
+    >>> [(f.junction, f.reference, f.rth) for f in ex.found]
+    [('tja', '0', 30.0), ('tjf', '0', 2.0)]
     """
     sub = lib.get(name)
     c = Circuit.of(flatten(lib, sub, params))
