@@ -135,3 +135,18 @@ def test_user_functions_and_temp_as_a_parameter(tmp_path):
     with pytest.raises(DataFormatError, match="TEMP .give --param TEMP"):
         import_model(lib, "D")
     assert import_model(lib, "D", params={"TEMP": "25"}).ladder == WANT
+
+
+def test_what_simulators_forgive_is_forgiven_and_noted(tmp_path):
+    lib = read_library(write(tmp_path, ".subckt A a b\nR1 a b 1\n.ends\n.ends\n"
+                                       ".subckt D Tj Tc\nR1 Tj Tc 1\nC1 Tj 0 1m\n"))
+    assert [s.name for s in lib.subckts] == ["A", "D"]
+    assert any("line 4: .ENDS without .SUBCKT: ignored" in n for n in lib.notes)
+    assert any(".SUBCKT D has no .ENDS: it ends with the file" in n for n in lib.notes)
+    assert import_model(write(tmp_path, ".subckt D Tj Tc\nR1 Tj Tc 1\nC1 Tj 0 1m\n"), "D").rth == 1
+
+
+def test_an_ltspice_binary_library_is_named_as_such(tmp_path):
+    path = write(tmp_path, b"\r\n<Binary File>\r\n\r\n\x1a&\x7f\xb9\x00\x01", "part.sub")
+    with pytest.raises(DataFormatError, match="part.sub: an LTspice binary .encrypted. library"):
+        import_model(path, "X")

@@ -121,6 +121,9 @@ CUTS[("infineon_hitfet.lib", "XMPL78", "")] = Cut(
 CUTS[("wolfspeed_c3m.lib", "XMPL0016120D", "")] = Cut(
     *chain([_J, "N1", "N2", "N3", "Tc"], [175.2e-3, 392.7e-3, 248.1e-3, 210.4e-3],
            [702.1e-6, 3.51e-3, 16.2e-3, 150.9e-3]), {"0", "Tc"}, case_c=1e-12)
+CUTS[("wolfspeed_module.lib", "XMPL021M12FM3", "Thermals=2, die Q2")] = Cut(
+    *chain([_J, "1", "2", "TcQ2"], [1.71e-3, 15.2e-3, 84.4e-3], [1.69e-3, 52.3e-3, 341.2e-3]),
+    {"0", "TcQ2"}, choices={"params": {"Thermals": "2"}, "network": "TjQ2"})
 CUTS[("cree_c2m_packaged.lib", "XMPL0025120D", "")] = Cut(
     *chain([_J, *[f"N{k}" for k in range(1, 14)], "Tc"],
            [4.6e-3, 4.2e-3, 18.7e-3, 20.1e-3, 27.9e-3, 26.0e-3, 17.1e-3, 18.9e-3, 24.8e-3,
@@ -237,6 +240,8 @@ def test_a_parameter_changes_the_network_and_is_kept_in_the_provenance(tmp_path)
     ("infineon_optimos_n_l3.lib", "XMPL66N08_L1", "(line 89): no thermal network"),
     ("infineon_coolmos_l3.lib", "cool_x_n_var", "no thermal network at Tj: no R or C element"),
     ("fairchild_fdm36xx.lib", "XMPL3622", "(line 5): no thermal network"),
+    ("wolfspeed_module.lib", "XMPL021M12FM3", "the network from TjQ1 to "
+     "X1.XDie_Thermal_Q1.Tj1 has no capacitance (a temperature held through a resistor"),
 ])
 def test_libraries_without_a_network_say_so_in_one_line(tmp_path, capsys, name, subckt, words):
     out = tmp_path / "m.json"

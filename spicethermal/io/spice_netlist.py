@@ -249,6 +249,12 @@ def _instance(lib: Library, parent: Subckt, line: Line, name_of, prefix: str, sc
         net.notes.append(f"{line.where}: {plain[0]}: no subcircuit name: ignored")
         return
     inst, pins, subname = plain[0], plain[1:-1], plain[-1]
+    if subname.startswith("{"):  # a subcircuit chosen by a parameter (Wolfspeed modules)
+        try:
+            value = evaluate(subname, scope, scope.functions())
+            subname = str(int(value)) if value == int(value) else repr(value)
+        except (ValueError, KeyError, OverflowError):
+            pass
     child = lib.find(subname, parent)
     mapped = tuple(name_of(p) for p in pins)
     if child is not None and len(pins) < len(child.pins) and \

@@ -120,6 +120,9 @@ def decode(raw: bytes, label: str) -> str:
             raw = raw.decode("utf-16").encode("utf-8")
         except UnicodeDecodeError:
             raise DataFormatError(f"{label}: not a SPICE library (bad UTF-16 text)") from None
+    if raw.lstrip().startswith(b"<Binary File>"):
+        raise DataFormatError(f"{label}: an LTspice binary (encrypted) library; an encrypted "
+                              "model cannot be read")
     if b"\0" in raw:
         raise DataFormatError(f"{label}: a binary file (it holds NUL bytes), not a SPICE library")
     try:
@@ -236,9 +239,10 @@ class _Reader:
         if word == ".subckt":
             self.subckt(line)
         elif word == ".ends":
-            if not self.stack:
-                raise DataFormatError(f"{line.where}: .ENDS without .SUBCKT")
-            self.stack.pop()
+            if self.stack:
+                self.stack.pop()
+            else:
+                self.lib.notes.append(f"{line.where}: .ENDS without .SUBCKT: ignored")
         elif word in (".include", ".inc") or (word == ".lib" and len(words) >= 2):
             self.include(line, words, path, depth)
         elif word == ".endl":
@@ -308,7 +312,7 @@ def read_library(path: str | os.PathLike) -> Library:
     path = Path(path)
     reader = _Reader(path)
     reader.read(path, str(path))
-    if reader.stack:
-        sub = reader.stack[-1]
-        raise DataFormatError(f"{sub.line.where}: .SUBCKT {sub.name} has no .ENDS")
+    for sub in reader.stack:  # as simulators do: the file's end closes it
+        reader.lib.notes.append(f"{sub.line.where}: .SUBCKT {sub.name} has no .ENDS: it ends "
+                                "with the file")
     return reader.lib

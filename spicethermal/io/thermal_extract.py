@@ -221,7 +221,8 @@ def extract(c: Circuit, junction: str, to: str | None = None) -> Found:
             and ref in (b.a, b.b) and c.thermal_ground(b.other(ref))]
     _past_reference(c, j, ref, held, nodes, case, left)
     notes += sorted({c.notes[b.element.name] for b in branches if b.element.name in c.notes})
-    ladder, shape = _ladder(j, ref, held, branches, at)
+    ladder, shape = _ladder(j, ref, held, branches,
+                            f"{at}: the network from {c.spelled(j)} to {c.spelled(ref)}")
     heat = sorted({s for n in nodes for s in c.heat.get(n, [])})
     return Found(j, ref, branches, ladder, sum(b.value for b in case), shape, left, notes, heat,
                  nodes, held, [b.name for b in case])
@@ -343,7 +344,8 @@ def _ladder(j: str, ref: str, held: set[str], branches: list[Branch],
         elif b.value:
             cs[key] = cs.get(key, 0.0) + b.value
     if not cs:
-        raise DataFormatError(f"{at}: the network from {j} to {ref} has no capacitance")
+        raise DataFormatError(f"{at} has no capacitance (a temperature held through a "
+                              "resistor, not a thermal network)")
     chain = _chain(j, ref, held, rs)
     found = _chain_ladder(chain, held, rs, cs) if chain is not None else None
     return found if found is not None else (_general(j, held, rs, cs), "network")

@@ -13,16 +13,16 @@ by name into junction, case and ambient. Every other element is electrical and l
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 
 from .spice_expr import NotConstant, evaluate
 from .spice_netlist import GROUND, Element, Netlist, linear_value, split_words
 
-JUNCTION = re.compile(r"t?_?j(unc(tion)?)?\d*|t?_?die|tjunc\w*", re.I)
-CASE = re.compile(r"t_?c(ase)?\d*|case|t_?case\w*|t_?mb|t_?sp|t_?sol(der)?\w*|t_?foot|t_?lead|"
-                  r"t_?tab|t_?hs|t_?sink|tref|t_?board|t_?pcb", re.I)
-AMBIENT = re.compile(r"t_?a(mb(ient|iant)?)?\d*|amb(ient|iant)?|t_?amb\w*|t_?air", re.I)
+JUNCTION = re.compile(r"t_?j\w*|j\d*|junction\w*|t?_?die\w*", re.I)
+CASE = re.compile(r"t_?c\w*|case\w*|t_?mb\w*|t_?sp\d*|t_?sol(der)?\w*|t_?foot\w*|t_?lead\w*|"
+                  r"t_?tab\w*|t_?hs\w*|t_?sink\w*|tref|t_?board\w*|t_?pcb\w*|t_?base\w*",
+                  re.I)
+AMBIENT = re.compile(r"t_?a\d*|t_?amb\w*|amb(ient|iant)?\w*|t_?air\w*", re.I)
 #: Element kinds that are electrical devices (every node of theirs is electrical).
 DEVICES = set("dqjzmlswtoyupna")
 
@@ -210,7 +210,9 @@ class Circuit:
         if not words or (el.kind in "eh" and len(words) > 1 and "=" not in words[0]):
             return el.kind == "v" and not words  # "V1 a 0" is 0 V
         try:
-            evaluate(words[0], _WithTemp(el.scope), el.scope.functions())
+            evaluate(words[0], el.scope, el.scope.functions())
+        except NotConstant as exc:  # the simulator temperature is a constant
+            return "TEMP" in str(exc) and "V(" not in words[0].upper()
         except (ValueError, KeyError):
             return False
         return True
@@ -248,25 +250,6 @@ def _zero(el: Element) -> bool:
     if len(words) > 1 and words[1].lower() != "ac":
         return False
     try:
-        return evaluate(words[0], _WithTemp(el.scope), el.scope.functions()) == 0
+        return evaluate(words[0], el.scope, el.scope.functions()) == 0
     except (ValueError, KeyError):
         return False
-
-
-class _WithTemp(Mapping[str, float]):
-    """A scope in which ``TEMP`` reads as a constant (the simulator temperature is one)."""
-
-    def __init__(self, scope: Mapping[str, float]) -> None:
-        self.scope = scope
-
-    def __contains__(self, name: object) -> bool:
-        return name == "temp" or name in self.scope
-
-    def __getitem__(self, name: str) -> float:
-        return 27.0 if name == "temp" and "temp" not in self.scope else self.scope[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.scope)
-
-    def __len__(self) -> int:
-        return len(self.scope)
