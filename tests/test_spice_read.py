@@ -45,6 +45,12 @@ def test_every_dialect_spells_the_same_network(tmp_path, text):
     assert m.ladder.r == pytest.approx(WANT.r) and m.ladder.c == pytest.approx(WANT.c)
 
 
+@pytest.mark.parametrize("name", ["part.lib", "part.txt", "part.mod", "part.sub", "PART.LIB"])
+def test_any_file_name_but_csv_is_a_spice_library(tmp_path, name):
+    text = ".subckt D Tj Tc\nR1 Tj n1 1\nC1 Tj 0 1m\nR2 n1 Tc 2\nC2 n1 0 3m\n.ends\n"
+    assert import_model(write(tmp_path, text, name), "D").ladder == WANT
+
+
 @pytest.mark.parametrize("encoding, text", [
     ("utf-8-sig", "* Tj in °C, 10 µs résolution ✓\n"),
     ("utf-16", "* LTspice sometimes saves UTF-16 ° \n"),
@@ -57,8 +63,8 @@ def test_encodings_and_unicode_comments(tmp_path, encoding, text):
 
 
 def test_logical_lines_join_continuations_and_drop_comments():
-    lines = logical_lines("* c\nR1 a b 1k ; r\n  + TC=0 // x\nC1 a 0 1u $ c\n.control\n"
-                          "plot v(a)\n.endc\nR2 a $N_1 1\n.end\nR3 a b 1\n", "f.lib")
+    lines = logical_lines("* c\nR1 a b 1k ; r\n  + TC=0 // x\nC1 a 0 1u $c\n.control\n"
+                          "plot v(a)\n.endc\nR2 a $N_1 1 $ r\n.end\nR3 a b 1\n", "f.lib")
     assert [(x.number, x.text) for x in lines] == [(2, "R1 a b 1k TC=0"), (4, "C1 a 0 1u"),
                                                    (8, "R2 a $N_1 1")]
     with pytest.raises(DataFormatError, match="f.lib, line 1: a continuation line"):

@@ -3,13 +3,15 @@
 
 Text: UTF-8 (a BOM is dropped), UTF-16 with a BOM, else Latin-1 (vendors' degree signs);
 any letter case; ``+`` continuation lines (also indented); comments in every dialect's
-spelling (``*`` lines, ``;`` and ``//`` anywhere, `` $ `` after a blank, ngspice's
-``.control`` blocks); ``.include``/``.inc`` and ``.lib FILE [SECTION]`` followed inside the
-library's folder (``.lib NAME`` ... ``.endl`` sections are all read); ``.end`` ends a file.
-Every file goes through :func:`spicethermal.io.files.open_bounded` (regular files only, size
-limit, no link out of the library's folder). A binary or empty file, and an encrypted one
-(LTspice ``* LTspice Encrypted File``, PSpice ``$CDNENCSTART``, HSPICE ``.prot``), is named
-as such.
+spelling (``*`` lines, ``;`` and ``//`` anywhere, ``$`` after a blank unless it starts a
+PSpice node name such as ``$N_0001``, ngspice's ``.control`` blocks); ``.include``/``.inc``
+and ``.lib FILE [SECTION]`` followed inside the library's folder (``.lib NAME`` ... ``.endl``
+sections are all read); ``.end`` ends a file. Every file goes through
+:func:`spicethermal.io.files.open_bounded` (regular files only, size limit, no link out of
+the library's folder). A binary or empty file, and an encrypted one (LTspice ``* LTspice
+Encrypted File`` or ``<Binary File>``, PSpice ``$CDNENCSTART``, HSPICE ``.prot``), is named
+as such; a stray ``.ENDS`` and a missing last ``.ENDS`` are forgiven, as simulators do, and
+noted.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ MAX_INCLUDE_DEPTH = 8
 _ENCRYPTED = (re.compile(r"^\*\s*LTspice\s+Encrypted", re.I), re.compile(r"\$CDNENCSTART", re.I),
               re.compile(r"^\s*\.prot(ect)?\b", re.I), re.compile(r"^\s*\*\*\s*Begin:\s*$", re.I))
 _HEX_LINE = re.compile(r"^\s*(?:[0-9A-F]{2}\s+){7,}[0-9A-F]{2}\s*$")
-_DOLLAR = re.compile(r"(?:^|\s)\$(?:\s|$)")
+_DOLLAR = re.compile(r"(?:^|\s)\$(?![A-Za-z]_)")  # not PSpice's $N_0001, $G_VCC nodes
 
 
 @dataclass(frozen=True)
