@@ -262,3 +262,31 @@ def test_empty_and_binary_files_are_one_line(tmp_path, capsys, content, words):
     assert main(["import", str(lib), "--subckt", "X", "-o", str(out)]) == 2 and not out.exists()
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and words in err and "part.lib" in err, err
+
+
+#: Networks of each shape the import gives: a general network (exact Foster form), a Cauer
+#: ladder past the case, a Foster chain.
+IN_NGSPICE = [("infineon_optimos_n_l3.lib", "XMPL66N08", "Zthtype=1"),
+              ("ir_ips10xx.lib", "XMPL1011", "--to Tambiant"),
+              ("fairchild_fdm36xx.lib", "XMPL3622_JA", "")]
+
+
+@pytest.mark.ngspice
+@pytest.mark.parametrize("key", IN_NGSPICE, ids=[k[1] for k in IN_NGSPICE])
+def test_the_imported_network_in_ngspice_matches_the_hand_cut_one(tmp_path, key):
+    """Exported as the simulator reads it (Cauer, every dialect): no ``limit()`` is written
+    (ngspice's is a random function), and ngspice's Zth matches the hand-cut network's."""
+    from spicethermal.spice import lib as spice
+
+    cut = CUTS[key]
+    m = import_model(CORPUS / key[0], key[1], **cut.choices)
+    for dialect in spice.DIALECTS:
+        path = spice.export(m, tmp_path / f"{dialect}.lib", dialect, "cauer", "PART")
+        assert "limit" not in path.read_text().lower()
+        tstop = 20 * max(m.ladder.time_constants())
+        net = spice.render_bench(path, "PART", power_w=1.0, tstop_s=tstop, tmax_s=tstop / 2000,
+                                 rise_s=1e-6)
+        w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
+        late = w.t_s > 1e-4  # after the 1 us ramp of the power
+        err = float(np.max(np.abs(w["V(TJ)"] - hand_zth(cut, w.t_s))[late])) / cut.rth
+        assert err < TOLERANCE, f"{dialect}: {100 * err:.3g} % of Rth"
