@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import DATA
+from test_vendor import validate
 from test_vendor_corpus import Cut, chain, hand_zth
 
 from spicethermal.cli.main import main
@@ -71,6 +72,7 @@ def test_a_vendor_part_on_a_heatsink_matches_the_whole_network(tmp_path, models,
     system = ThermalModel.load(out)
     assert system.reference == "ambient" and system.ladder.topology == "cauer"
     assert system.rth == pytest.approx(sum(PART_R) + HEATSINK.rth, rel=1e-12)
+    validate(json.loads(out.read_text()))
     doc = json.loads(out.read_text())["provenance"]
     assert [p["file"] for p in doc["compose"]] == ["part.json", "sink.json"]
     t = np.concatenate([np.logspace(-7, 0, 200), np.linspace(1.0, 600.0, 400)])

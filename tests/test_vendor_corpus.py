@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_vendor import validate
 
 from spicethermal.cli.main import main
 from spicethermal.core.errors import DataFormatError
@@ -189,6 +190,7 @@ def test_each_library_imports_as_shipped_and_matches_the_hand_cut_network(key):
     name, subckt, _ = key
     cut = CUTS[key]
     m = import_model(CORPUS / name, subckt, **cut.choices)
+    validate(m.to_dict())
     exact = hand_zth(cut, T)
     rth = cut.rth
     assert m.rth == pytest.approx(rth, rel=1e-9)
