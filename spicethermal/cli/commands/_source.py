@@ -7,6 +7,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
+from ...core.errors import DataFormatError
 from ...io.sources import read_source
 from ._types import AliasFormatter, add_option, count, listed, number, positive
 
@@ -80,11 +81,27 @@ def read_source_args(args: argparse.Namespace, source: str | None = None, *,
     return src
 
 
-def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True) -> Bundle:
+def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True,
+                      model_reference: str | None = None) -> Bundle:
     """SOURCE as ``compare`` and ``diagnose`` take it (:meth:`Source.comparable`), what was
-    done on the way printed on stderr (``rth``: whether ``args.rth`` is the source's Rth)."""
+    done on the way printed on stderr (``rth``: whether ``args.rth`` is the source's Rth).
+
+    With ``model_reference``, a source that does not state its reference (any file but a
+    bundle, whose manifest does) is taken to ``args.reference``, else to the model's; a
+    bundle keeps its own and ``args.reference`` may only repeat it."""
     src = read_source_args(args, source, rth=rth)
     bundle, notes = src.comparable()
+    if model_reference is not None:
+        given = getattr(args, "reference", None)
+        if src.kind == "bundle":
+            if given is not None and given != bundle.reference:
+                raise DataFormatError(f"{src.path}: the bundle states its reference, "
+                                      f"{bundle.reference}; --reference {given} contradicts it")
+        else:
+            bundle = bundle.with_(reference=given or model_reference)
+            if given is None:
+                notes.append(f"the file does not state its reference: the model's "
+                             f"({model_reference}); --reference says otherwise")
     for note in notes:
         print(f"{src.path}: {note}", file=sys.stderr)
     return bundle

@@ -33,6 +33,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--window", type=_window, metavar="S",
                         help="sample window for PWM readings, s (default: the model's "
                              "sample-window effect, else the bundle's sample_window_s)")
+    parser.add_argument("--reference", choices=("case", "ambient"),
+                        help="what SOURCE is measured to, for a file that does not say (a CSV, "
+                             "PyRth, T3Ster; default: the model's reference); a bundle states "
+                             "its own")
     add_source_arguments(parser, curve=False, early=False)
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no progress bar on stderr (none either when it is not a terminal)")
@@ -41,7 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
     engine(args.engine, model)  # --engine analytic refuses device effects in one line
-    bundle = comparable_source(args, args.bundle)
+    bundle = comparable_source(args, args.bundle, model_reference=model.reference)
     result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
     if args.json:
         print(dumps_json(result.to_json(), indent=2))

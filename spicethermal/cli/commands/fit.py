@@ -23,7 +23,7 @@ from ...core.errors import DataFormatError
 from ...effects import spec
 from ...fit.bootstrap import fig_fit_band, fit_bootstrap
 from ...fit.fitters import fit_with_effects
-from ...fit.ladder import fit_model
+from ...fit.ladder import check_rth, fit_model
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
 from ...io.sources import early_time_json
@@ -121,6 +121,8 @@ def run(args: argparse.Namespace) -> int:
     curve = src.curve(args.curve, early_window_s=args.early_window)
     held, reference = src.rth_held(args.curve) or args.rth is not None, src.bundle.reference
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
+    if args.rth is not None:
+        check_rth(curve.t_s, curve.zth_k_per_w, args.rth, curve.label or str(source))
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
         max_order=args.max_order, reference=args.reference or reference, weighting=args.weighting,
