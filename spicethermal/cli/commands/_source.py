@@ -8,7 +8,16 @@ import sys
 from typing import TYPE_CHECKING
 
 from ...io.sources import read_source
-from ._types import AliasFormatter, add_option, count, listed, number, positive
+from ._types import (
+    AliasFormatter,
+    add_option,
+    count,
+    listed,
+    number,
+    positive,
+    positive_duration,
+    positive_power,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from ...io.bundle import Bundle
@@ -24,7 +33,7 @@ def window(text: str) -> tuple[float, float]:
     >>> window("1e-4,4e-4")
     (0.0001, 0.0004)
     """
-    values = listed(positive)(text)
+    values = listed(positive_duration)(text)
     if len(values) != 2 or not values[0] < values[1]:
         raise argparse.ArgumentTypeError(f"{text!r}: expected T1,T2 in s with 0 < T1 < T2")
     return values[0], values[1]
@@ -53,7 +62,7 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, curve: bool = True,
                            help="temperature at the end of the record (anchors the "
                                 "calibration), or the reference of a cooling CSV")
     if power:
-        group.add_argument("--power", type=positive, metavar="W",
+        group.add_argument("--power", type=positive_power, metavar="W",
                            help="heating power of a PyRth .txt or cooling CSV (default 1 W "
                                 "nominal, said in the output)")
     if rth:

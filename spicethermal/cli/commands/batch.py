@@ -26,6 +26,7 @@ from ...core.errors import DataFormatError
 from ...effects import spec
 from ...spice.lib import DIALECTS, TOPOLOGIES
 from ._types import count as _count
+from ._types import frequency, positive_power
 from ._types import index as _index
 from ._types import listed as _listed
 from ._types import positive as _positive
@@ -58,9 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
                         help="network of the models and .lib files (default foster)")
     pwm = parser.add_argument_group("PWM peak table over the population")
-    pwm.add_argument("--power", type=_positive, default=1.0, metavar="W",
+    pwm.add_argument("--power", type=positive_power, default=1.0, metavar="W",
                      help="pulse power (default 1 W)")
-    pwm.add_argument("--freq", type=_listed(_positive), default=(100.0, 1e3, 1e4),
+    pwm.add_argument("--freq", type=_listed(frequency), default=(100.0, 1e3, 1e4),
                      metavar="HZ,...", help="frequencies (default 100,1000,10000)")
     pwm.add_argument("--duty", type=_listed(_positive), default=(0.1, 0.5, 0.9),
                      metavar="D,...", help="duty cycles in (0, 1] (default 0.1,0.5,0.9)")

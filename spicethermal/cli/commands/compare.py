@@ -14,7 +14,7 @@ from ...engines.interface import NAMES, engine
 from ...io.files import dumps_json
 from ...model import ThermalModel
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
-from ._types import nonnegative as _window
+from ._types import duration as _window
 
 NAME = "compare"
 HELP = "measured vs model over every data set of a bundle (the paper's Table 2)"

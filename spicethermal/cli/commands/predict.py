@@ -9,6 +9,7 @@ linear models, ngspice with device effects (:mod:`spicethermal.analysis.predict`
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ...analysis.predict import (
     DEFAULT_POINTS,
@@ -18,10 +19,11 @@ from ...analysis.predict import (
     plot_prediction,
     predict,
 )
+from ...core.plausible import implausible_rise
 from ...io.bundle import format_columns
 from ...io.files import atomic_write_text
 from ...model import ThermalModel
-from ._types import add_engine_options, add_option, count, number, positive
+from ._types import add_engine_options, add_option, count, number, positive_duration
 
 NAME = "predict"
 HELP = "junction temperature under a measured power profile (analytic, or ngspice with effects)"
@@ -36,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", metavar="TJ.png", help="also draw Tj and power against time")
     add_option(parser, "--ambient", old=("--tref",), dest="tref", type=number, default=25.0,
                metavar="DEGC", help="reference (ambient or case) temperature, degC (default 25)")
-    parser.add_argument("--until", type=positive, metavar="S",
+    parser.add_argument("--until", type=positive_duration, metavar="S",
                         help="predict until this time, s (default: the profile's last sample; "
                              "after it the power is held)")
     parser.add_argument("--points", type=count, default=DEFAULT_POINTS, metavar="N",
@@ -55,6 +57,10 @@ def run(args: argparse.Namespace) -> int:
     atomic_write_text(args.output, format_columns(result.columns(), [
         f"spicethermal predict: {args.model} under {args.power}, Tref {args.tref:g} degC, "
         f"engine {result.engine}"]))
+    warning = implausible_rise(result.peak[1] - args.tref, f"the power profile {args.power} "
+                               f"(power_w in W)")
+    if warning:
+        print(f"spicethermal predict: warning: {warning}", file=sys.stderr)
     if args.plot:
         plot_prediction(result, args.plot)
     print(result)
