@@ -153,6 +153,6 @@ def test_predict_warns_about_an_absurd_rise(tmp_path, actuator, capsys):
     model = _model(tmp_path, actuator)
     profile = tmp_path / "p.csv"
     profile.write_text("t_s,power_w\n0,1e6\n1,1e6\n")
-    assert main(["predict", model, "--power", str(profile), "-o", str(tmp_path / "tj.csv"),
+    assert main(["predict", model, "--profile", str(profile), "-o", str(tmp_path / "tj.csv"),
                  "--engine", "analytic"]) == 0
     assert "warning: a peak rise of" in capsys.readouterr().err

@@ -111,7 +111,7 @@ def test_command_on_csv_sources(tmp_path: Path, capsys) -> None:
     _, tj = synthetic_cooling(f, 5.0, t, ambient_c=30.0)
     cool = tmp_path / "cooling.csv"
     cool.write_text(format_columns({"t_s": t, "tj_c": tj}))
-    assert cli.main(["table1", str(cool), "--json", "--tref-steady", "30", "--datasheet", "mur880e",
+    assert cli.main(["table1", str(cool), "--json", "--ambient", "30", "--datasheet", "mur880e",
                      "--tj-steady", str(30 + 5.0 * f.rth), "--mask", "none"]) == 0
     err = [r["error_percent"] for r in json.loads(capsys.readouterr().out)["rows"]]
     assert np.all(np.abs(err) < 0.5)

@@ -73,7 +73,14 @@ def cli_markdown() -> str:
            "on an option measured in kelvin (metavar `K`), where it is the unit (`--tol 0.5K`). "
            "An option with a unit refuses the others (`--freq 1s`). Negative values read as "
            "values (`--ambient -40`, `--ambient -4e1`) and are refused in one line where they "
-           "make no sense.", ""]
+           "make no sense.", "",
+           "One spelling per concept: `-o/--output` is the data a command writes (a model, a "
+           "table, a `.lib`, a directory), `--plot FIG.png` a figure, `--report DIR` an HTML "
+           "report, `--power W` a power in watts, `--profile PROFILE.csv` a power profile, "
+           "`--freq HZ,...` and `--duty D,...` frequencies and duty cycles (a list where a "
+           "command takes several), `--ambient DEGC` the reference temperature. Old spellings "
+           "(`--tref`, `--p-max`, `--freqs`, `--duties`, `-o FIG.png`, ...) still work in this "
+           "release, hidden from the help, with a one-line deprecation note on stderr.", ""]
     out += [f"- [`{name}`](#{name.replace(' ', '-')})" for name, _ in pages[1:]]
     for name, text in pages:
         out += ["", f"## {name}", "", "```text", text.rstrip(), "```"]

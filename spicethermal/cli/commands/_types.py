@@ -24,6 +24,7 @@ import argparse
 import copy
 import math
 import re
+import sys
 from collections.abc import Callable, Sequence
 from decimal import Decimal
 from typing import Any
@@ -233,18 +234,47 @@ class AliasFormatter(argparse.HelpFormatter):
         return super()._format_action_invocation(shown)
 
 
+#: How long an old spelling keeps working.
+DEPRECATION = "it goes in the next release"
+
+
+def deprecated(prog: str, old: str, new: str) -> None:
+    """One line on stderr: ``old`` (an option, or a use of one) is deprecated for ``new``.
+
+    >>> deprecated("spicethermal pwm", "--tref", "--ambient")  # on stderr
+    """
+    print(f"{prog}: note: {old} is deprecated, use {new} ({DEPRECATION})", file=sys.stderr)
+
+
+_DEPRECATING: dict[type, type] = {}
+
+
+def _deprecating(cls: type[argparse.Action]) -> type[argparse.Action]:
+    """``cls`` that notes on stderr when it is given by one of its ``hidden_aliases``."""
+    if cls not in _DEPRECATING:
+        def __call__(self, parser, namespace, values, option_string=None):  # noqa: N807
+            if option_string in self.hidden_aliases:
+                shown = [s for s in self.option_strings if s not in self.hidden_aliases]
+                deprecated(parser.prog, option_string, "/".join(shown))
+            return cls.__call__(self, parser, namespace, values, option_string)
+
+        _DEPRECATING[cls] = type(f"Deprecating{cls.__name__}", (cls,), {"__call__": __call__})
+    return _DEPRECATING[cls]
+
+
 def add_option(parser: argparse.ArgumentParser, *names: str, old: Sequence[str] = (),
                **kwargs: Any) -> argparse.Action:
     """``parser.add_argument(*names, **kwargs)`` that also accepts the ``old`` spellings.
 
-    The old spellings parse exactly as the new ones but are left out of ``--help``, docs/cli.md
-    and the spelling rules of ``tests/test_cli_spelling.py``.
+    The old spellings parse exactly as the new ones, print a one-line deprecation note on
+    stderr (:func:`deprecated`), and are left out of ``--help``, docs/cli.md and the spelling
+    rules of ``tests/test_cli_spelling.py``.
 
     Parameters
     ----------
     parser : the command's parser.
     names : the option's spellings (``"-o", "--output"``).
-    old : earlier spellings kept working (``"--out"``).
+    old : earlier spellings kept working for one release (``"--out"``).
     kwargs : as for :meth:`argparse.ArgumentParser.add_argument`.
 
     Returns
@@ -255,13 +285,44 @@ def add_option(parser: argparse.ArgumentParser, *names: str, old: Sequence[str] 
     --------
     >>> p = argparse.ArgumentParser(prog="x")
     >>> _ = add_option(p, "--freq", old=("--f-pwm",), type=float)
-    >>> p.parse_args(["--f-pwm", "5"]).freq, "--f-pwm" in p.format_help()
+    >>> p.parse_args(["--freq", "5"]).freq, "--f-pwm" in p.format_help()
     (5.0, False)
     """
     action = parser.add_argument(*names, *old, **kwargs)
     action.hidden_aliases = tuple(old)  # type: ignore[attr-defined]
+    if old:
+        action.__class__ = _deprecating(type(action))
     parser.formatter_class = AliasFormatter
     return action
+
+
+#: Suffixes of a figure file.
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def old_figure_output(args: argparse.Namespace, dest: str = "output") -> str | None:
+    """``-o FIG.png``, the figure's old spelling: taken out of ``args.<dest>`` into
+    ``args.plot`` (unless ``--plot`` is given) with a deprecation note; returns that figure path.
+
+    ``args.<dest>`` may be a path or a list of paths (an ``append`` option).
+
+    Examples
+    --------
+    >>> args = argparse.Namespace(command="curves", output="fig.png", plot=None)
+    >>> old_figure_output(args), args.plot, args.output
+    ('fig.png', 'fig.png', None)
+    """
+    value = getattr(args, dest)
+    paths = value if isinstance(value, list) else [value] if value is not None else []
+    figures = [x for x in paths if x.lower().endswith(FIGURE_SUFFIXES)]
+    if not figures:
+        return None
+    deprecated(f"spicethermal {args.command}", f"-o {figures[0]} (a figure)",
+               f"--plot {figures[0]}; -o is the data output")
+    args.plot = args.plot or figures[0]
+    rest = [x for x in paths if x not in figures]
+    setattr(args, dest, rest if isinstance(value, list) else rest[0] if rest else None)
+    return figures[0]
 
 
 # ------------------------------------------------------------------------------ shared options
@@ -290,5 +351,6 @@ def add_engine_options(parser: argparse.ArgumentParser, choices: Sequence[str],
     >>> p.parse_args(["-q"]), p.parse_args(["--engine", "ngspice"]).engine
     (Namespace(engine='auto', quiet=True), 'ngspice')
     """
-    parser.add_argument("--engine", choices=choices, default="auto", help=engine_help)
+    parser.add_argument("--engine", choices=choices, default="auto",
+                        help=f"{engine_help} (default auto)")
     parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)

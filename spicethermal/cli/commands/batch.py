@@ -55,7 +55,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="candidate effect of the diagnosis (repeatable; default every "
                              "catalogued effect)")
     parser.add_argument("--no-diagnose", action="store_true", help="fit and export only")
-    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice")
+    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice",
+                        help="syntax of the .lib files: ngspice (default), pspice or ltspice")
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
                         help="network of the models and .lib files (default foster)")
     pwm = parser.add_argument_group("PWM peak table over the population")

@@ -29,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="print the spicethermal-comparison/1 document")
     parser.add_argument("--engine", choices=NAMES, default="auto",
                         help="PWM engine: auto (analytic for linear models, ngspice with device "
-                             "effects), analytic, ngspice or pyspice")
+                             "effects; default), analytic, ngspice or pyspice")
     parser.add_argument("--window", type=_window, metavar="S",
                         help="sample window for PWM readings, s (default: the model's "
                              "sample-window effect, else the bundle's sample_window_s)")

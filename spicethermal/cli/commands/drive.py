@@ -49,8 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="target temperature of the actuation node (period average), °C")
     parser.add_argument("--ambient", type=_number, default=25.0, metavar="C",
                         help="reference temperature, °C (default 25)")
-    parser.add_argument("--p-max", type=positive_power, metavar="W",
-                        help="heater power when on (default: the DC power whose steady state "
+    add_option(parser, "--power", old=("--p-max",), dest="p_max", type=positive_power,
+               metavar="W", help="heater power when on (default: the DC power whose steady state "
                              "puts the junction at t-max)")
     add_option(parser, "--freq", old=("--f-pwm",), dest="f_pwm", type=frequency,
                default=DEFAULT_F_PWM_HZ, metavar="HZ",

@@ -1,4 +1,4 @@
-"""``spicethermal predict MODEL.json --power PROFILE.csv -o TJ.csv [--plot TJ.png]``.
+"""``spicethermal predict MODEL.json --profile PROFILE.csv -o TJ.csv [--plot TJ.png]``.
 
 The junction temperature under a measured power profile (CSV ``t_s, power_w`` from t = 0,
 linear between samples, held after the last): the analytic engine (exact, mode by mode) for
@@ -31,8 +31,8 @@ HELP = "junction temperature under a measured power profile (analytic, or ngspic
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="a spicethermal model file")
-    parser.add_argument("--power", required=True, metavar="PROFILE.csv",
-                        help="power profile: columns t_s (from 0) and power_w")
+    add_option(parser, "--profile", old=("--power",), required=True, metavar="PROFILE.csv",
+               help="power profile: columns t_s (from 0) and power_w in W")
     parser.add_argument("-o", "--output", required=True, metavar="TJ.csv",
                         help="where to write t_s, power_w, tj_c")
     parser.add_argument("--plot", metavar="TJ.png", help="also draw Tj and power against time")
@@ -50,14 +50,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
-    profile = PowerProfile.read(args.power)
+    profile = PowerProfile.read(args.profile)
     times = output_times(profile, args.until, args.points)
     result = predict(model, profile, times, tref_c=args.tref, engine=args.engine,
                      quiet=args.quiet)
     atomic_write_text(args.output, format_columns(result.columns(), [
-        f"spicethermal predict: {args.model} under {args.power}, Tref {args.tref:g} degC, "
+        f"spicethermal predict: {args.model} under {args.profile}, Tref {args.tref:g} degC, "
         f"engine {result.engine}"]))
-    warning = implausible_rise(result.peak[1] - args.tref, f"the power profile {args.power} "
+    warning = implausible_rise(result.peak[1] - args.tref, f"the power profile {args.profile} "
                                f"(power_w in W)")
     if warning:
         print(f"spicethermal predict: warning: {warning}", file=sys.stderr)
