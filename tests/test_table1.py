@@ -80,7 +80,9 @@ def test_command_text_is_an_aligned_table(tmp_path: Path, capsys) -> None:
     path = _synthetic_bundle(tmp_path)
     assert cli.main(["table1", str(path), "--datasheet", "mur880e"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0].startswith("early time: masked")  # the √t window and Tj at the cut
+    # the √t window and Tj at the cut, said once, under the table
+    assert [x for x in lines if "early" in x][0].startswith("early-time correction: masked")
+    assert sum("early" in x for x in lines) == 1
     start = next(i for i, line in enumerate(lines) if "error (%)" in line)
     rows = lines[start:start + 7]
     assert "datasheet r(t)" in rows[0]
