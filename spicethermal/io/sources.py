@@ -142,15 +142,23 @@ class Source:
         z = self.bundle.zth[index - len(self.bundle.cooling)]
         return z.rth_k_per_w is not None
 
-    def comparable(self, points_per_decade: int = BINS_PER_DECADE) -> tuple[Bundle, list[str]]:
+    def comparable(self, points_per_decade: int = BINS_PER_DECADE, *,
+                   mask_transient: bool = False) -> tuple[Bundle, list[str]]:
         """The bundle as ``compare`` and ``diagnose`` take it, and what was done to it: zth
         tables become the cooling curves they imply at 1 W (``Tj(t) = Tref + Rth − Zth(t)`` by
         superposition, ``Tref`` the ambient or 25 degC), and cooling curves denser than
         :data:`DENSE_POINTS` samples are averaged into ``points_per_decade`` log-spaced bins
-        (:func:`thin`)."""
+        (:func:`thin`).
+
+        ``mask_transient``: leave out of each cooling curve the samples ``fit`` masks as the
+        electrical transient (:meth:`curve`'s early-time correction, the same detection), so
+        that a model is judged on what it was fitted to describe; each curve's
+        ``extra["left_out"]`` then says ``{"samples": n, "before_s": t}``."""
         notes: list[str] = []
         cooling = []
-        for c in self.bundle.cooling:
+        for i, c in enumerate(self.bundle.cooling):
+            if mask_transient:
+                c = self._masked(i, notes)
             thinned = thin(c, points_per_decade)
             if thinned is not c:
                 notes.append(f"{c.file}: {c.t_s.size} samples averaged into {thinned.t_s.size} "
@@ -171,6 +179,28 @@ class Source:
             notes.append(f"{zc.label}: compared as the cooling curve it implies at 1 W from "
                          f"{ambient:g} degC")
         return bundle.with_(cooling=tuple(cooling), zth=(), ambient_c=ambient), notes
+
+
+    def _masked(self, index: int, notes: list[str]) -> CoolingTable:
+        """Cooling curve ``index`` without the samples fit masks (``extra["left_out"]``)."""
+        c = self.bundle.cooling[index]
+        try:
+            early = self.curve(index).early
+        except DataFormatError:  # no Zth from it: fit would refuse it, nothing to mirror
+            return c
+        t_mask = early.masked_s[1] if early is not None and early.masked_points else 0.0
+        keep = c.t_s >= t_mask
+        left_out = {"samples": int(c.t_s.size - keep.sum()), "before_s": float(t_mask)}
+        if left_out["samples"]:
+            notes.append(f"{c.file}: {left_out['samples']} samples before {t_mask:.3g} s left "
+                         f"out (the electrical transient, masked as fit masks it)")
+
+        def cut(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else values[keep]
+
+        return replace(c, t_s=c.t_s[keep], tj_c=cut(c.tj_c), v_tsp_v=cut(c.v_tsp_v),
+                       tref_c=cut(c.tref_c), rows=cut(c.rows),
+                       extra={**c.extra, "left_out": left_out})
 
 
 def thin(cooling: CoolingTable, points_per_decade: int = BINS_PER_DECADE) -> CoolingTable:

@@ -89,11 +89,13 @@ def read_source_args(args: argparse.Namespace, source: str | None = None, *,
     return src
 
 
-def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True) -> Bundle:
+def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True,
+                      mask_transient: bool = False) -> Bundle:
     """SOURCE as ``compare`` and ``diagnose`` take it (:meth:`Source.comparable`), what was
-    done on the way printed on stderr (``rth``: whether ``args.rth`` is the source's Rth)."""
+    done on the way printed on stderr (``rth``: whether ``args.rth`` is the source's Rth;
+    ``mask_transient``: leave out the samples fit masks as the electrical transient)."""
     src = read_source_args(args, source, rth=rth)
-    bundle, notes = src.comparable()
+    bundle, notes = src.comparable(mask_transient=mask_transient)
     for note in notes:
         print(f"{src.path}: {note}", file=sys.stderr)
     return bundle

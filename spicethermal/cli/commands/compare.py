@@ -1,8 +1,10 @@
 """``spicethermal compare MODEL.json BUNDLE [--json] [--engine auto|analytic|ngspice|pyspice]``.
 
-Measured vs model over every data set of the bundle: the PWM readings as the paper's Table 2
-(Freq × duty: T_exp, T_mod, Δ) and the cooling curves point by point. ``--json`` prints the
-``spicethermal-comparison/1`` document. Δ = measured − model.
+Measured vs model over every data set of the bundle, one table per kind: the PWM readings as the
+paper's Table 2 (Freq × duty: T_exp, T_mod, Δ; the power in a column when each row has its
+own), the cooling curves one row each. Unless the model has an ``electrical-transient`` effect,
+the samples ``fit`` masks as the electrical transient are left out, as fit leaves them out, and
+counted. ``--json`` prints the ``spicethermal-comparison/1`` document. Δ = measured − model.
 """
 
 from __future__ import annotations
@@ -41,7 +43,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
     engine(args.engine, model)  # --engine analytic refuses device effects in one line
-    bundle = comparable_source(args, args.bundle)
+    # judged on what a fit describes: without an electrical-transient effect, the samples fit
+    # masks as the transient are left out (and counted)
+    bundle = comparable_source(args, args.bundle,
+                               mask_transient=model.effect("electrical-transient") is None)
     result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
     if args.json:
         print(dumps_json(result.to_json(), indent=2))
