@@ -4,7 +4,7 @@ VENV    := .venv
 BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench firmware clean
+.PHONY: setup demo test check lint bench firmware clean
 
 setup: $(STAMP) ngspice
 
@@ -27,9 +27,14 @@ firmware:
 demo: setup firmware
 	$(BIN)/spicethermal demo -o out/demo
 
+# every test, two processes (pytest-xdist): the README's and CI's command
 test: setup firmware
 	$(MAKE) -C firmware test
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
+
+# the edit loop: everything but the tests marked slow (whole-pipeline runs)
+check: setup firmware
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m 'not slow and not benchmark'
 
 lint: setup
 	$(BIN)/ruff check spicethermal tests bench

@@ -12,6 +12,9 @@ from spicethermal.analysis.verdict import at_noise
 from spicethermal.core.ladder import Foster
 from spicethermal.io.bundle import Bundle, CoolingTable
 
+#: full diagnoses: the slow tier (`make test` runs it, `make check` does not)
+pytestmark = pytest.mark.slow
+
 T = 10.0 ** (np.arange(-50, 21) / 10)  # 10 µs ... 100 s
 
 

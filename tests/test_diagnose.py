@@ -26,6 +26,9 @@ from spicethermal.effects import known_names
 from spicethermal.io.bundle import Bundle
 from spicethermal.model import ThermalModel
 
+#: full diagnoses: the slow tier (`make test` runs it, `make check` does not)
+pytestmark = pytest.mark.slow
+
 SEEDS = (0, 1)
 CATALOGUED = [s for s in SCENARIOS if expected_effect(s) is not None]
 

@@ -15,6 +15,9 @@ from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects.temperature_coefficient import law, law_slope
 from spicethermal.fit.tcforward import local_cooling_rise, local_steady_nodes, tc_cooling
 
+#: full diagnoses: the slow tier (`make test` runs it, `make check` does not)
+pytestmark = pytest.mark.slow
+
 
 def test_the_step_law_and_its_slope_are_the_logistic_step():
     s = Switch.of(0.3, 40.0, 2.0, 0, 0, 25.0)

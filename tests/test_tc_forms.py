@@ -29,6 +29,9 @@ from spicethermal.spice import lib as spice
 from spicethermal.validation.cases import case
 from spicethermal.validation.network import Network, ResistanceLaw
 
+#: full diagnoses: the slow tier (`make test` runs it, `make check` does not)
+pytestmark = pytest.mark.slow
+
 TC = "temperature-coefficient"
 R4, C4 = (4.0, 12.0, 40.0, 90.0), (2e-5, 4e-4, 8e-3, 0.3)
 

@@ -17,6 +17,9 @@ from spicethermal.validation.measure import Bench, Transient, Tsp, measure
 from spicethermal.validation.network import LatentHeat, Network, ResistanceLaw
 from spicethermal.validation.periodic import periodic_start, pwm_reading
 
+#: full diagnoses: the slow tier (`make test` runs it, `make check` does not)
+pytestmark = pytest.mark.slow
+
 R4, C4 = (4.0, 12.0, 40.0, 90.0), (2e-5, 4e-4, 8e-3, 0.3)
 
 
