@@ -58,7 +58,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
                         help="largest order tried by --order auto (default 10)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME",
-                        help="an effect to fit with the ladder (repeatable)")
+                        help="an effect to fit with the ladder (repeatable; default none: the "
+                             "linear ladder alone)")
     parser.add_argument("--weighting", choices=("relative", "absolute"), default="relative",
                         help="relative (default: log-domain, every decade of time counts, as "
                              "datasheet and measured curves need) or absolute (K/W) residuals")
