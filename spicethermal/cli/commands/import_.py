@@ -39,8 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "several lists them")
     parser.add_argument("--param", type=_param, action="append", default=[],
                         metavar="NAME=VALUE",
-                        help="a parameter's value instead of the library's (repeatable), e.g. "
-                             "--param Zthtype=1 for Infineon's maximum network")
+                        help="a parameter's value instead of the library's (repeatable; "
+                             "default: the library's own values), e.g. --param Zthtype=1 for "
+                             "Infineon's maximum network")
     parser.add_argument("--network", metavar="N|NODE",
                         help="which network when the subcircuit holds several (listed without "
                              "it): its number or its junction node")
