@@ -26,6 +26,7 @@ firmware:
 
 demo: setup firmware
 	$(BIN)/spicethermal demo -o out/demo
+	@echo "the spicethermal command is in $(VENV): in each new shell, run  . $(BIN)/activate"
 
 # every test, two processes (pytest-xdist): the README's and CI's command
 test: setup firmware

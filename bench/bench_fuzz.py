@@ -28,7 +28,7 @@ from spicethermal.io.bundle import Bundle
 
 ROOT = Path(__file__).resolve().parent.parent
 CLI = [sys.executable, "-m", "spicethermal.cli.main"]
-QUICK = ["--powers", "0.094", "--t-last", "5", "--settle-s", "20", "-q"]
+QUICK = ["--cooling-power", "0.094", "--t-last", "5", "--settle", "20", "-q"]
 
 
 def fuzz(examples: int, seed: int) -> dict:

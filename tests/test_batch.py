@@ -7,6 +7,7 @@ import csv
 import functools
 import json
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -225,3 +226,52 @@ def test_workers_and_scheduler_exclude_each_other(capsys):
         main(["batch", "x", "-o", "y", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"])
     assert exc.value.code == 2
     assert "not allowed with argument" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------ issue #45
+def _copies(root: Path, n: int) -> list[Path]:
+    """``n`` copies of one simulated device, in directories of their own names."""
+    bundle = device_bundle(simulate_population(1, seed=2)[0])
+    return [bundle.write(root / f"copy_{i}") for i in range(n)]
+
+
+def test_identical_inputs_are_flagged_and_counted_once(tmp_path):
+    """Four identical inputs: one device, three duplicates (by content hash, in results.csv
+    and the report); the robust σ is the documented 1 % floor, not 0; the PWM peaks are at
+    the bundles' power, not 1 W (no Dask: the runner's own steps, in process)."""
+    from spicethermal.batch.runner import mark_duplicates, write_table
+    from spicethermal.batch.summary import summarize
+
+    paths = _copies(tmp_path / "in", 4)
+    results = [characterize(Source.read(p, p.name), Options(diagnose=False)) for p in paths]
+    rows = [r["row"] for r in results]
+    mark_duplicates(rows)
+    write_table(rows, tmp_path / "out")
+    table = _csv_rows(tmp_path / "out" / "results.csv")
+    assert [r["duplicate_of"] for r in table] == ["", "copy_0", "copy_0", "copy_0"]
+    summary = summarize(results, tmp_path / "out", freqs_hz=[1e3], duties=[0.5])
+    power = float(table[0]["power_w"])
+    assert power == pytest.approx(20.0, rel=0.05)  # the simulated bundles' power, not 1 W
+    assert summary.power_w == pytest.approx(power)
+    peaks = _csv_rows(tmp_path / "out" / "pwm_peaks.csv")
+    assert float(peaks[0]["power_w"]) == pytest.approx(power) and peaks[0]["devices"] == "1"
+    page = (tmp_path / "out" / "index.html").read_text()
+    assert "robust σ 0 K/W" not in page
+    assert re.search(r"robust σ [\d.]+ K/W \(1\.0 % — the floor, 1 % of the median\)", page)
+    assert "3 duplicates (the same content as another input, counted once)" in page
+    assert "Duplicate inputs" in page and page.count(">copy_0<") >= 4
+
+
+def test_the_runner_flags_duplicates_in_results_csv(client, tmp_path):
+    paths = _copies(tmp_path / "in", 2)
+    run = run_batch(paths, tmp_path / "out", client=client, options=Options(diagnose=False))
+    assert [r["duplicate_of"] for r in run.rows] == ["", "copy_0"]
+    rows = _csv_rows(tmp_path / "out" / "results.csv")
+    assert list(rows[0])[-1] == "duplicate_of" and rows[1]["duplicate_of"] == "copy_0"
+
+
+def test_a_curve_files_content_is_its_bytes_not_its_name(tmp_path):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    for p in (a, b):
+        p.write_text("t_s,zth_k_per_w\n1e-3,0.1\n1e-2,0.2\n")
+    assert Source.read(a, "a").sha256 == Source.read(b, "b").sha256

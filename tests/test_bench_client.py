@@ -282,13 +282,13 @@ def test_bad_plans_are_refused_before_touching_the_bench(tmp_path):
 def test_cli_bench_calibrate_and_errors(tmp_path, capsys):
     out = tmp_path / "cli"
     assert main(["bench", "calibrate", "--port", "sim://actuator?seed=1", "-o", str(out),
-                 "--setpoints", "25,50", "-q"]) == 0
+                 "--setpoint", "25,50", "-q"]) == 0
     assert Bundle.read(out).calibration.temp_c.size == 2
     assert main(["bench", "rth", "--port", "sim://actuator?mute=1", "-o", str(out), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no response from the device" in err[0]
     with pytest.raises(SystemExit) as info:
-        main(["bench", "pwm", "--port", "sim://actuator", "-o", str(out), "--duties", "x"])
+        main(["bench", "pwm", "--port", "sim://actuator", "-o", str(out), "--duty", "x"])
     assert info.value.code == 2
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -274,3 +275,73 @@ def test_table2_figures(model, bundle_dir, tmp_path):
     assert out.stat().st_size > 10000
     with pytest.raises(DataFormatError, match="pwm"):
         plot_table2(c.dataset("cooling_1"))
+
+
+# ------------------------------------------------------------------------------ output (#45)
+def test_a_pwm_grid_with_a_power_per_row_is_one_table(model):
+    """Each row's measured power (as the bench records it) goes in a column of one Table 2,
+    not into 18 one-row tables."""
+    f, d = (np.array(x) for x in zip(*[(f, d) for f in FREQS for d in DUTIES], strict=True))
+    powers = POWER_W * (1 + 1e-3 * np.arange(f.size))
+    table = PwmTable(f, d, np.full(f.size, 30.0), power_w=POWER_W, row_power_w=powers,
+                     sample_window_s=WINDOW_S)
+    text = Comparison(compare_pwm(model, table, reference_c=25.0)).table()
+    lines = text.splitlines()
+    assert sum("Freq (kHz)" in line for line in lines) == 1
+    assert "P per point" in lines[0] and "sample window 100 µs" in lines[0]
+    assert lines[2].count("P (W)") == len(DUTIES)
+    body = [line for line in lines if line.split("|")[0].strip() in ("0.5", "1", "3", "5", "10",
+                                                                      "25")]
+    assert len(body) == len(FREQS) and all(line.count("|") == 4 for line in body)
+    assert "0.0940" in body[0] and f"{powers[-1]:.4f}" in body[-1]
+    assert any(line.startswith("pwm: 18 points, rms") for line in lines)
+
+
+def test_cooling_curves_are_one_table(model):
+    c = compare(model, synthetic_bundle(model))
+    lines = c.table().splitlines()
+    start = lines.index(next(x for x in lines if x.startswith("Cooling curves")))
+    assert lines[start + 1].split()[:4] == ["curve", "power", "(W)", "points"]
+    assert [x.split()[0] for x in lines[start + 2:start + 4]] == ["cooling_1", "cooling_2"]
+    assert lines[-1].startswith("all data sets: 44 points")
+
+
+def test_compare_on_the_record_a_model_was_fitted_to_leaves_out_what_fit_masked(tmp_path,
+                                                                                 capsys):
+    """The real MOSFET transient: fit, then compare with the same calibration. The samples of
+    the electrical transient that fit masked are left out and counted; what is left is what the
+    model was asked to describe (RMS 1.71 K and a 28 K worst point when they were compared)."""
+    raw = DATA / "pyrth_mosfet"
+    cal = ["--calibration", str(raw / "calibration.csv"), "--ambient", "25"]
+    model = str(tmp_path / "m.json")
+    assert main(["fit", str(raw / "MOSFET_dry.txt"), *cal, "-o", model, "-q"]) == 0
+    fitted = json.loads((tmp_path / "m.json").read_text())["provenance"]["early_time"]
+    capsys.readouterr()
+    assert main(["compare", model, str(raw / "MOSFET_dry.txt"), *cal, "--json"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    left = doc["left_out"]["cooling_1"]
+    assert left["before_s"] == fitted["masked_s"][1] and left["samples"] == 88
+    assert min(p["at"]["t_s"] for p in doc["points"]) >= left["before_s"]
+    assert doc["rms_k"] < 0.05 and doc["max_abs_k"] < 0.1
+    assert "88 samples before 9.6e-05 s left out" in err
+    assert main(["compare", model, str(raw / "MOSFET_dry.txt"), *cal]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"^cooling_1\s+1\s+242\s+88 before 96 µs", text, re.M), text
+
+
+def test_a_model_with_the_electrical_transient_is_compared_on_every_sample(tmp_path, model,
+                                                                            capsys):
+    """That effect describes the early samples: nothing is left out."""
+    t = np.geomspace(1e-6, 10.0, 200)
+    rise = POWER_W * model.ladder.cooling(t) - 2.0 * np.exp(-t / 2e-5)  # a 2 K transient
+    b = Bundle(ambient_c=25.0, cooling=(CoolingTable(t, POWER_W, tj_c=25.0 + rise,
+                                                     tref_steady_c=25.0),))
+    path = b.write(tmp_path / "b")
+    with_effect = ThermalModel(model.ladder, (Effect.create(
+        "electrical-transient", amplitude_k=2.0, masked_s=1e-4),))
+    for m, masked in ((model, True), (with_effect, False)):
+        m.save(tmp_path / "m.json")
+        assert main(["compare", str(tmp_path / "m.json"), str(path), "--json"]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        assert ("left_out" in doc and doc["left_out"]["cooling_1"]["samples"] > 0) == masked

@@ -185,7 +185,7 @@ def test_report_tables_have_units_in_their_headers(demo):
 
 @pytest.mark.slow
 def test_demo_outputs_are_usable(demo):
-    assert len(demo.libs) == 6 and all(p.read_text().count(".SUBCKT") == 1 for p in demo.libs)
+    assert len(demo.libs) == 9 and all(p.read_text().count(".SUBCKT") == 1 for p in demo.libs)
     model = ThermalModel.load(demo.out / "actuator_model.json")
     assert model.rth == pytest.approx(146.0 * (1 - 2e-3 * 13.7), rel=0.02)  # Rth at its rise
     better = ThermalModel.load(demo.out / "actuator_model_temperature-coefficient.json")
@@ -222,3 +222,58 @@ def test_demo_command_help_names_the_report():
     from spicethermal.cli.commands import demo as command
 
     assert "report" in command.HELP and Path(command.__file__).exists()
+
+
+def _netlist(path: Path) -> list[str]:
+    """A .lib's element lines (no comments: the header names the bundle's path)."""
+    return [line for line in path.read_text().splitlines() if line and not line.startswith("*")]
+
+
+@pytest.mark.slow
+def test_report_numbers_agree_with_the_files_and_the_command_line(demo, tmp_path, capsys):
+    """One number per thing: what the report says about the .lib files, the Cauer ladder, the
+    calibration and Rth is what the folder holds and what the commands give for the same
+    bundle and model."""
+    from spicethermal.cli.main import main
+    from spicethermal.io.bundle import Bundle
+
+    html = demo.report.read_text()
+    page = _Page()
+    page.feed(html)
+    text = " ".join(page.text)
+    tables = {t[0][0][1]: t[1:] for t in page.tables}
+    # every .lib written is counted and listed once (the summary said 6 of 9)
+    libs = sorted((demo.out / "lib").glob("*.lib"))
+    assert len(libs) == len(demo.libs) == 9
+    assert f"{len(libs)} .lib files in" in demo.summary[4]
+    assert sorted(row[0][1] for row in tables["file"]) == sorted(f"lib/{p.name}" for p in libs)
+    # absolute temperatures, as the copy-paste deck reads V(TJ) and as `export` writes them
+    for p in libs:
+        assert "node voltages are temperatures in degC" in p.read_text(), p.name
+    model = demo.out / "actuator_model.json"
+    assert main(["export", str(model), "--topology", "cauer", "--name", "ACTUATOR", "-o",
+                 str(tmp_path / "cli.lib")]) == 0
+    assert _netlist(tmp_path / "cli.lib") == _netlist(demo.out / "lib" /
+                                                      "actuator_ngspice_cauer.lib")
+    # the Cauer table in the .lib's words and values: node TJ, N1...; C to node 0
+    assert "each capacity to node 0, the thermal ground" in text and "node 0 is" not in text
+    lines = _netlist(demo.out / "lib" / "actuator_ngspice_cauer.lib")
+    r = {ln.split()[1]: float(ln.split()[3]) for ln in lines if ln.startswith("R")}
+    c = {ln.split()[1]: float(ln.split()[3]) for ln in lines if ln.startswith("C")}
+    assert [row[0][1] for row in tables["node"]] == list(r)
+    for (_, node), (_, rv), (_, cv) in tables["node"]:
+        assert float(rv) == pytest.approx(r[node], rel=1e-3)
+        assert float(cv) == pytest.approx(c[node], rel=1e-3)
+    # the fitted parameters are where the text says
+    assert html.index("fitted parameters in the candidates table below") < \
+        html.index("Candidates, best first")
+    # the calibration: the law the text names is the bundle's, and the figure draws it
+    cal = Bundle.read(demo.out / "actuator").calibration_fit()
+    assert ("with a quadratic" if cal.degree == 2 else "fitted linearly") in text
+    assert f"K-factor {cal.k_factor_mv_per_k:.3f} mV/K" in text
+    # Rth of section 2 is what `fit` gives for the same bundle
+    assert main(["fit", str(demo.out / "actuator"), "-o", str(tmp_path / "m.json"), "-q"]) == 0
+    rth = json.loads((tmp_path / "m.json").read_text())["rth_k_per_w"]
+    stated = float(re.search(r"gives Rth = ([\d.]+) K/W \(eq\. 1\)", text)[1])
+    assert stated == pytest.approx(rth, abs=0.005)
+    capsys.readouterr()

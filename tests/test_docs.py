@@ -71,6 +71,37 @@ def _run_spice(body: str, tmp: Path) -> None:
         deck.append(line.split(";")[0].rstrip())
     wave = NgspiceBatch(timeout_s=60).run("\n".join(deck), ["V(TJ)"], dialect)
     assert wave.t_s.size > 2
+    # as the reader runs it, `ngspice -b deck.cir`: every .meas prints its value
+    as_written = re.sub(r"(?im)^\.include\s+(\S+)", lambda m: f".include {tmp / m[1]}", body)
+    (tmp / "deck.cir").write_text(as_written)
+    proc = subprocess.run(["ngspice", "-b", "deck.cir"], cwd=tmp, capture_output=True, text=True,
+                          timeout=60)
+    for name in re.findall(r"(?im)^\.meas\w*\s+\w+\s+(\w+)", body):
+        assert re.search(rf"(?im)^{name}\s*=\s*\S", proc.stdout), (
+            f"ngspice -b prints no {name}:\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}")
+
+
+def _duration(text: str) -> float:
+    """``20m`` -> 0.02 (a SPICE number)."""
+    scale = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "m": 1e-3, "k": 1e3, "meg": 1e6}
+    number, unit = re.fullmatch(r"([\d.]+(?:e[-+]?\d+)?)([a-z]*)", text.lower()).groups()
+    return float(number) * scale.get(unit.removesuffix("s") if unit != "s" else "", 1.0)
+
+
+def test_the_tutorial_deck_says_what_it_simulates_and_prints_in_batch_mode():
+    """The README's deck: its .tran comment states the simulated time (20 ms, not "a
+    second"), and a .meas makes `ngspice -b` print a result."""
+    decks = [b for _, lang, b in blocks((ROOT / "README.md").read_text(encoding="utf-8"))
+             if lang == "spice" and "PULSE" in b]
+    assert decks, "README.md: the tutorial's deck is gone"
+    deck = decks[0]
+    tran = re.search(r"(?im)^\.tran\s+(\S+)\s+(\S+).*?;(.*)$", deck)
+    stop = _duration(tran[2])
+    stated = re.search(r"\((\d+(?:\.\d+)?)\s*(ms|s|µs|us)\)", tran[3])
+    assert stated, f"the .tran comment states no duration: {tran[3]!r}"
+    value = float(stated[1]) * {"s": 1.0, "ms": 1e-3, "µs": 1e-6, "us": 1e-6}[stated[2]]
+    assert value == pytest.approx(stop), (tran[0], stop)
+    assert re.search(r"(?im)^\.(meas|print)", deck), "ngspice -b prints nothing without it"
 
 
 @pytest.mark.slow

@@ -216,7 +216,7 @@ def test_default_power_is_the_safe_dc_power(demo):
 def test_cli_json_plot_and_deck(demo, tmp_path, capsys):
     path = demo.save(tmp_path / "act.json")
     fig, deck = tmp_path / "drive.png", tmp_path / "drive.cir"
-    code = cli.main(["drive", str(path), "--t-max", "90", "--target", "60", "--p-max", "2",
+    code = cli.main(["drive", str(path), "--t-max", "90", "--target", "60", "--power", "2",
                      "--node", "2", "--json", "--plot", str(fig), "--spice", str(deck)])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
@@ -232,7 +232,7 @@ def test_cli_json_plot_and_deck(demo, tmp_path, capsys):
 
 def test_cli_errors_are_one_line(demo, tmp_path, capsys):
     path = demo.save(tmp_path / "act.json")
-    assert cli.main(["drive", str(path), "--t-max", "60", "--target", "59", "--p-max", "2"]) == 2
+    assert cli.main(["drive", str(path), "--t-max", "60", "--target", "59", "--power", "2"]) == 2
     err = capsys.readouterr().err.strip()
     assert "not safely reachable" in err and len(err.splitlines()) == 1
     assert cli.main(["drive", str(tmp_path / "nope.json"), "--t-max", "90",
@@ -297,7 +297,7 @@ def test_schedule_is_whole_periods(cavity_drive):
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 def test_cli_verify_runs_the_deck(tmp_path, capsys):
     path = ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])).save(tmp_path / "m.json")
-    code = cli.main(["drive", str(path), "--t-max", "70", "--target", "55", "--p-max", "1",
+    code = cli.main(["drive", str(path), "--t-max", "70", "--target", "55", "--power", "1",
                      "--verify", "--json"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)

@@ -96,7 +96,7 @@ def test_commands_refuse_analytic_for_a_nonlinear_model(tmp_path, capsys):
     (tmp_path / "p.csv").write_text("t_s,power_w\n0,0\n1e-3,0.5\n")
     model = _tc_model(tmp_path)
     for argv in (["compare", model, str(DATA / "sample_bundle")],
-                 ["predict", model, "--power", str(tmp_path / "p.csv"), "-o",
+                 ["predict", model, "--profile", str(tmp_path / "p.csv"), "-o",
                   str(tmp_path / "tj.csv")]):
         assert main([*argv, "--engine", "analytic"]) == 2
         err = capsys.readouterr().err
@@ -115,7 +115,7 @@ def test_commands_run_every_engine(tmp_path, capsys):
     peaks = {}
     for name in NAMES:
         out = tmp_path / f"tj_{name}.csv"
-        assert main(["predict", model, "--power", str(tmp_path / "p.csv"), "-o", str(out),
+        assert main(["predict", model, "--profile", str(tmp_path / "p.csv"), "-o", str(out),
                      "--engine", name]) == 0
         peaks[name] = np.loadtxt(out, delimiter=",", skiprows=2)[:, 2].max()  # tj_c
     assert max(peaks.values()) - min(peaks.values()) < 1e-3 * 0.5 * LADDER.rth

@@ -76,7 +76,7 @@ def test_bad_profile_names_the_row(tmp_path, capsys, text, words) -> None:
     prof = tmp_path / "p.csv"
     prof.write_text(text)
     out = tmp_path / "tj.csv"
-    assert main(["predict", str(model), "--power", str(prof), "-o", str(out)]) == 2
+    assert main(["predict", str(model), "--profile", str(prof), "-o", str(out)]) == 2
     err = capsys.readouterr().err
     assert words in err and err.count("\n") == 1 and not out.exists()
 
@@ -88,8 +88,8 @@ def test_command_writes_tj_csv_and_figure(tmp_path, capsys) -> None:
     prof.write_text(format_columns({"t_s": [0.0, 1e-6, 0.1, 0.100001],
                                     "power_w": [0.0, 1.0, 1.0, 0.0]}))
     out, fig = tmp_path / "tj.csv", tmp_path / "tj.png"
-    assert main(["predict", str(model), "--power", str(prof), "-o", str(out), "--plot",
-                 str(fig), "--tref", "40", "--until", "1", "--points", "101"]) == 0
+    assert main(["predict", str(model), "--profile", str(prof), "-o", str(out), "--plot",
+                 str(fig), "--ambient", "40", "--until", "1", "--points", "101"]) == 0
     assert "peak" in capsys.readouterr().out
     cols = read_columns(out, ["t_s", "power_w", "tj_c"])
     assert cols["t_s"][-1] == 1.0 and cols["tj_c"][0] == 40.0

@@ -66,9 +66,9 @@ def test_bootstrap_progress(monkeypatch, command):
 
 def test_bench_procedure_progress(monkeypatch, tmp_path):
     common = ["--port", "sim://actuator?seed=1", "-o", str(tmp_path / "b")]
-    for action, options in (("calibrate", ["--setpoints", "25,35"]), ("rth", []),
-                            ("cooling", ["--powers", "0.094", "--t-last", "1"]),
-                            ("pwm", ["--freqs", "25k", "--duties", "0.5"])):
+    for action, options in (("calibrate", ["--setpoint", "25,35"]), ("rth", []),
+                            ("cooling", ["--cooling-power", "0.094", "--t-last", "1"]),
+                            ("pwm", ["--freq", "25k", "--duty", "0.5"])):
         _shown_unless_quiet(monkeypatch, ["bench", action, *common, *options],
                             "% ")  # the bar's percentage
 
@@ -77,7 +77,7 @@ def test_bench_procedure_progress(monkeypatch, tmp_path):
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 def test_predict_with_device_effects_progress(monkeypatch, tmp_path):
     (tmp_path / "p.csv").write_text("t_s,power_w\n0,0\n1e-3,0.5\n0.5,0.5\n")
-    argv = ["predict", _tc_model(tmp_path / "m.json"), "--power", str(tmp_path / "p.csv"),
+    argv = ["predict", _tc_model(tmp_path / "m.json"), "--profile", str(tmp_path / "p.csv"),
             "-o", str(tmp_path / "tj.csv")]
     _shown_unless_quiet(monkeypatch, argv, "ngspice transient")
 
@@ -86,7 +86,7 @@ def test_predict_with_device_effects_progress(monkeypatch, tmp_path):
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 def test_drive_verify_progress(monkeypatch, tmp_path):
     path = ThermalModel(Foster.from_tau([30.0, 70.0], [0.01, 1.0])).save(tmp_path / "m.json")
-    argv = ["drive", str(path), "--t-max", "70", "--target", "55", "--p-max", "1", "--verify"]
+    argv = ["drive", str(path), "--t-max", "70", "--target", "55", "--power", "1", "--verify"]
     _shown_unless_quiet(monkeypatch, argv, "ngspice drive check")
 
 

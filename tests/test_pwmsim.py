@@ -262,16 +262,21 @@ def test_fig8_curves(actuator):
 def test_curves_command(tmp_path, actuator, capsys):
     path = _model_file(tmp_path, actuator)
     out = tmp_path / "fig8.png"
-    assert main(["curves", path, "-o", str(out)]) == 0
+    table = out.with_suffix(".csv")
+    assert main(["curves", path, "--plot", str(out), "-o", str(table)]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10000
-    assert capsys.readouterr().out.splitlines() == [str(out), str(out.with_suffix(".csv"))]
-    assert main(["curves", path, "-o", str(out), "--duty", "0.5", "--duty", "0"]) == 0
+    lines = capsys.readouterr().out.splitlines()  # says what it wrote
+    assert lines[0].startswith(f"wrote figure {out}: r_D(t) for duty 0, 0.1,")
+    assert lines[1].startswith(f"wrote table {table}: peak Zth in K/W for duty 0, 0.1,")
+    assert main(["curves", path, "--plot", str(out), "--duty", "0.5", "--duty", "0"]) == 0
     with pytest.raises(SystemExit) as exc:
-        main(["curves", path, "-o", str(out), "--duty", "1.5"])
+        main(["curves", path, "--plot", str(out), "--duty", "1.5"])
     assert exc.value.code == 2
-    assert main(["curves", str(tmp_path / "none.json"), "-o", str(out)]) == 2
+    assert main(["curves", str(tmp_path / "none.json"), "--plot", str(out)]) == 2
+    assert main(["curves", path]) == 2  # nothing to write
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and "duty" in err[0] and "none.json" in err[1]
+    assert len(err) == 3 and "duty" in err[0] and "none.json" in err[1]
+    assert "--plot FIG.png" in err[2] and "-o TABLE.csv" in err[2]
 
 
 @pytest.mark.ngspice

@@ -162,4 +162,4 @@ def test_a_raw_transient_without_calibration_names_the_options(capsys) -> None:
         err = capsys.readouterr().err
         assert "--calibration" in err and "--k-factor" in err and err.count("\n") == 1
     assert main(["spectrum", raw, "--k-factor", "-2.3"]) == 2
-    assert "--tref" in capsys.readouterr().err
+    assert "--ambient" in capsys.readouterr().err

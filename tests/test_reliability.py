@@ -26,7 +26,7 @@ from spicethermal.io import files
 from spicethermal.io.bundle import Bundle, CoolingTable
 
 CLI = [sys.executable, "-m", "spicethermal.cli.main"]
-QUICK = ["--powers", "0.094", "--t-last", "5", "--settle-s", "20", "-q"]
+QUICK = ["--cooling-power", "0.094", "--t-last", "5", "--settle", "20", "-q"]
 
 
 def bench_cooling(out: Path, seed: int, *extra: str) -> subprocess.Popen:
@@ -177,7 +177,7 @@ def test_kill_9_inside_the_directory_swap_leaves_a_complete_bundle(tmp_path: Pat
 def test_reruns_add_data_sets_and_replace_is_explicit(base: Path, capsys) -> None:
     port = ["--port", "sim://actuator?seed=4", "-o", str(base)]
     assert main(["bench", "cooling", *port, *QUICK]) == 0
-    assert main(["bench", "calibrate", *port, "--setpoints", "25,45", "-q"]) == 0
+    assert main(["bench", "calibrate", *port, "--setpoint", "25,45", "-q"]) == 0
     b = Bundle.read(base)
     assert [c.file for c in b.cooling] == ["cooling_1.csv", "cooling_2.csv"]
     assert b.calibration.file == "calibration_2.csv"

@@ -128,7 +128,7 @@ def test_diagnose_with_a_model_on_single_point_curves(tmp_path, model, capsys) -
 
 @pytest.mark.parametrize("name", ["a$b.png", "x^2.png", "$^$.png"])
 def test_mathtext_characters_in_a_figure_name(tmp_path, model, capsys, name) -> None:
-    code, _, err = run(["curves", str(model), "-o", str(tmp_path / name)], capsys)
+    code, _, err = run(["curves", str(model), "--plot", str(tmp_path / name)], capsys)
     assert code == 0, err
     assert (tmp_path / name).stat().st_size > 0
 

@@ -48,7 +48,7 @@ def test_cooling_csv_with_raw_voltage_and_k_factor(tmp_path: Path) -> None:
     p.write_text(format_columns({"t_s": T, "v_tsp_v": 0.6 - 2e-3 * (tj - 25.0)}))
     with pytest.raises(DataFormatError, match="--calibration CSV"):
         read_source(p, tref_c=25.0)
-    with pytest.raises(DataFormatError, match="--k-factor needs --tref"):
+    with pytest.raises(DataFormatError, match="--k-factor needs --ambient"):
         read_source(p, k_factor_mv_per_k=-2.0)
     src = read_source(p, k_factor_mv_per_k=-2.0, tref_c=25.0, power_w=2.0)
     assert any("anchored" in n for n in src.notes)

@@ -194,7 +194,7 @@ def test_cli_structure_json_one_and_two_sources(tmp_path, capsys):
     assert r[-1] == pytest.approx(2.9, rel=5e-3)
 
     fig = tmp_path / "sf.png"
-    assert main(["structure", *paths, "--json", "-o", str(fig)]) == 0
+    assert main(["structure", *paths, "--json", "--plot", str(fig)]) == 0
     two = json.loads(capsys.readouterr().out)
     assert isinstance(two, list) and [x["source"] for x in two] == paths
     assert two[0]["separation"] == two[1]["separation"]

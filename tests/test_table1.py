@@ -80,7 +80,9 @@ def test_command_text_is_an_aligned_table(tmp_path: Path, capsys) -> None:
     path = _synthetic_bundle(tmp_path)
     assert cli.main(["table1", str(path), "--datasheet", "mur880e"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0].startswith("early time: masked")  # the √t window and Tj at the cut
+    # the √t window and Tj at the cut, said once, under the table
+    assert [x for x in lines if "early" in x][0].startswith("early-time correction: masked")
+    assert sum("early" in x for x in lines) == 1
     start = next(i for i, line in enumerate(lines) if "error (%)" in line)
     rows = lines[start:start + 7]
     assert "datasheet r(t)" in rows[0]
@@ -111,7 +113,7 @@ def test_command_on_csv_sources(tmp_path: Path, capsys) -> None:
     _, tj = synthetic_cooling(f, 5.0, t, ambient_c=30.0)
     cool = tmp_path / "cooling.csv"
     cool.write_text(format_columns({"t_s": t, "tj_c": tj}))
-    assert cli.main(["table1", str(cool), "--json", "--tref-steady", "30", "--datasheet", "mur880e",
+    assert cli.main(["table1", str(cool), "--json", "--ambient", "30", "--datasheet", "mur880e",
                      "--tj-steady", str(30 + 5.0 * f.rth), "--mask", "none"]) == 0
     err = [r["error_percent"] for r in json.loads(capsys.readouterr().out)["rows"]]
     assert np.all(np.abs(err) < 0.5)

@@ -21,8 +21,7 @@ def test_duty_family_csv_is_the_pwm_peak_per_watt(tmp_path, capsys) -> None:
     checked against the independent PWM solver."""
     model = tmp_path / "m.json"
     ThermalModel(LADDER).save(model)
-    fig = tmp_path / "fig8.png"
-    assert main(["curves", str(model), "-o", str(fig), "--duty", "0.1", "--duty", "0.5"]) == 0
+    assert main(["curves", str(model), "-o", str(tmp_path / "fig8.csv"), "--duty", "0.1,0.5"]) == 0
     cols = read_columns(tmp_path / "fig8.csv", ["t_s", "zth_k_per_w_d0.1", "zth_k_per_w_d0.5"])
     for d in (0.1, 0.5):
         for t, z in list(zip(cols["t_s"], cols[f"zth_k_per_w_d{d:g}"], strict=True))[::7]:

@@ -19,7 +19,8 @@ from test_spice import COUPLED_TOLERANCE, coupled_error, exact_rise, ladder_bran
 from spicethermal.cli.main import main
 from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Cauer, Foster
-from spicethermal.io.vendor import evaluate, import_model, spice_number
+from spicethermal.io.spice_expr import evaluate, spice_number
+from spicethermal.io.vendor import import_model
 from spicethermal.model import ThermalModel
 from spicethermal.spice import lib as spice
 
@@ -140,25 +141,77 @@ def test_foster_chain_with_a_pure_resistance_is_its_exact_cauer(tmp_path):
 
 
 @pytest.mark.parametrize("body, line, words", [
-    ("R1 Tj n1 1\nB1 0 Tj I=V(Tj)\nR2 n1 Tc 1\n", 4, "B1 is a behavioural source"),
-    ("R1 Tj n1 1\nG1 0 Tj VALUE={1}\nR2 n1 Tc 1\n", 4, "G1 is a dependent source"),
-    ("R1 Tj n1 1\nX1 n1 Tc SUB\n", 4, "X1 is a subcircuit instance"),
-    ("R1 Tj n1 1\nR2 n1 Tc 1\nR3 n1 Tc 1\n", 5, "branches off the chain"),
-    ("R1 Tj n1 1\nR2 n1 Tc 1\nC1 Tj n2 1\n", 5, "neither across a stage"),
-    ("R1 Tj n1 {zz}\nR2 n1 Tc 1\n", 3, "unknown parameter 'zz'"),
-    ("R1 Tj n1 1 TC=0.004\nR2 n1 Tc 1\n", 3, "cannot represent"),
-    ("R1 Tj n1 -1\nR2 n1 Tc 1\n", 3, "must be finite and > 0"),
-    (".model X D\nR1 Tj Tc 1\n", 3, ".model inside .SUBCKT"),
+    ("R1 Tj n1 1\nR2 n1 Tc {zz}\nC1 n1 0 1\n", 4, "R2 is in the thermal network from Tj but "
+                                                   "unknown parameter 'zz'"),
+    ("R1 Tj n1 -1\nR2 n1 Tc 1\nC1 n1 0 1\n", 3, "must be > 0"),
+    ("R1 Tj n1 {V(Tj)}\nR2 n1 Tc 1\nC1 n1 0 1\n", 3, "depends on a node voltage"),
+    ("R1 Tj n1 1\nR2 n1 Tc 1\nC1 n1 0 Q=1m*V(n1)\n", 5, "a charge Q=: not a linear C"),
+    ("R1 Tj n1 1\nR2 n1 Tc 1\nC1 n1 0 1 Lser=1n\n", 5, "Lser=1e-09 is an inductance"),
+    ("R1 Tj n1 RMOD 1\nR2 n1 Tc 1\nC1 n1 0 1\n", 3, "uses model RMOD"),
 ])
 def test_what_cannot_be_represented_is_one_line_naming_the_line(tmp_path, capsys, body, line,
                                                                  words):
     lib = _write(tmp_path, f"* vendor\n.subckt D Tj Tc\n{body}.ends\n")
-    with pytest.raises(DataFormatError, match=f"line {line}: .*{words}"):
+    with pytest.raises(DataFormatError, match=re.escape(f"line {line}: ") + ".*"
+                       + re.escape(words)):
         import_model(lib)
     out = tmp_path / "m.json"
     assert main(["import", str(lib), "-o", str(out)]) == 2 and not out.exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"line {line}" in err[0]
+
+
+def test_a_temperature_coefficient_is_taken_at_the_simulator_temperature(tmp_path):
+    lib = _write(tmp_path, ".subckt D Tj Tc\nR1 Tj n1 1 TC=0.004,1e-5\nR2 n1 Tc 1 TC1=0 TC2=0\n"
+                           "C1 n1 0 1\nC2 Tj 0 1 IC=0\n.ends\n")
+    nominal = import_model(lib)
+    assert nominal.ladder.r == (1.0, 1.0)
+    line = nominal.provenance["extraction"]
+    assert "R1: TC=0.004,1e-05 taken at TNOM = 27 degC, the value as written" in line
+    assert "options that change nothing: TC1=0, TC2=0, IC=0" in line
+    hot = import_model(lib, params={"TEMP": "127"})
+    assert hot.ladder.r == pytest.approx((1 + 0.004 * 100 + 1e-5 * 100 ** 2, 1.0), rel=1e-12)
+    assert "R1: TC=0.004,1e-05 evaluated at TEMP = 127 degC" in hot.provenance["extraction"]
+
+
+@pytest.mark.parametrize("body, words", [
+    ("R1 Tj n1 1\nR2 n1 Tc 1\n", "has no capacitance"),
+    ("C1 Tj 0 1\n", "no resistor leads to a held node"),
+    ("R1 n1 Tc 1\nC1 n1 0 1\n", "no R or C element there"),
+])
+def test_a_subcircuit_without_a_network_at_its_junction_says_why(tmp_path, body, words):
+    lib = _write(tmp_path, f".subckt D Tj Tc\n{body}.ends\n")
+    with pytest.raises(DataFormatError, match=f".SUBCKT D \\(line 1\\): .*{words}"):
+        import_model(lib)
+
+
+def test_electrical_elements_around_the_network_are_left_with_the_reason(tmp_path):
+    """What the old reader refused (issue #44): behavioural and dependent sources, subcircuit
+    instances, an electrical capacitor with an option, TC=0,0 on the network."""
+    lib = _write(tmp_path, """.subckt SUB a b
+R1 a b 1k
+.ends
+.subckt D d g s Tj Tc
+B1 0 Tj I=V(d,s)*I(Vs)
+G1 d s VALUE={V(g,s)*2}
+X1 d g SUB
+Vs s s1 0
+Ci_d d 0 1p Rpar=1G
+R1 Tj n1 1 TC=0,0
+C1 Tj 0 1m TC=0,0
+R2 n1 Tc 2
+C2 n1 0 3m IC=0
+.ends
+""")
+    m = import_model(lib, "D")
+    assert m.ladder == Cauer([1.0, 2.0], [1e-3, 3e-3])
+    prov = m.provenance
+    assert prov["elements"]["taken"] == ["R1", "C1", "R2", "C2"]
+    assert prov["elements"]["heat_sources"] == ["B1"]
+    line = prov["extraction"]
+    assert line == ("took 4 (R1, C1, R2, C2); heat source B1; options that change nothing: "
+                    "TC=0,0 ×2, IC=0; left 4 electrical (G1, X1.R1, Vs, Ci_d)")
+    assert "\n" not in line
 
 
 def test_several_subcircuits_are_listed_and_one_is_chosen(tmp_path, capsys):

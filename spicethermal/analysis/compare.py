@@ -103,9 +103,12 @@ class Comparison:
 
     points: tuple[ComparisonPoint, ...]
     engine: str = "analytic"
+    #: Per cooling curve, the samples fit masks and compare left out: ``{"samples", "before_s"}``
+    left_out: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", tuple(self.points))
+        object.__setattr__(self, "left_out", MappingProxyType(dict(self.left_out)))
 
     # -- numbers ---------------------------------------------------------------------------
     @property
@@ -132,7 +135,8 @@ class Comparison:
 
     def dataset(self, name: str) -> Comparison:
         """The points of one data set (``"pwm"``, ``"cooling_1"``, ...)."""
-        return Comparison(tuple(p for p in self.points if p.dataset == name), self.engine)
+        return Comparison(tuple(p for p in self.points if p.dataset == name), self.engine,
+                          {k: v for k, v in self.left_out.items() if k == name})
 
     def by_dataset(self) -> dict[str, Comparison]:
         """Every data set's own comparison."""
@@ -145,26 +149,35 @@ class Comparison:
     # -- output ----------------------------------------------------------------------------
     def to_json(self) -> dict[str, Any]:
         """The ``spicethermal-comparison/1`` document."""
-        return {"format": COMPARISON_FORMAT, "rms_k": _finite(self.rms_k),
-                "max_abs_k": _finite(self.max_abs_k),
-                "points": [p.to_json() for p in self.points]}
+        doc = {"format": COMPARISON_FORMAT, "rms_k": _finite(self.rms_k),
+               "max_abs_k": _finite(self.max_abs_k),
+               "points": [p.to_json() for p in self.points]}
+        if self.left_out:
+            doc["left_out"] = {k: dict(v) for k, v in self.left_out.items()}
+        return doc
 
     def table(self) -> str:
-        """Text: the PWM points as the paper's Table 2 (Freq × duty: T_exp, T_mod, Δ), then one
-        summary line per data set and the overall RMS."""
-        lines = []
+        """Text, one table per kind of data set: PWM as the paper's Table 2 (the power in a
+        column when it varies), the cooling curves one row each, then all points.
+
+        >>> pts = [ComparisonPoint("pwm", {"freq_hz": f, "duty": d}, 30.0, 29.5,
+        ...                        {"power_w": 0.094 + f * 1e-9, "window_s": 1e-4})
+        ...        for f in (500.0, 25e3) for d in (0.2, 0.8)]
+        >>> print("\\n".join(Comparison(tuple(pts)).table().splitlines()[1:5]))
+        Freq (kHz) |            D=20%             |            D=80%             |
+                   |   P (W)  T_exp  T_mod      Δ |   P (W)  T_exp  T_mod      Δ |
+        --------------------------------------------------------------------------
+               0.5 |  0.0940  30.00  29.50   0.50 |  0.0940  30.00  29.50   0.50 |
+        """
+        lines: list[str] = []
         pwm = self.dataset("pwm")
         if pwm.points:
             lines += _pwm_table(pwm.points, self.engine)
-            lines.append("")
-        width = max([len(n) for n in self.datasets] + [7])
-        lines.append(f"{'dataset':<{width}}  points   rms (K)   max |Δ| (K)   mean Δ (K)")
-        for name, c in self.by_dataset().items():
-            lines.append(f"{name:<{width}}  {len(c.points):6d}  {c.rms_k:8.3f}  {c.max_abs_k:12.3f}"
-                         f"  {float(np.mean(c.residuals_k)):11.3f}")
-        lines.append(f"{'all':<{width}}  {len(self.points):6d}  {self.rms_k:8.3f}  "
-                     f"{self.max_abs_k:12.3f}  "
-                     f"{float(np.mean(self.residuals_k)) if self.points else math.nan:11.3f}")
+            lines += [_summary("pwm", pwm), ""]
+        cooling = [c for name, c in self.by_dataset().items() if name != "pwm"]
+        if cooling:
+            lines += _cooling_table(cooling, self.left_out) + [""]
+        lines.append(_summary("all data sets", self))
         return "\n".join(lines)
 
 
@@ -172,31 +185,72 @@ def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
+def _summary(name: str, c: Comparison) -> str:
+    mean = float(np.mean(c.residuals_k)) if c.points else math.nan
+    return (f"{name}: {len(c.points)} points, rms {c.rms_k:.3f} K, max |Δ| {c.max_abs_k:.3f} K, "
+            f"mean Δ {mean:.3f} K")
+
+
+#: PWM conditions shown in the header when constant, else a column: key, head, width, format...
+_PWM_CONDITIONS = (("power_w", "P (W)", 8, ".4f", "{:g} W", 1.0),
+                   ("window_s", "win (µs)", 9, ".3g", "sample window {:g} µs", 1e6))
+
+
 def _pwm_table(points: Sequence[ComparisonPoint], engine: str) -> list[str]:
-    """Table 2 layout; one block per (power, window) when the rows use several."""
-    groups: dict[tuple[float, float], list[ComparisonPoint]] = {}
-    for p in points:
-        groups.setdefault((p.info.get("power_w", math.nan), p.info.get("window_s", math.nan)),
-                          []).append(p)
-    lines: list[str] = []
-    for (power, window), pts in groups.items():
-        freqs = sorted({p.at["freq_hz"] for p in pts})
-        duties = sorted({p.at["duty"] for p in pts})
-        cell = {(p.at["freq_hz"], p.at["duty"]): p for p in pts}
-        lines.append(f"PWM: junction temperature, measured (T_exp) vs model (T_mod), °C; "
-                     f"Δ = T_exp − T_mod, K  [{power:g} W, sample window {window * 1e6:g} µs, "
-                     f"engine {engine}]")
-        head = f"{'Freq (kHz)':>10} |" + "".join(f"{'D=' + _pct(d):^23}|" for d in duties)
-        sub = f"{'':>10} |" + "".join(f"{'T_exp':>7}{'T_mod':>8}{'Δ':>7} |" for _ in duties)
-        lines += [head, sub, "-" * len(sub)]
-        for f in freqs:
-            row = f"{f / 1e3:>10g} |"
-            for d in duties:
-                p = cell.get((f, d))
-                row += (f"{p.measured_c:7.2f}{p.model_c:8.2f}{p.residual_k:7.2f} |" if p
-                        else f"{'':22} |")
-            lines.append(row)
+    """The paper's Table 2 layout in one table; a condition that varies between the rows (each
+    row's measured power) is a column of each duty's block instead of a header note."""
+    freqs = sorted({p.at["freq_hz"] for p in points})
+    duties = sorted({p.at["duty"] for p in points})
+    cell = {(p.at["freq_hz"], p.at["duty"]): p for p in points}
+    notes, columns = [], []
+    for key, head, width, fmt, note, scale in _PWM_CONDITIONS:
+        values = {p.info.get(key, math.nan) for p in points}
+        if len(values) == 1:
+            notes.append(note.format(next(iter(values)) * scale))
+        else:
+            columns.append((head, width, fmt, key, scale))
+            notes.append(f"{head.split()[0]} per point")
+    lines = [f"PWM (the paper's Table 2): junction temperature, measured (T_exp) vs model "
+             f"(T_mod), °C; Δ = T_exp − T_mod, K  [{', '.join(notes)}, engine {engine}]"]
+    heads = [f"{h:>{w}}" for h, w, _, _, _ in columns] + \
+        [f"{'T_exp':>7}", f"{'T_mod':>7}", f"{'Δ':>7}"]
+    block = "".join(heads) + " "
+    head = f"{'Freq (kHz)':>10} |" + "".join(f"{'D=' + _pct(d):^{len(block)}}|" for d in duties)
+    sub = f"{'':>10} |" + "".join(f"{block}|" for _ in duties)
+    lines += [head, sub, "-" * len(sub)]
+    for f in freqs:
+        row = f"{f / 1e3:>10g} |"
+        for d in duties:
+            p = cell.get((f, d))
+            if p is None:
+                row += f"{'':{len(block)}}|"
+                continue
+            row += "".join(f"{p.info.get(key, math.nan) * scale:{w}{fmt}}"
+                           for _, w, fmt, key, scale in columns)
+            row += f"{p.measured_c:7.2f}{p.model_c:7.2f}{p.residual_k:7.2f} |"
+        lines.append(row)
     return lines
+
+
+def _cooling_table(curves: Sequence[Comparison], left_out: Mapping[str, Mapping[str, float]]
+                   ) -> list[str]:
+    """One row per cooling curve: power, points compared, samples left out, rms, max, mean."""
+    lines = ["Cooling curves: junction temperature, measured vs model; Δ = measured − model, K"]
+    rows = [("curve", "power (W)", "points", "left out", "rms (K)", "max |Δ| (K)", "mean Δ (K)")]
+    for c in curves:
+        name = c.points[0].dataset
+        gone = left_out.get(name, {})
+        rows.append((name, f"{c.points[0].info.get('power_w', math.nan):.4g}",
+                     str(len(c.points)),
+                     f"{gone['samples']:g} before {gone['before_s'] * 1e6:.3g} µs"
+                     if gone.get("samples") else "none",
+                     f"{c.rms_k:.3f}", f"{c.max_abs_k:.3f}",
+                     f"{float(np.mean(c.residuals_k)):.3f}"))
+    widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
+    lines += ["  ".join(x.ljust(w) if k == 0 else x.rjust(w)
+                        for k, (x, w) in enumerate(zip(r, widths, strict=True))) for r in rows]
+    return lines + ["left out: the samples fit masks as the electrical transient"] * any(
+        v.get("samples") for v in left_out.values())
 
 
 def _pct(d: float) -> str:
@@ -354,7 +408,10 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
                                       f"simulated at {name} {at}")
             points.append(ComparisonPoint(name, at, float(meas), float(mod),
                                           info.get(name, [{}] * (k + 1))[k]))
-    return Comparison(tuple(points), engine)
+    left_out = {f"cooling_{i + 1}": dict(c.extra["left_out"])
+                for i, c in enumerate(bundle.cooling)
+                if "left_out" in c.extra and f"cooling_{i + 1}" in wanted}
+    return Comparison(tuple(points), engine, left_out)
 
 
 def _info(data: BundleData) -> dict[str, list[dict[str, float]]]:

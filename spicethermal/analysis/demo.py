@@ -37,6 +37,9 @@ ACTUATOR_URL = ("sim://actuator?seed={seed}&effects=electrical-transient,sample-
                 "tsp-nonlinearity,temperature-coefficient")
 MUR880E_URL = "sim://mur880e?seed={seed}"
 SUBCKT = {"actuator": "ACTUATOR", "mur880e": "MUR880E"}
+#: The ``.lib`` files' temperature convention: absolute, the command line's default (node
+#: voltages in °C, TREF driven with the ambient), as the report's copy-paste deck uses them.
+TEMPERATURE = "absolute"
 
 
 @dataclass
@@ -129,7 +132,8 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         for dialect in DIALECTS:
             for topology in TOPOLOGIES:
                 paths.append(export(model, out / "lib" / f"actuator_{dialect}_{topology}.lib",
-                                    dialect, topology, SUBCKT["actuator"]))
+                                    dialect, topology, SUBCKT["actuator"],
+                                    temperature=TEMPERATURE))
         return tuple(paths)
 
     libs = steps.run("export .lib: ngspice, PSPICE, LTspice × Foster, Cauer", export_all)
@@ -152,15 +156,16 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         before, after = diag.baseline, diag.final
         effect = diag.verdict_effect
         if effect is None:
-            return None, before, before
+            return None, before, before, ()
         better = diag.model()
         better.save(out / f"actuator_model_{effect}.json")
-        for dialect in DIALECTS:
-            export(better, out / "lib" / f"actuator_{effect}_{dialect}_cauer.lib", dialect,
-                   "cauer", SUBCKT["actuator"] + "_TC")
-        return better, before, after
+        paths = tuple(export(better, out / "lib" / f"actuator_{effect}_{dialect}_cauer.lib",
+                             dialect, "cauer", SUBCKT["actuator"] + "_TC",
+                             temperature=TEMPERATURE) for dialect in DIALECTS)
+        return better, before, after, paths
 
-    better, before, after = steps.run("add the effect and compare again", improve)
+    better, before, after, effect_libs = steps.run("add the effect and compare again", improve)
+    libs = (*libs, *effect_libs)  # every .lib written, counted and listed once
     diag_figs = steps.run("diagnosis figures",
                           lambda: plots.diagnosis_figures(diag, figs))
 

@@ -33,7 +33,7 @@ __all__ = ["COLUMNS", "Options", "Source", "characterize", "make_row", "subckt_n
 #: Columns of the results table, in order (``results.csv``; docs/batch.md explains each).
 COLUMNS = ("source", "device", "name", "rth_k_per_w", "order", "tau_min_s", "tau_max_s",
            "fit_rms_k", "fit_rms_k_per_w", "power_w", "verdict", "improvement", "wall_s",
-           "error", "sha256")
+           "error", "sha256", "duplicate_of")
 #: Curves longer than this are stored resampled (20 points per decade) in ``result.json``.
 STORED_POINTS = 400
 
@@ -54,7 +54,8 @@ class Options:
 class Source:
     """One input of a batch, in memory: ``kind`` ``"bundle"`` (a directory's files) or
     ``"curve"`` (one Zth CSV file), ``name`` its output name, ``sha256`` its content hash
-    (over file names and bytes: the key of ``--resume``), ``error`` if it could not be read."""
+    (over a bundle's file names and bytes, a curve file's bytes: the key of ``--resume`` and
+    of duplicates), ``error`` if it could not be read."""
 
     path: str
     name: str
@@ -71,8 +72,8 @@ class Source:
         >>> p = pathlib.Path(tempfile.mkdtemp()) / "a.csv"
         >>> _ = p.write_text("t_s,zth_k_per_w")
         >>> s = Source.read(p, "a")
-        >>> s.kind, s.sha256[:12]
-        ('curve', '82ebcf994e8d')
+        >>> s.kind, s.sha256 == Source.read(p.rename(p.with_name("b.csv")), "b").sha256
+        ('curve', True)
         """
         path = Path(path)
         kind = "bundle" if path.is_dir() else "curve"
@@ -84,8 +85,9 @@ class Source:
         except OSError as exc:
             return cls(str(path), name, kind, error=f"{path}: {exc.strerror or exc}")
         digest = hashlib.sha256()
-        for file, data in sorted(files.items()):
-            digest.update(file.encode() + b"\0" + len(data).to_bytes(8, "little") + data)
+        for file, data in sorted(files.items()):  # a curve's content is its bytes, not its name
+            key = file if kind == "bundle" else ""
+            digest.update(key.encode() + b"\0" + len(data).to_bytes(8, "little") + data)
         return cls(str(path), name, kind, files, digest.hexdigest())
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from ..io.files import atomic_write_text
 from ..report.html import Section, render
 from ..viz.plots import new_figure, save_figure
-from .spread import PERCENTILES, Z_OUTLIER, Outlier
+from .spread import PERCENTILES, RESOLUTION, Z_OUTLIER, Outlier, robust_scale
 
 __all__ = ["fig_rth_histogram", "fig_verdicts", "fig_zth_population", "verdict_counts",
            "write_page"]
@@ -76,7 +76,7 @@ def fig_verdicts(counts: dict[str, int], path: Path) -> Path:
 
 def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
                outliers: Sequence[Outlier], typical: Any, worst: Any,
-               pwm: Sequence[dict], elapsed_s: float) -> Path:
+               pwm: Sequence[dict], elapsed_s: float, power_origin: str = "") -> Path:
     """Figures into ``out/figures`` and the page ``out/index.html``; returns the page."""
 
     rows = [r["row"] for r in results]
@@ -85,15 +85,27 @@ def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
     figs = out / "figures"
     counts = dict(verdict_counts(rows))
     errors = [r for r in rows if r.get("error")]
+    twins = [r for r in rows if r.get("duplicate_of")]
     summary = [f"{len(rows)} inputs: {len(good)} characterized, {len(errors)} with an error, "
-               f"{len(outliers)} outlier{'' if len(outliers) == 1 else 's'} (robust |z| ≥ "
-               f"{Z_OUTLIER:g})."]
+               f"{len(twins)} duplicate{'' if len(twins) == 1 else 's'} (the same content as "
+               f"another input, counted once), {len(outliers)} outlier"
+               f"{'' if len(outliers) == 1 else 's'} (robust |z| ≥ {Z_OUTLIER:g})."]
     sections = []
+    if twins:
+        same = Section("duplicates", "Duplicate inputs")
+        same.paragraphs.append("Inputs with the same content hash (sha256 of results.csv): "
+                               "one measurement given twice is not two devices, so only the "
+                               "first is in the population's statistics.")
+        same.table(["input", "source", "same content as"],
+                   [[r["name"], r["source"], r["duplicate_of"]] for r in twins])
+        sections.append(same)
     if good:
         med = float(np.median(rth))
-        s = 1.4826 * float(np.median(np.abs(rth - med)))
+        s = float(robust_scale(rth, RESOLUTION * med))
+        floor = " — the floor, 1 % of the median" if s <= RESOLUTION * med else ""
         summary.append(f"Rth median {med:.4g} K/W, robust σ {s:.3g} K/W "
-                       f"({100 * s / med:.1f} %), range {rth.min():.4g} … {rth.max():.4g} K/W.")
+                       f"({100 * s / med:.1f} %{floor}), range {rth.min():.4g} … "
+                       f"{rth.max():.4g} K/W.")
         dist = Section("distribution", "Rth and Zth(t) over the population")
         dist.figure(fig_rth_histogram(rth, flagged, figs / "rth_histogram.png"), out,
                     "Rth of every device (outliers in red).")
@@ -126,9 +138,9 @@ def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
         sections.append(spread)
     if pwm:
         table = Section("pwm", "PWM junction peak over the population")
-        table.paragraphs.append(f"Periodic steady-state peak rise (K) at {pwm[0]['power_w']:g} W "
-                                f"of every device's ladder; percentiles over the devices "
-                                f"(pwm_peaks.csv).")
+        table.paragraphs.append(f"Periodic steady-state peak rise (K) at {pwm[0]['power_w']:.4g} W "
+                                f"({power_origin or 'given'}) of every device's ladder; "
+                                f"percentiles over the devices (pwm_peaks.csv).")
         table.table(["f (Hz)", "duty", *[f"p{p} (K)" for p in PERCENTILES], "max (K)"],
                     [[f"{r['freq_hz']:g}", f"{r['duty']:g}",
                       *[f"{r[f'peak_p{p}_k']:.4g}" for p in PERCENTILES],
@@ -140,10 +152,11 @@ def write_page(out: Path, results: Sequence[dict], good: Sequence[dict],
         sections.append(bad)
     every = Section("devices", "Every device")
     every.paragraphs.append("The full table with every column is results.csv.")
-    every.table(["device", "Rth (K/W)", "order", "fit RMS (K/W)", "verdict", "wall (s)"],
+    every.table(["device", "Rth (K/W)", "order", "fit RMS (K/W)", "verdict", "wall (s)",
+                 "duplicate of"],
                 [[r["name"], _num(r.get("rth_k_per_w")), r.get("order") or "",
                   _num(r.get("fit_rms_k_per_w"), 2), r.get("verdict") or "",
-                  _num(r.get("wall_s"), 2)] for r in rows])
+                  _num(r.get("wall_s"), 2), r.get("duplicate_of") or ""] for r in rows])
     sections.append(every)
     html = render("Batch characterization", f"{len(rows)} inputs", summary, sections,
                   elapsed_s)

@@ -38,7 +38,7 @@ from ..io.files import atomic_open, atomic_write_text, dumps_json, read_json
 from .device import COLUMNS, Options, Source, characterize, make_row
 
 __all__ = ["BatchRun", "check_output", "cluster_client", "find_sources", "load_results",
-           "run_batch", "write_table"]
+           "mark_duplicates", "run_batch", "write_table"]
 
 RESULT = "result.json"
 
@@ -252,8 +252,27 @@ def run_batch(paths: Sequence[str | os.PathLike], out_dir: str | os.PathLike, *,
         bar.close()
         client.cancel([f for f in futures if not f.done()])  # only what an interrupt left
     results = tuple(records[i] for i in range(len(sources)))
+    mark_duplicates([r["row"] for r in results])
     write_table([r["row"] for r in results], out)
     return BatchRun(results, len(pending), len(sources) - len(pending))
+
+
+def mark_duplicates(rows: Sequence[dict[str, Any]]) -> None:
+    """Set each row's ``duplicate_of`` to the name of the first input with the same content
+    hash (empty for the first and for inputs of their own content): the same measurement
+    given twice, counted once in the population's statistics.
+
+    >>> rows = [{"name": n, "sha256": h} for n, h in (("a", "1"), ("b", "2"), ("c", "1"))]
+    >>> mark_duplicates(rows)
+    >>> [r["duplicate_of"] for r in rows]
+    ['', '', 'a']
+    """
+    first: dict[str, str] = {}
+    for row in rows:
+        key = row.get("sha256") or ""
+        row["duplicate_of"] = first.setdefault(key, row["name"]) if key else ""
+        if row["duplicate_of"] == row["name"]:
+            row["duplicate_of"] = ""
 
 
 def _error_row(source: Source, exc: BaseException) -> dict[str, Any]:

@@ -60,7 +60,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 __all__ = ["PERCENTILES", "RESOLUTION", "Z_OUTLIER", "Outlier", "envelopes", "find_outliers",
-           "fit_envelope", "path_limit", "pwm_peaks", "robust_z"]
+           "fit_envelope", "path_limit", "population_power", "pwm_peaks", "robust_scale",
+           "robust_z"]
 
 #: A robust z-score at or beyond this marks an outlier (Iglewicz & Hoaglin).
 Z_OUTLIER = 3.5
@@ -73,6 +74,18 @@ PERCENTILES = (50, 90, 99)
 _MAD_TO_SIGMA = 1.4826
 
 
+def robust_scale(values: ArrayLike, floor: float = 0.0) -> NDArray:
+    """The robust σ, ``max(1.4826 · MAD, floor)`` (per column of a 2-D array): the scale of
+    :func:`robust_z`, never below ``floor`` (for Rth, :data:`RESOLUTION` × the median).
+
+    >>> float(robust_scale([2.0, 2.0, 2.0, 2.0], floor=0.02))  # identical inputs: the floor
+    0.02
+    """
+    x = np.asarray(values, dtype=float)
+    return np.maximum(_MAD_TO_SIGMA * np.median(np.abs(x - np.median(x, axis=0)), axis=0),
+                      floor)
+
+
 def robust_z(values: ArrayLike, floor: float = 0.0) -> NDArray:
     """Robust z-scores ``(x − median) / max(1.4826 · MAD, floor)`` (0 where the scale is 0).
 
@@ -81,7 +94,7 @@ def robust_z(values: ArrayLike, floor: float = 0.0) -> NDArray:
     """
     x = np.asarray(values, dtype=float)
     med = np.median(x, axis=0)
-    scale = np.maximum(_MAD_TO_SIGMA * np.median(np.abs(x - med), axis=0), floor)
+    scale = robust_scale(x, floor)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(scale > 0, (x - med) / np.where(scale > 0, scale, 1.0), 0.0)
 
@@ -235,6 +248,25 @@ def fit_envelope(t_s: NDArray, zth_k_per_w: NDArray, rth_k_per_w: float, label: 
                          provenance={"tool": f"spicethermal {__version__} batch",
                                      "source": label})
     return model
+
+
+def population_power(powers_w: Sequence[float | None], given_w: float | None = None
+                     ) -> tuple[float, str]:
+    """The power of the PWM peak table and where it comes from: ``given_w`` (``--power``),
+    else the median of the devices' measured powers (the power cut before the fitted cooling
+    curve), else 1 W nominal (Zth tables carry no power).
+
+    >>> population_power([0.094, 0.094, 0.3])
+    (0.094, "the median of the devices' measured powers")
+    >>> population_power([None, None]), population_power([0.094], 2.0)[0]
+    ((1.0, '1 W nominal: no input gives a power'), 2.0)
+    """
+    if given_w is not None:
+        return float(given_w), "--power"
+    known = [float(p) for p in powers_w if p is not None and p == p and p > 0]
+    if not known:
+        return 1.0, "1 W nominal: no input gives a power"
+    return float(np.median(known)), "the median of the devices' measured powers"
 
 
 def pwm_peaks(ladders: Sequence[Any], power_w: float, freqs_hz: Sequence[float],

@@ -23,7 +23,15 @@ from ..io.files import atomic_write_text
 from ..model import ThermalModel
 from ..spice.lib import export
 from .report import write_page
-from .spread import PERCENTILES, Outlier, envelopes, find_outliers, fit_envelope, pwm_peaks
+from .spread import (
+    PERCENTILES,
+    Outlier,
+    envelopes,
+    find_outliers,
+    fit_envelope,
+    population_power,
+    pwm_peaks,
+)
 
 __all__ = ["Summary", "summarize"]
 
@@ -38,6 +46,8 @@ class Summary:
     worst: Any
     pwm: tuple[dict[str, float], ...]
     page: Path
+    power_w: float = 1.0
+    power_origin: str = ""
 
     @property
     def outlier_names(self) -> list[str]:
@@ -53,15 +63,19 @@ def _csv(rows: Sequence[dict[str, Any]], header: Sequence[str]) -> str:
     return text.getvalue()
 
 
-def summarize(results: Sequence[dict[str, Any]], out_dir: str | Path, *, power_w: float = 1.0,
+def summarize(results: Sequence[dict[str, Any]], out_dir: str | Path, *,
+              power_w: float | None = None,
               freqs_hz: Sequence[float] = (100.0, 1e3, 1e4),
               duties: Sequence[float] = (0.1, 0.5, 0.9), dialect: str = "ngspice",
               elapsed_s: float = 0.0) -> Summary:
     """Outliers, envelope ladders, PWM table and report of a batch's ``results`` (records
     ``{"row", "model", "curve"}`` as :func:`~.runner.run_batch` returns them) into ``out_dir``.
+    A duplicate input (``duplicate_of``) is counted once; the PWM table is at ``power_w``,
+    default the devices' own (:func:`~.spread.population_power`).
     """
     out = Path(out_dir)
-    good = [r for r in results if not r["row"].get("error") and r.get("model")]
+    good = [r for r in results if not r["row"].get("error") and r.get("model")
+            and not r["row"].get("duplicate_of")]
     models = [ThermalModel.from_dict(r["model"], r["row"]["name"]) for r in good]
     names = tuple(r["row"]["name"] for r in good)
     rth = np.array([m.rth for m in models])
@@ -84,10 +98,11 @@ def summarize(results: Sequence[dict[str, Any]], out_dir: str | Path, *, power_w
         for model, name in ((typical, "typical"), (worst, "worst")):
             model.save(out / "spread" / f"{name}.json")
             export(model, out / "spread" / f"{name}.lib", dialect, None, name.upper())
+    power_w, origin = population_power([r["row"].get("power_w") for r in good], power_w)
     pwm = tuple(pwm_peaks([m.ladder for m in models], power_w, freqs_hz, duties)) if good else ()
     header = ["freq_hz", "duty", "power_w", "devices",
               *[f"peak_p{p}_k" for p in PERCENTILES], "peak_max_k"]
     atomic_write_text(out / "pwm_peaks.csv", _csv(pwm, header))
 
-    page = write_page(out, results, good, outliers, typical, worst, pwm, elapsed_s)
-    return Summary(outliers, names, typical, worst, pwm, page)
+    page = write_page(out, results, good, outliers, typical, worst, pwm, elapsed_s, origin)
+    return Summary(outliers, names, typical, worst, pwm, page, power_w, origin)

@@ -26,9 +26,15 @@ from pathlib import Path
 from .. import __version__
 from ..core.errors import SpiceThermalError
 from . import commands
+from .commands._types import NEGATIVE
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # -94m, -40, -2.5e3 are values, not options (argparse knows only -40 and -2.5)
+        self._negative_number_matcher = NEGATIVE
+
     def error(self, message: str) -> None:  # one line, exit 2 (argparse's own convention)
         self.exit(2, f"{self.prog}: error: {one_line(message)}\n")
 

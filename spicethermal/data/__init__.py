@@ -13,6 +13,9 @@
 * ``vendor/`` — vendors' thermal networks (Infineon, LT SOAtherm for Infineon, Fairchild and
   IR parts, Fairchild): short excerpts of public SPICE libraries, sources and terms in
   ``vendor/README.md``; read by ``spicethermal import`` in the tests and the README.
+* ``heatsink_zth.csv`` — an example heatsink Zth(t), base to ambient (a stand-in for a
+  measurement, made from a three-layer model with 0.2 % noise: see its header); the README's
+  ``compose`` example fits it.
 * ``model.schema.json`` — the JSON Schema of the model file (``docs/model-format.md``).
 """
 

@@ -114,6 +114,8 @@ __all__ = [
     "RELATIVE_PRECISION",
     "WINDOW_MARGIN",
     "FitResult",
+    "PLATEAU_SLACK",
+    "check_rth",
     "OrderTrial",
     "fit_foster",
     "fit_model",
@@ -339,6 +341,54 @@ def _fit_order(prob: Problem, seeds: list[NDArray], window: tuple[float, float],
     overall = min(runs, key=lambda x: x.rss)
     good = [x for x in runs if not x.why]
     return (min(good, key=lambda x: x.rss) if good else overall), overall
+
+
+#: A sparse curve (digitized datasheet points, taken as exact) may stand this fraction above
+#: its Rth before a given Rth is refused (:func:`check_rth`).
+PLATEAU_SLACK = 0.02
+
+
+def check_rth(t_s: ArrayLike, zth_k_per_w: ArrayLike, rth_k_per_w: float,
+              label: str = "the curve") -> None:
+    """Refuse an Rth below the curve's own plateau, beyond its noise: the Zth(t) of a passive
+    network rises to its Rth and never above it, so holding ``ΣR`` to a smaller Rth fits
+    nothing right (a datasheet's Rth to another reference, a typo).
+
+    Parameters
+    ----------
+    t_s, zth_k_per_w : array_like
+        The curve.
+    rth_k_per_w : float
+        The Rth to hold (``fit --rth``).
+    label : str
+        How the message names the curve.
+
+    Raises
+    ------
+    DataFormatError
+        The curve's largest value (log-binned when dense) less three times its noise (0 for
+        sparse points) and :data:`PLATEAU_SLACK` of itself is above ``rth_k_per_w``.
+
+    Examples
+    --------
+    >>> check_rth([1.0, 2.0, 3.0], [0.5, 0.9, 1.005], 1.0)
+    >>> check_rth([1.0, 2.0, 3.0], [0.5, 0.9, 1.3], 1.0)
+    Traceback (most recent call last):
+    ...
+    spicethermal.core.errors.DataFormatError: --rth 1 K/W is below the curve's own plateau: \
+its Zth reaches 1.3 K/W at t = 3 s (noise ±0 K/W); the Zth of a passive network never \
+exceeds its Rth: give this curve's Rth (to its own reference, case or ambient) or leave --rth out
+    """
+    t, z, _ = as_data(t_s, zth_k_per_w, None, rth_k_per_w)
+    tf, zf, _ = bin_data(t, z, None, BINS_PER_DECADE) if t.size > DENSE_POINTS else (t, z, None)
+    noise = bin_noise(t, z, tf)
+    k = int(np.argmax(zf))
+    if rth_k_per_w < zf[k] * (1 - PLATEAU_SLACK) - 3 * noise[k]:
+        raise DataFormatError(
+            f"--rth {rth_k_per_w:.6g} K/W is below {label}'s own plateau: its Zth reaches "
+            f"{zf[k]:.6g} K/W at t = {tf[k]:.3g} s (noise ±{noise[k]:.2g} K/W); the Zth of a "
+            "passive network never exceeds its Rth: give this curve's Rth (to its own "
+            "reference, case or ambient) or leave --rth out")
 
 
 # ------------------------------------------------------------------- model-level hook

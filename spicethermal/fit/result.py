@@ -169,6 +169,8 @@ class FitResult(JsonDocument):
             lines.append(f"{self.criterion} per order: " + ", ".join(
                 f"{tr.order}: {tr.criterion_value:.1f}{'' if tr.accepted else ' (rejected)'}"
                 for tr in self.trials))
+            lines.extend(f"order {tr.order} rejected: {tr.reason}" for tr in self.trials
+                         if not tr.accepted and tr.reason)
         lines.extend(f"warning: {w}" for w in self.warnings)
         return "\n".join(lines)
 

@@ -51,6 +51,15 @@ FIT_WINDOW_FACTOR = 4.0
 MIN_FIT_POINTS = 10
 
 
+class NotAboveReference(DataFormatError):
+    """A cooling curve whose Tj at the cut is not above its reference: no Rth. ``core`` is the
+    message without the hint, for a caller that knows the better one."""
+
+    def __init__(self, core: str, hint: str, tj_c: float, ref_c: float) -> None:
+        super().__init__(f"{core} ({hint})")
+        self.core, self.tj_c, self.ref_c = core, tj_c, ref_c
+
+
 @dataclass(frozen=True)
 class EarlyTimeFix:
     """The early-time correction applied to a cooling curve (JESD51-14 √t extrapolation).
@@ -69,9 +78,21 @@ class EarlyTimeFix:
     detected: bool
 
     def __str__(self) -> str:
+        """One line: what was masked (nothing, said so), the √t fit and Tj at the cut.
+
+        >>> fix = EarlyTimeFix((0.0, 0.0), 0, (1e-4, 8e-4), 10, 38.76, 34.2, 0.03, False)
+        >>> str(fix).split("; ")[0]
+        'no samples masked (no electrical transient given or detected)'
+        >>> str(EarlyTimeFix((0.0, 9.6e-5), 88, (1e-4, 4e-4), 10, 38.7, 34.2, 0.03, True)
+        ...     ).split("; ")[0]
+        'masked 88 samples before 9.6e-05 s (detected electrical transient)'
+        """
         how = "detected" if self.detected else "given"
-        return (f"masked {self.masked_points} samples before {self.masked_s[1]:.3g} s ({how}); "
-                f"sqrt(t) fit over {self.fit_window_s[0]:.3g}..{self.fit_window_s[1]:.3g} s "
+        masked = (f"masked {self.masked_points} samples before {self.masked_s[1]:.3g} s ({how} "
+                  f"electrical transient)" if self.masked_points else
+                  "no samples masked (no electrical transient given or detected)")
+        lo, hi = self.fit_window_s
+        return (f"{masked}; sqrt(t) fit over {lo:.3g}..{hi:.3g} s "
                 f"({self.fit_points} samples, rms {self.fit_rms_k:.3g} K): "
                 f"T0 = {self.t0_c:.4g} degC, k = {self.slope_k_per_sqrt_s:.4g} K/sqrt(s)")
 
@@ -299,11 +320,11 @@ class ZthCurve:
         tj_max = table.tj_steady_c if table.tj_steady_c is not None else early.t0_c
         rth = (tj_max - steady_ref) / p
         if not rth > 0:
-            raise DataFormatError(f"{name}: Tj at the cut ({tj_max:.4g} degC) is not above the "
-                                  f"reference ({steady_ref:.4g} degC): no Rth (raw v_tsp_v "
-                                  f"through a calibration taken at another sense current or "
-                                  f"offset? use a k-factor calibration anchored at the "
-                                  f"reference, docs/bundle-format.md)")
+            raise NotAboveReference(
+                f"{name}: Tj at the cut ({tj_max:.4g} degC) is not above the reference "
+                f"({steady_ref:.4g} degC): no Rth", "raw v_tsp_v through a calibration taken at "
+                "another sense current or offset? use a k-factor calibration anchored at the "
+                "reference, docs/bundle-format.md", float(tj_max), float(steady_ref))
         zth = (tj_max - theta) / p
         return cls(t, zth, rth, power_w=p, label=label, early=early, tj_max_c=float(tj_max),
                    tref_steady_c=float(steady_ref))

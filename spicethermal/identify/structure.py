@@ -181,12 +181,32 @@ class StructureFunction:
                                "c_j_per_k": self.c_j_per_k.tolist()}}
 
     def __str__(self) -> str:
+        """One line: sections, Rth, and ΣC where the measurement resolves it.
+
+        The last ΣC is not the device's: the curve ends at ``ΣR = Rth``, where the heat reaches
+        the ambient (an infinite capacity) and the spectrum's time constants run past the
+        record, so ΣC diverges there (10⁴-10⁶ J/K for a device of a fraction of a J/K). The
+        figure that means something is ΣC at the end of the resolved range.
+
+        >>> from spicethermal.core.ladder import Cauer
+        >>> sf = StructureFunction.from_ladder(Cauer([1.0, 2.0, 0.01], [1e-3, 0.1, 1e4]),
+        ...                                    t_resolved_s=(1e-4, 1.0))
+        >>> text = str(sf)
+        >>> "resolved ΣR 1..3 K/W, where ΣC = 0.101 J/K" in text, "diverges to 1e+04 J/K" in text
+        (True, True)
+        """
         text = (f"{self.label or 'structure function'}: {self.order} Cauer sections, "
-                f"Rth = {self.rth_k_per_w:.4g} K/W, ΣC = {self.c_j_per_k[-1]:.4g} J/K")
+                f"Rth = {self.rth_k_per_w:.4g} K/W")
+        last = f"{self.c_j_per_k[-1]:.3g} J/K"
         if self.t_resolved_s is not None and self.resolved().any():
             lo, hi = self.resolved_r_range()
-            text += f"; resolved ΣR {lo:.3g}..{hi:.3g} K/W"
-        return text
+            c_hi = self.resolved_c_range()[1]
+            text += f"; resolved ΣR {lo:.3g}..{hi:.3g} K/W, where ΣC = {c_hi:.3g} J/K"
+            if self.c_j_per_k[-1] > 1.5 * c_hi:
+                text += (f" (beyond, ΣC diverges to {last} toward the ambient, an infinite heat "
+                         f"sink)")
+            return text
+        return text + f", ΣC = {last} at ΣR = Rth (where it diverges toward the ambient)"
 
 
 def structure_function(source: ZthCurve | Spectrum | Foster | Cauer, *,

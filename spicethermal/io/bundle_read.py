@@ -224,7 +224,7 @@ class ManifestReader:
                 raise DataFormatError(f"{label}, key {key}: {name} gives v_tsp_v but the "
                                       f"bundle has no calibration to convert it (add one, "
                                       f"docs/bundle-format.md, or pass --calibration CSV "
-                                      f"or --k-factor MV_PER_K with --tref DEGC)")
+                                      f"or --k-factor MV_PER_K with --ambient DEGC)")
             cooling.append(self.wrap(lambda cols=cols, name=name, entry=entry, power=power,
                                      tjs=tjs, trs=trs: CoolingTable(
                 t_s=cols["t_s"], power_w=power, tj_c=cols.get("tj_c"),

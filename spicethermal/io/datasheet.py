@@ -160,6 +160,29 @@ def _percent(measured: NDArray, reference: NDArray) -> NDArray:
     return (measured - reference) / reference * 100.0
 
 
+#: Measured and datasheet Rth further apart than this factor are not the same device (or not
+#: the same mounting): Table 1 then says so.
+RTH_MISMATCH_FACTOR = 2.0
+
+
+def rth_mismatch(measured_k_per_w: float, datasheet_k_per_w: float) -> str | None:
+    """A warning when the measured and datasheet Rth differ by more than
+    :data:`RTH_MISMATCH_FACTOR`, else None.
+
+    >>> rth_mismatch(146.8, 1.51)[:70]
+    "the measured Rth (146.8 K/W) is 97× the datasheet's (1.51 K/W): not th"
+    >>> rth_mismatch(1.6, 1.51) is None
+    True
+    """
+    ratio = measured_k_per_w / datasheet_k_per_w
+    if not (ratio > RTH_MISMATCH_FACTOR or ratio < 1 / RTH_MISMATCH_FACTOR):
+        return None
+    times = f"{ratio:.2g}×" if ratio > 1 else f"1/{1 / ratio:.2g}"
+    return (f"the measured Rth ({measured_k_per_w:.4g} K/W) is {times} the datasheet's "
+            f"({datasheet_k_per_w:.4g} K/W): not the datasheet's device or mounting, so the "
+            f"errors compare only the shapes of r(t)")
+
+
 @dataclass(frozen=True, eq=False)
 class Table1(JsonDocument):
     """Measured vs datasheet r(t) (the paper's Table 1 for any device and curve)."""
@@ -179,6 +202,12 @@ class Table1(JsonDocument):
     early: str = ""
     meta: dict[str, Any] = field(default_factory=dict, repr=False)
 
+    @property
+    def warnings(self) -> list[str]:
+        """What the reader must know before reading the errors (an Rth mismatch)."""
+        warning = rth_mismatch(self.rth_measured_k_per_w, self.rth_datasheet_k_per_w)
+        return [warning] if warning else []
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict (``format: spicethermal-table1/1``)."""
         rows = []
@@ -197,7 +226,8 @@ class Table1(JsonDocument):
                 "rth_measured_k_per_w": self.rth_measured_k_per_w,
                 "rth_datasheet_k_per_w": self.rth_datasheet_k_per_w,
                 "rms_error_percent": float(np.sqrt(np.mean(self.error_percent ** 2))),
-                "early_time_correction": self.early, "rows": rows}
+                "early_time_correction": self.early, "warnings": self.warnings,
+                "rows": rows}
 
     def format(self) -> str:
         """The table as aligned text, laid out like the paper's."""
@@ -222,6 +252,7 @@ class Table1(JsonDocument):
             lines.append("* extrapolated by the sqrt(t) law (masked or before the first sample)")
         if self.early:
             lines.append(f"early-time correction: {self.early}")
+        lines.extend(f"warning: {w}" for w in self.warnings)
         return "\n".join(lines)
 
     def __str__(self) -> str:

@@ -61,7 +61,7 @@ def _calibration_table(calibration: CalibrationLike | None, label: str
                        ) -> CalibrationTable | KFactor:
     if calibration is None:
         raise DataFormatError(f"{label}: the file holds no calibration: give one (--calibration "
-                              f"CSV with temp_c, v_tsp_v, or --k-factor MV_PER_K with --tref "
+                              f"CSV with temp_c, v_tsp_v, or --k-factor MV_PER_K with --ambient "
                               f"DEGC)")
     if isinstance(calibration, CalibrationTable | KFactor):
         return calibration

@@ -36,7 +36,7 @@ import numpy as np
 from ..core.errors import DataFormatError
 from ..fit.ladder import BINS_PER_DECADE, DENSE_POINTS, log_bins
 from ..identify.calibration import KFactor
-from ..identify.curves import ZthCurve
+from ..identify.curves import NotAboveReference, ZthCurve
 from .bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ZthTable, read_columns
 from .files import read_text
 from .importers import END_SAMPLES, read_pyrth, read_t3ster
@@ -44,7 +44,8 @@ from .importers import END_SAMPLES, read_pyrth, read_t3ster
 #: Kinds of source (:attr:`Source.kind`).
 KINDS = ("bundle", "zth-csv", "cooling-csv", "pyrth", "t3ster")
 #: The options that name a calibration, as the command line spells them.
-CALIBRATION_OPTIONS = "--calibration CSV (temp_c, v_tsp_v) or --k-factor MV_PER_K with --tref DEGC"
+CALIBRATION_OPTIONS = ("--calibration CSV (temp_c, v_tsp_v) or --k-factor MV_PER_K with "
+                       "--ambient DEGC")
 
 
 def read_calibration(path: str | os.PathLike) -> CalibrationTable:
@@ -114,10 +115,16 @@ class Source:
             c = self.bundle.cooling[index]
             tref, tref_steady = self.bundle.cooling_reference_c(index)
             tjs = c.tj_steady_c if c.tj_steady_c is not None else tj_steady_c
-            zc = ZthCurve.from_cooling(c.t_s, self.bundle.cooling_tj_c(index), c.power_w, tjs,
-                                       tref, tref_steady, mask_s=mask_s,
-                                       fit_window_s=early_window_s,
-                                       label=c.file or f"cooling[{index}]")
+            try:
+                zc = ZthCurve.from_cooling(c.t_s, self.bundle.cooling_tj_c(index), c.power_w,
+                                           tjs, tref, tref_steady, mask_s=mask_s,
+                                           fit_window_s=early_window_s,
+                                           label=c.file or f"cooling[{index}]")
+            except NotAboveReference as exc:
+                if c.v_tsp_v is None or isinstance(self.bundle.calibration, KFactor):
+                    raise
+                recipe = k_factor_recipe(self.bundle, index, exc.ref_c)
+                raise DataFormatError(f"{exc.core}. {recipe}") from None
         else:
             z = self.bundle.zth[index - n_cool]
             if z.normalized and z.rth_k_per_w is None:
@@ -135,15 +142,23 @@ class Source:
         z = self.bundle.zth[index - len(self.bundle.cooling)]
         return z.rth_k_per_w is not None
 
-    def comparable(self, points_per_decade: int = BINS_PER_DECADE) -> tuple[Bundle, list[str]]:
+    def comparable(self, points_per_decade: int = BINS_PER_DECADE, *,
+                   mask_transient: bool = False) -> tuple[Bundle, list[str]]:
         """The bundle as ``compare`` and ``diagnose`` take it, and what was done to it: zth
         tables become the cooling curves they imply at 1 W (``Tj(t) = Tref + Rth − Zth(t)`` by
         superposition, ``Tref`` the ambient or 25 degC), and cooling curves denser than
         :data:`DENSE_POINTS` samples are averaged into ``points_per_decade`` log-spaced bins
-        (:func:`thin`)."""
+        (:func:`thin`).
+
+        ``mask_transient``: leave out of each cooling curve the samples ``fit`` masks as the
+        electrical transient (:meth:`curve`'s early-time correction, the same detection), so
+        that a model is judged on what it was fitted to describe; each curve's
+        ``extra["left_out"]`` then says ``{"samples": n, "before_s": t}``."""
         notes: list[str] = []
         cooling = []
-        for c in self.bundle.cooling:
+        for i, c in enumerate(self.bundle.cooling):
+            if mask_transient:
+                c = self._masked(i, notes)
             thinned = thin(c, points_per_decade)
             if thinned is not c:
                 notes.append(f"{c.file}: {c.t_s.size} samples averaged into {thinned.t_s.size} "
@@ -164,6 +179,28 @@ class Source:
             notes.append(f"{zc.label}: compared as the cooling curve it implies at 1 W from "
                          f"{ambient:g} degC")
         return bundle.with_(cooling=tuple(cooling), zth=(), ambient_c=ambient), notes
+
+
+    def _masked(self, index: int, notes: list[str]) -> CoolingTable:
+        """Cooling curve ``index`` without the samples fit masks (``extra["left_out"]``)."""
+        c = self.bundle.cooling[index]
+        try:
+            early = self.curve(index).early
+        except DataFormatError:  # no Zth from it: fit would refuse it, nothing to mirror
+            return c
+        t_mask = early.masked_s[1] if early is not None and early.masked_points else 0.0
+        keep = c.t_s >= t_mask
+        left_out = {"samples": int(c.t_s.size - keep.sum()), "before_s": float(t_mask)}
+        if left_out["samples"]:
+            notes.append(f"{c.file}: {left_out['samples']} samples before {t_mask:.3g} s left "
+                         f"out (the electrical transient, masked as fit masks it)")
+
+        def cut(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else values[keep]
+
+        return replace(c, t_s=c.t_s[keep], tj_c=cut(c.tj_c), v_tsp_v=cut(c.v_tsp_v),
+                       tref_c=cut(c.tref_c), rows=cut(c.rows),
+                       extra={**c.extra, "left_out": left_out})
 
 
 def thin(cooling: CoolingTable, points_per_decade: int = BINS_PER_DECADE) -> CoolingTable:
@@ -260,7 +297,7 @@ def _calibration(calibration: str | os.PathLike | None, k_mv_per_k: float | None
     if k_mv_per_k is None:
         return None
     if tref_c is None:
-        raise DataFormatError("--k-factor needs --tref DEGC: the temperature at the end of the "
+        raise DataFormatError("--k-factor needs --ambient DEGC: the temperature at the end of the "
                               "record, where the K-factor is anchored")
     return KFactor.from_mv_per_k(k_mv_per_k, 0.0, tref_c, "--k-factor")
 
@@ -284,6 +321,31 @@ def csv_header(path: str | os.PathLike) -> list[str]:
     return []
 
 
+def k_factor_recipe(bundle: Bundle, index: int, ref_c: float) -> str:
+    """How to anchor cooling curve ``index``'s calibration at its reference: the bundle.json
+    keys of a K-factor calibration (docs/bundle-format.md) with this record's numbers, and the
+    command-line options that do the same.
+
+    >>> v = 0.65 - 0.002 * np.array([13.0, 5.0, 0.0])  # ends near 0.64 V, 40 mV above the table
+    >>> b = Bundle(calibration=CalibrationTable(np.array([25.0, 75.0]), np.array([0.6, 0.5])),
+    ...            cooling=(CoolingTable(np.array([1e-3, 1e-1, 10.0]), 1.0, v_tsp_v=v),))
+    >>> k_factor_recipe(b, 0, 25.0).split("bundle.json, ")[1].split(" (docs")[0]
+    '"format": "spicethermal-bundle/2" and "calibration": {"kind": "k-factor", \
+"k_mv_per_k": -2, "v_ref_v": 0.638, "t_ref_c": 25}'
+    """
+    k = bundle.calibration_fit().k_factor_mv_per_k
+    v_end = float(np.mean(bundle.cooling[index].v_tsp_v[-END_SAMPLES:]))
+    v_table = float(bundle.calibration_fit().voltage(ref_c))
+    return (f"The record ends at {v_end:.6g} V, {abs(v_end - v_table) * 1e3:.3g} mV off the "
+            f"table's {v_table:.6g} V at {ref_c:g} degC (another sense current or "
+            f"offset: only the slope transfers). Anchor the table's slope at the end of the "
+            f"record, back at the reference: in bundle.json, \"format\": "
+            f"\"spicethermal-bundle/2\" and \"calibration\": {{\"kind\": \"k-factor\", "
+            f"\"k_mv_per_k\": {k:.4g}, \"v_ref_v\": {v_end:.6g}, \"t_ref_c\": {ref_c:g}}} "
+            f"(docs/bundle-format.md); or on the command line "
+            f"--k-factor {k:.4g} --ambient {ref_c:g}")
+
+
 def _anchor(cal: KFactor, v_tsp_v: np.ndarray) -> tuple[KFactor, str]:
     """The K-factor anchored at the end of a record (the device back at ``t_ref_c``)."""
     cal = replace(cal, v_ref_v=float(np.mean(v_tsp_v[-END_SAMPLES:])))
@@ -296,7 +358,7 @@ def _anchor_note(bundle: Bundle) -> list[str]:
     if anchor:
         return [f"calibration anchored: {anchor}"]
     return [f"the record ends at {bundle.cooling[0].tref_steady_c:.4g} degC through the "
-            f"calibration as given (--tref DEGC anchors it at the device's true temperature)"]
+            f"calibration as given (--ambient DEGC anchors it at the device's true temperature)"]
 
 
 def _with_rth(bundle: Bundle, rth: float | None) -> Bundle:
@@ -328,7 +390,7 @@ def _read_csv(path: Path, cal: CalibrationTable | KFactor | None, tref_c: float 
                               f"{CALIBRATION_OPTIONS}")
     if "tref_c" not in cols and tref_c is None:
         raise DataFormatError(f"{path}: a cooling curve needs a reference: a tref_c column or "
-                              f"--tref DEGC")
+                              f"--ambient DEGC")
     if power_w is None:
         notes.append("power 1 W nominal (--power W)")
     v = None if "tj_c" in cols else cols["v_tsp_v"]

@@ -77,13 +77,16 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
 
     s = Section("calibration", "1. TSP calibration (paper Fig. 2)")
     s.paragraphs.append(
-        f"The heater diode's forward voltage against temperature, fitted "
-        f"{'linearly' if len(calibration.coefficients) == 2 else 'with a quadratic'}: "
-        f"K-factor {calibration.k_factor_mv_per_k:.3f} mV/K, residual RMS "
+        f"The heater diode's forward voltage against temperature (as the bench records it, "
+        f"relative to its value at the ambient), fitted "
+        f"{'linearly' if calibration.degree == 1 else 'with a quadratic'}: "
+        f"K-factor {calibration.k_factor_mv_per_k:.3f} mV/K"
+        f"{' at mid-range' if calibration.degree == 2 else ''}, residual RMS "
         f"{calibration.rms_mv:.3f} mV ({calibration.rms_k:.3f} K) over "
-        f"{calibration.points} points. {calibration.linearity}")
-    s.figure(figs / "fig2_calibration.png", out, "Fig. 2 — TSP forward voltage (mV) against "
-             "the hot-plate temperature with the fit, and its residuals in K")
+        f"{calibration.points} points. Linearity test: {calibration.linearity}.")
+    s.figure(figs / "fig2_calibration.png", out, "Fig. 2 — TSP voltage (mV) against the "
+             "hot-plate temperature with the law used; its bow, the points' and the law's "
+             "departure from a straight line in K; the law's residuals in K")
     secs.append(s)
 
     s = Section("fit", "2. Thermal impedance and the fitted ladder (paper Fig. 7)")
@@ -98,10 +101,9 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
             [[i + 1, _g(st["r_k_per_w"]), _g(st["u_r_k_per_w"], 2), _g(st["tau_s"]),
               _g(st["u_tau_s"], 2), _g(st["c_j_per_k"])] for i, st in enumerate(fit.stages)],
             "Foster ladder (fit)")
-    cauer = model.ladder.to_cauer()
-    s.table(["node", "R (K/W)", "C (J/K)"],
-            [[i, _g(r), _g(c)] for i, (r, c) in enumerate(zip(cauer.r, cauer.c, strict=True))],
-            "Equivalent Cauer ladder (exact conversion; node 0 is the junction)")
+    s.table(["node", "R towards TREF (K/W)", "C to node 0 (J/K)"], cauer_rows(model),
+            "Equivalent Cauer ladder (exact conversion), nodes as the .lib files name them: "
+            "TJ the junction, N1 … inward layers, each capacity to node 0, the thermal ground")
     if len(curves) > 1:
         s.paragraphs.append("All cooling curves: " + "; ".join(
             f"{c.label} at {c.power_w:g} W: Rth = {c.rth_k_per_w:.2f} K/W" for c in curves)
@@ -183,7 +185,8 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
              for c in diagnosis.to_json()["candidates"]], "Candidates, best first")
     if better is not None:
         s.paragraphs.append(
-            f"With {', '.join(diagnosis.effects)} added (fitted parameters above), the RMS "
+            f"With {', '.join(diagnosis.effects)} added (fitted parameters in the candidates "
+            f"table below), the RMS "
             f"error over every data set falls from {before.rms_k:.3g} K to {after.rms_k:.3g} K "
             f"({before.rms_k / max(after.rms_k, 1e-12):.3g}× lower; RMS staircase: "
             f"{diagnosis.staircase()}); worst from {before.max_abs_k:.3g} K to "
@@ -197,9 +200,10 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
 
     s = Section("netlists", "7. Exported SPICE models")
     s.paragraphs.append(
-        "Every file holds .SUBCKT NAME TJ TREF: heat flow in W is a current into TJ, the "
-        "temperature rise in K is V(TJ) − V(TREF). The header of each file carries Rth, the time "
-        "constants and the provenance.")
+        f"{len(libs)} files, each holding .SUBCKT NAME TJ TREF: heat flow in W is a current "
+        f"into TJ; temperatures are absolute, V(TJ) in °C with TREF driven at the ambient in "
+        f"°C (the temperature rise in K is V(TJ) − V(TREF)). The header of each file carries "
+        f"Rth, the time constants and the provenance.")
     s.table(["file", "dialect", "topology", "size"],
             [[os.path.relpath(p, out), *_dialect_topology(p), f"{p.stat().st_size} B"]
              for p in libs])
@@ -268,11 +272,25 @@ def diagnosis_caption(path: str | os.PathLike) -> str:
     return DIAGNOSIS_CAPTIONS.get(stem, f"Diagnosis figure: {stem.replace('_', ' ')}")
 
 
+def cauer_rows(model) -> list[list[str]]:
+    """The exact Cauer ladder of ``model`` as the ``.lib`` files lay it out: node (``TJ``,
+    ``N1``, ...), its resistor towards TREF (K/W) and its capacity to node 0 (J/K).
+
+    >>> from spicethermal.core.ladder import Cauer
+    >>> from spicethermal.model import ThermalModel
+    >>> cauer_rows(ThermalModel(Cauer([1.0, 2.0], [1e-3, 0.5])))
+    [['TJ', '1', '0.001'], ['N1', '2', '0.5']]
+    """
+    cauer = model.ladder.to_cauer() if model.ladder.topology != "cauer" else model.ladder
+    return [["TJ" if i == 0 else f"N{i}", _g(r), _g(c)]
+            for i, (r, c) in enumerate(zip(cauer.r, cauer.c, strict=True))]
+
+
 def _early_text(curve) -> str:
     early = getattr(curve, "early", None)
     if early is None or not getattr(early, "detected", False):
         return ""
-    return (f"The electrical transient masked the first {early.masked_s * 1e6:.0f} µs "
+    return (f"The electrical transient masked the first {early.masked_s[1] * 1e6:.0f} µs "
             f"({early.masked_points} points), extrapolated back by the √t law.")
 
 

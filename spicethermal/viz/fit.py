@@ -12,6 +12,7 @@ import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
     from ..core.ladder import Cauer, Foster
     from ..fit.ladder import FitResult
@@ -230,14 +231,29 @@ def fig7(result: FitResult, path: str | os.PathLike, cauer: bool = True,
 
 
 # --------------------------------------------------- Fig. 2 and Table 1 (the demo report)
+def calibration_law(cal: Calibration) -> str:
+    """The law a calibration converts by, as a legend says it.
+
+    >>> from spicethermal.identify.calibration import Calibration
+    >>> calibration_law(Calibration.fit([20, 40, 60, 80], [0.6, 0.56, 0.52, 0.48]))
+    'linear law, K = -2.000 mV/K'
+    """
+    if cal.degree == 1:
+        return f"linear law, K = {cal.k_factor_mv_per_k:.3f} mV/K"
+    return f"quadratic law, K = {cal.k_factor_mv_per_k:.3f} mV/K at mid-range"
+
+
 def plot_calibration(cal: Calibration, ax: Axes | None = None) -> Axes:
-    """V_tsp against temperature: the points and the fitted curve (paper Fig. 2)."""
+    """V_tsp against temperature: the points and the law used, linear or quadratic (paper
+    Fig. 2); the voltage axis spans the points with a margin."""
     ax = ax if ax is not None else new_figure().add_subplot()
     t = np.asarray(cal.temp_c)
     grid = np.linspace(t.min(), t.max(), 200)
     ax.plot(t, np.asarray(cal.v_tsp_v) * 1e3, "o", color="C0", label="calibration points")
-    ax.plot(grid, cal.voltage(grid) * 1e3, "-", color="C1",
-            label=f"fit, K = {cal.k_factor_mv_per_k:.3f} mV/K")
+    ax.plot(grid, cal.voltage(grid) * 1e3, "-", color="C1", label=calibration_law(cal))
+    v = np.asarray(cal.v_tsp_v) * 1e3
+    pad = 0.08 * (float(np.ptp(v)) or 1.0)
+    ax.set_ylim(float(v.min()) - pad, float(v.max()) + pad)
     ax.set_xlabel("temperature (°C)")
     ax.set_ylabel("V_tsp (mV)")
     ax.grid(True, alpha=0.3)
@@ -245,8 +261,46 @@ def plot_calibration(cal: Calibration, ax: Axes | None = None) -> Axes:
     return ax
 
 
+def calibration_figure(cal: Calibration) -> Figure:
+    """Fig. 2: the points and the law used; the bow, what the points and the law depart from
+    the best straight line in K (flat for a linear law, the quadratic's curvature otherwise,
+    invisible on the voltage scale); the law's residuals in K.
+
+    >>> from spicethermal.identify.calibration import Calibration
+    >>> cal = Calibration.fit([20, 40, 60, 80, 100], [0.6, 0.5595, 0.5185, 0.477, 0.435], 2)
+    >>> fig = calibration_figure(cal)
+    >>> [ax.get_ylabel() for ax in fig.get_axes()]
+    ['V_tsp (mV)', 'bow (K)', 'residual (K)']
+    >>> fig.get_axes()[0].get_legend().get_texts()[1].get_text()[:15]
+    'quadratic law, '
+    """
+    fig = new_figure(6.4, 6.4)
+    grid = fig.add_gridspec(3, 1, height_ratios=[3, 1.4, 1.3])
+    ax = fig.add_subplot(grid[0])
+    plot_calibration(cal, ax)
+    ax.set_xlabel("")  # the temperature axis is labelled once, under the last panel
+    ax.set_title("TSP calibration (Fig. 2)", fontsize=10, loc="left")
+    t, v = np.asarray(cal.temp_c), np.asarray(cal.v_tsp_v)
+    line = np.polynomial.Polynomial.fit(t, v, 1).convert()  # the best straight line
+    slope = float(line.coef[1])
+    ts = np.linspace(t.min(), t.max(), 200)
+    bow = fig.add_subplot(grid[1], sharex=ax)
+    bow.axhline(0, color="0.5", lw=0.8)
+    bow.plot(t, (v - line(t)) / slope, "o", color="C0", ms=4)
+    bow.plot(ts, (cal.voltage(ts) - line(ts)) / slope, "-", color="C1")
+    bow.set_ylabel("bow (K)")
+    bow.grid(True, alpha=0.3)
+    ax2 = fig.add_subplot(grid[2], sharex=ax)
+    ax2.axhline(0, color="0.5", lw=0.8)
+    ax2.plot(t, cal.residuals_k, "o-", color="C3", ms=4)
+    ax2.set_ylabel("residual (K)")
+    ax2.set_xlabel("temperature (°C)")
+    ax2.grid(True, alpha=0.3)
+    return fig
+
+
 def fig_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
-    """Fig. 2: the calibration with its residuals in kelvin underneath.
+    """Fig. 2 (:func:`calibration_figure`) written to ``path``.
 
     >>> import tempfile, pathlib
     >>> from spicethermal.identify.calibration import Calibration
@@ -254,18 +308,7 @@ def fig_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
     >>> fig_calibration(cal, pathlib.Path(tempfile.mkdtemp()) / "c.png").exists()
     True
     """
-    fig = new_figure(6.4, 5.2)
-    grid = fig.add_gridspec(2, 1, height_ratios=[3, 1.3])
-    ax = fig.add_subplot(grid[0])
-    plot_calibration(cal, ax)
-    ax.set_title("TSP calibration (Fig. 2)", fontsize=10, loc="left")
-    ax2 = fig.add_subplot(grid[1], sharex=ax)
-    ax2.axhline(0, color="0.5", lw=0.8)
-    ax2.plot(np.asarray(cal.temp_c), cal.residuals_k, "o-", color="C3", ms=4)
-    ax2.set_ylabel("residual (K)")
-    ax2.set_xlabel("temperature (°C)")
-    ax2.grid(True, alpha=0.3)
-    return save_figure(fig, path)
+    return save_figure(calibration_figure(cal), path)
 
 
 def fig_table1(table: Table1, path: str | os.PathLike) -> Path:

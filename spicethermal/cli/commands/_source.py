@@ -7,8 +7,18 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
+from ...core.errors import DataFormatError
 from ...io.sources import read_source
-from ._types import AliasFormatter, add_option, count, listed, number, positive
+from ._types import (
+    AliasFormatter,
+    add_option,
+    count,
+    listed,
+    number,
+    positive,
+    positive_duration,
+    positive_power,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from ...io.bundle import Bundle
@@ -24,7 +34,7 @@ def window(text: str) -> tuple[float, float]:
     >>> window("1e-4,4e-4")
     (0.0001, 0.0004)
     """
-    values = listed(positive)(text)
+    values = listed(positive_duration)(text)
     if len(values) != 2 or not values[0] < values[1]:
         raise argparse.ArgumentTypeError(f"{text!r}: expected T1,T2 in s with 0 < T1 < T2")
     return values[0], values[1]
@@ -53,7 +63,7 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, curve: bool = True,
                            help="temperature at the end of the record (anchors the "
                                 "calibration), or the reference of a cooling CSV")
     if power:
-        group.add_argument("--power", type=positive, metavar="W",
+        group.add_argument("--power", type=positive_power, metavar="W",
                            help="heating power of a PyRth .txt or cooling CSV (default 1 W "
                                 "nominal, said in the output)")
     if rth:
@@ -80,11 +90,29 @@ def read_source_args(args: argparse.Namespace, source: str | None = None, *,
     return src
 
 
-def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True) -> Bundle:
+def comparable_source(args: argparse.Namespace, source: str, *, rth: bool = True,
+                      model_reference: str | None = None,
+                      mask_transient: bool = False) -> Bundle:
     """SOURCE as ``compare`` and ``diagnose`` take it (:meth:`Source.comparable`), what was
-    done on the way printed on stderr (``rth``: whether ``args.rth`` is the source's Rth)."""
+    done on the way printed on stderr (``rth``: whether ``args.rth`` is the source's Rth;
+    ``mask_transient``: leave out the samples fit masks as the electrical transient).
+
+    With ``model_reference``, a source that does not state its reference (any file but a
+    bundle, whose manifest does) is taken to ``args.reference``, else to the model's; a
+    bundle keeps its own and ``args.reference`` may only repeat it."""
     src = read_source_args(args, source, rth=rth)
-    bundle, notes = src.comparable()
+    bundle, notes = src.comparable(mask_transient=mask_transient)
+    if model_reference is not None:
+        given = getattr(args, "reference", None)
+        if src.kind == "bundle":
+            if given is not None and given != bundle.reference:
+                raise DataFormatError(f"{src.path}: the bundle states its reference, "
+                                      f"{bundle.reference}; --reference {given} contradicts it")
+        else:
+            bundle = bundle.with_(reference=given or model_reference)
+            if given is None:
+                notes.append(f"the file does not state its reference: the model's "
+                             f"({model_reference}); --reference says otherwise")
     for note in notes:
         print(f"{src.path}: {note}", file=sys.stderr)
     return bundle

@@ -26,6 +26,7 @@ from ...core.errors import DataFormatError
 from ...effects import spec
 from ...spice.lib import DIALECTS, TOPOLOGIES
 from ._types import count as _count
+from ._types import frequency, positive_power
 from ._types import index as _index
 from ._types import listed as _listed
 from ._types import positive as _positive
@@ -54,13 +55,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="candidate effect of the diagnosis (repeatable; default every "
                              "catalogued effect)")
     parser.add_argument("--no-diagnose", action="store_true", help="fit and export only")
-    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice")
+    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice",
+                        help="syntax of the .lib files: ngspice (default), pspice or ltspice")
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
                         help="network of the models and .lib files (default foster)")
     pwm = parser.add_argument_group("PWM peak table over the population")
-    pwm.add_argument("--power", type=_positive, default=1.0, metavar="W",
-                     help="pulse power (default 1 W)")
-    pwm.add_argument("--freq", type=_listed(_positive), default=(100.0, 1e3, 1e4),
+    pwm.add_argument("--power", type=positive_power, metavar="W",
+                     help="pulse power, W (default: the devices' own, the median of the powers "
+                          "of their fitted cooling curves; 1 W when no input gives one)")
+    pwm.add_argument("--freq", type=_listed(frequency), default=(100.0, 1e3, 1e4),
                      metavar="HZ,...", help="frequencies (default 100,1000,10000)")
     pwm.add_argument("--duty", type=_listed(_positive), default=(0.1, 0.5, 0.9),
                      metavar="D,...", help="duty cycles in (0, 1] (default 0.1,0.5,0.9)")
@@ -103,9 +106,14 @@ def run(args: argparse.Namespace) -> int:
                         elapsed_s=time.perf_counter() - t0)
     errors = sum(1 for r in batch.rows if r.get("error"))
     if not args.quiet:
+        twins = [r for r in batch.rows if r.get("duplicate_of")]
         print(f"{len(batch.rows)} inputs ({batch.computed} computed, {batch.reused} reused), "
-              f"{errors} with an error, {len(summary.outliers)} outlier"
-              f"{'' if len(summary.outliers) == 1 else 's'}")
+              f"{errors} with an error, {len(twins)} duplicate{'' if len(twins) == 1 else 's'}"
+              f", {len(summary.outliers)} outlier{'' if len(summary.outliers) == 1 else 's'}")
+        for r in twins:
+            print(f"  duplicate {r['name']}: the same content as {r['duplicate_of']} (counted "
+                  f"once)")
+        print(f"PWM peaks at {summary.power_w:.4g} W ({summary.power_origin})")
         for o in summary.outliers:
             print(f"  outlier {summary.names[o.index]}: {o.reason}")
         print(f"wrote {out / 'results.csv'} and {summary.page}")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 
 from ...bench.session import ACTIONS, run_bench
-from ._types import add_option, frequency, listed, number
+from ._types import add_option, frequency, listed, number, positive_duration, positive_power
 from ._types import positive as _positive
 
 NAME = "bench"
@@ -39,29 +39,37 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
                    help="wait while another process writes the bundle (default: exit 2)")
     p.add_argument("--replace", action="append", default=[], metavar="NAME",
                    help="replace this data file of the bundle (e.g. cooling_1.csv) with the "
-                        "new data set of its kind; without it nothing is ever dropped")
-    add_option(p, "--settle", old=("--settle-s",), type=_positive, dest="settle_s", metavar="S",
+                        "new data set of its kind (repeatable; default none: nothing is ever "
+                        "dropped)")
+    add_option(p, "--settle", old=("--settle-s",), type=positive_duration, dest="settle_s",
+               metavar="S",
                    help="heating time to the steady state (default from the board's plan)")
-    add_option(p, "--window", old=("--window-s",), type=_positive, dest="window_s", metavar="S",
+    add_option(p, "--window", old=("--window-s",), type=positive_duration, dest="window_s",
+               metavar="S",
                    help="sample window, s (default 1e-4, the paper's 100 us)")
     if action in ("run", "calibrate"):
-        p.add_argument("--setpoints", type=listed(number), dest="calibration_c", metavar="C,..",
-                       help="calibration temperatures, degC")
+        add_option(p, "--setpoint", old=("--setpoints",), type=listed(number),
+                   dest="calibration_c", metavar="C,...",
+                   help="calibration temperatures, degC (default from the board's plan)")
     if action in ("run", "rth"):
-        p.add_argument("--rth-power", type=_positive, dest="rth_power_w", metavar="W",
-                       help="power of the Rth measurement, W")
+        p.add_argument("--rth-power", type=positive_power, dest="rth_power_w", metavar="W",
+                       help="power of the Rth measurement, W (default from the board's plan)")
     if action in ("run", "cooling"):
-        p.add_argument("--powers", type=listed(_positive), dest="cooling_powers_w", metavar="W,..",
-                       help="powers of the cooling curves, W")
-        p.add_argument("--t-last", type=_positive, dest="cooling_t_last_s", metavar="S",
-                       help="last cooling sample, s after the cut")
+        add_option(p, "--cooling-power", old=("--powers",), type=listed(positive_power),
+                   dest="cooling_powers_w", metavar="W,...",
+                   help="powers of the cooling curves, one curve each, W (default from the "
+                        "board's plan)")
+        p.add_argument("--t-last", type=positive_duration, dest="cooling_t_last_s", metavar="S",
+                       help="last cooling sample, s after the cut (default from the board's "
+                            "plan)")
     if action in ("run", "pwm"):
-        p.add_argument("--pwm-power", type=_positive, dest="pwm_power_w", metavar="W",
-                       help="pulse power of the PWM runs, W")
-        p.add_argument("--freqs", type=listed(frequency), dest="pwm_freqs_hz", metavar="HZ,..",
-                       help="PWM frequencies, Hz")
-        p.add_argument("--duties", type=listed(_positive), dest="pwm_duties", metavar="D,..",
-                       help="PWM duty cycles, 0..1")
+        p.add_argument("--pwm-power", type=positive_power, dest="pwm_power_w", metavar="W",
+                       help="pulse power of the PWM runs, W (default from the board's plan)")
+        add_option(p, "--freq", old=("--freqs",), type=listed(frequency), dest="pwm_freqs_hz",
+                   metavar="HZ,...", help="PWM frequencies, Hz (default from the board's plan)")
+        add_option(p, "--duty", old=("--duties",), type=listed(_positive), dest="pwm_duties",
+                   metavar="D,...", help="PWM duty cycles in (0, 1] (default from the board's "
+                                         "plan)")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

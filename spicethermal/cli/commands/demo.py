@@ -17,7 +17,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                metavar="DIR",
                         help="directory for the bundles, models, .lib files and report "
                              "(default out/demo)")
-    parser.add_argument("--seed", type=int, default=1, help="seed of the simulated bench")
+    parser.add_argument("--seed", type=int, default=1,
+                        help="seed of the simulated bench (default 1)")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress output")
 
 

@@ -27,6 +27,7 @@ from ...model import ThermalModel
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import number as _number
 from ._types import positive as _positive
+from ._types import positive_duration, positive_power
 
 NAME = "diagnose"
 HELP = "show where the model fails and which physical effect is missing"
@@ -53,10 +54,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     table = parser.add_argument_group("for a table of measured vs simulated PWM readings")
     table.add_argument("--rth", type=_positive, metavar="K_PER_W", default=146.0,
                        help="Rth of the simulated ladder (default 146, the paper's)")
-    table.add_argument("--power", type=_positive, metavar="W",
+    table.add_argument("--power", type=positive_power, metavar="W",
                        help="pulse power (default: from the simulated column at the lowest "
                             "frequency)")
-    table.add_argument("--window", type=_positive, metavar="S", default=1e-4,
+    table.add_argument("--window", type=positive_duration, metavar="S", default=1e-4,
                        help="sample window the bench used (default 1e-4 s, the paper's)")
     table.add_argument("--ambient", type=_number, metavar="DEGC", dest="tref",
                        help="reference added to a table's rises (default 25, as in the "

@@ -25,10 +25,9 @@ from ...engines.interface import NAMES
 from ...io.files import atomic_write_text, dumps_json
 from ...model import ThermalModel
 from ...viz.plots import fig_drive
-from ._types import add_engine_options, add_option, frequency
+from ._types import add_engine_options, add_option, frequency, positive_power, quantity
 from ._types import index as _node
 from ._types import number as _number
-from ._types import positive as _positive
 
 NAME = "drive"
 HELP = "safe fast drive: the PWM schedule that actuates fastest with the junction peak <= t-max"
@@ -50,15 +49,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="target temperature of the actuation node (period average), °C")
     parser.add_argument("--ambient", type=_number, default=25.0, metavar="C",
                         help="reference temperature, °C (default 25)")
-    parser.add_argument("--p-max", type=_positive, metavar="W",
-                        help="heater power when on (default: the DC power whose steady state "
+    add_option(parser, "--power", old=("--p-max",), dest="p_max", type=positive_power,
+               metavar="W", help="heater power when on (default: the DC power whose steady state "
                              "puts the junction at t-max)")
     add_option(parser, "--freq", old=("--f-pwm",), dest="f_pwm", type=frequency,
                default=DEFAULT_F_PWM_HZ, metavar="HZ",
                help=f"PWM frequency (default {DEFAULT_F_PWM_HZ:g})")
     parser.add_argument("--node", type=_node, default=0, metavar="N",
                         help="actuation node: 0 junction (default), N = Cauer node N")
-    parser.add_argument("--tol", type=_positive, default=DEFAULT_TOL_K, metavar="K",
+    parser.add_argument("--tol", type=quantity("K", open_low=True), default=DEFAULT_TOL_K,
+                        metavar="K",
                         help=f"band around the target the node must settle in "
                              f"(default {DEFAULT_TOL_K:g})")
     parser.add_argument("--release", type=_number, metavar="C",

@@ -23,7 +23,8 @@ HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and t
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="spicethermal-model/3 (/2, /1) file")
-    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice")
+    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice",
+                        help="the simulator's syntax: ngspice (default), pspice or ltspice")
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
                         help="network to write (default: the model's own; converted exactly). "
                              "cauer: capacitors to the thermal ground, right when coupled to a "
@@ -38,7 +39,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--temperature", choices=TEMPERATURES, default="absolute",
                         help="absolute (default): node voltages are temperatures in degC, you "
                              "drive the reference pin; rise: rises in K over node 0 = ambient")
-    parser.add_argument("-o", "--output", required=True, metavar="FILE.lib")
+    parser.add_argument("-o", "--output", required=True, metavar="FILE.lib",
+                        help="the .lib file to write")
 
 
 def run(args: argparse.Namespace) -> int:

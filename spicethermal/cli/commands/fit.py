@@ -23,7 +23,7 @@ from ...core.errors import DataFormatError
 from ...effects import spec
 from ...fit.bootstrap import fig_fit_band, fit_bootstrap
 from ...fit.fitters import fit_with_effects
-from ...fit.ladder import fit_model
+from ...fit.ladder import check_rth, fit_model
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
 from ...io.sources import early_time_json
@@ -58,7 +58,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
                         help="largest order tried by --order auto (default 10)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME",
-                        help="an effect to fit with the ladder (repeatable)")
+                        help="an effect to fit with the ladder (repeatable; default none: the "
+                             "linear ladder alone)")
     parser.add_argument("--weighting", choices=("relative", "absolute"), default="relative",
                         help="relative (default: log-domain, every decade of time counts, as "
                              "datasheet and measured curves need) or absolute (K/W) residuals")
@@ -121,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
     curve = src.curve(args.curve, early_window_s=args.early_window)
     held, reference = src.rth_held(args.curve) or args.rth is not None, src.bundle.reference
     rth = args.rth if args.rth is not None else (curve.rth_k_per_w if held else None)
+    if args.rth is not None:
+        check_rth(curve.t_s, curve.zth_k_per_w, args.rth, curve.label or str(source))
     model, result = fit_model(
         curve, effects=args.effect, order=args.order, rth_k_per_w=rth, hold_rth=held,
         max_order=args.max_order, reference=args.reference or reference, weighting=args.weighting,

@@ -1,4 +1,4 @@
-"""``spicethermal predict MODEL.json --power PROFILE.csv -o TJ.csv [--plot TJ.png]``.
+"""``spicethermal predict MODEL.json --profile PROFILE.csv -o TJ.csv [--plot TJ.png]``.
 
 The junction temperature under a measured power profile (CSV ``t_s, power_w`` from t = 0,
 linear between samples, held after the last): the analytic engine (exact, mode by mode) for
@@ -9,6 +9,7 @@ linear models, ngspice with device effects (:mod:`spicethermal.analysis.predict`
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ...analysis.predict import (
     DEFAULT_POINTS,
@@ -18,10 +19,11 @@ from ...analysis.predict import (
     plot_prediction,
     predict,
 )
+from ...core.plausible import implausible_rise
 from ...io.bundle import format_columns
 from ...io.files import atomic_write_text
 from ...model import ThermalModel
-from ._types import add_engine_options, add_option, count, number, positive
+from ._types import add_engine_options, add_option, count, number, positive_duration
 
 NAME = "predict"
 HELP = "junction temperature under a measured power profile (analytic, or ngspice with effects)"
@@ -29,14 +31,14 @@ HELP = "junction temperature under a measured power profile (analytic, or ngspic
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json", help="a spicethermal model file")
-    parser.add_argument("--power", required=True, metavar="PROFILE.csv",
-                        help="power profile: columns t_s (from 0) and power_w")
+    add_option(parser, "--profile", old=("--power",), required=True, metavar="PROFILE.csv",
+               help="power profile: columns t_s (from 0) and power_w in W")
     parser.add_argument("-o", "--output", required=True, metavar="TJ.csv",
                         help="where to write t_s, power_w, tj_c")
     parser.add_argument("--plot", metavar="TJ.png", help="also draw Tj and power against time")
     add_option(parser, "--ambient", old=("--tref",), dest="tref", type=number, default=25.0,
                metavar="DEGC", help="reference (ambient or case) temperature, degC (default 25)")
-    parser.add_argument("--until", type=positive, metavar="S",
+    parser.add_argument("--until", type=positive_duration, metavar="S",
                         help="predict until this time, s (default: the profile's last sample; "
                              "after it the power is held)")
     parser.add_argument("--points", type=count, default=DEFAULT_POINTS, metavar="N",
@@ -48,13 +50,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
-    profile = PowerProfile.read(args.power)
+    profile = PowerProfile.read(args.profile)
     times = output_times(profile, args.until, args.points)
     result = predict(model, profile, times, tref_c=args.tref, engine=args.engine,
                      quiet=args.quiet)
     atomic_write_text(args.output, format_columns(result.columns(), [
-        f"spicethermal predict: {args.model} under {args.power}, Tref {args.tref:g} degC, "
+        f"spicethermal predict: {args.model} under {args.profile}, Tref {args.tref:g} degC, "
         f"engine {result.engine}"]))
+    warning = implausible_rise(result.peak[1] - args.tref, f"the power profile {args.profile} "
+                               f"(power_w in W)")
+    if warning:
+        print(f"spicethermal predict: warning: {warning}", file=sys.stderr)
     if args.plot:
         plot_prediction(result, args.plot)
     print(result)

@@ -10,12 +10,14 @@ steady state (:mod:`spicethermal.engines.pwmsim`).
 from __future__ import annotations
 
 import argparse
+import sys
 
+from ...core.plausible import implausible_rise
 from ...engines.interface import NAMES
 from ...engines.pwmsim import pwm_state
 from ...io.files import dumps_json
 from ...model import ThermalModel
-from ._types import add_option, duty, frequency, nonnegative, number
+from ._types import add_option, duration, duty, frequency, number, power
 
 NAME = "pwm"
 HELP = "periodic steady state under PWM: peak, mean, valley and the bench reading"
@@ -27,9 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         type=frequency, help="PWM frequency, Hz")
     parser.add_argument("--duty", required=True, metavar="D",
                         type=duty, help="duty cycle, 0..1")
-    parser.add_argument("--power", required=True, metavar="W", type=nonnegative,
+    parser.add_argument("--power", required=True, metavar="W", type=power,
                         help="power during the on-phase, W")
-    parser.add_argument("--window", default=0.0, metavar="S", type=nonnegative,
+    parser.add_argument("--window", default=0.0, metavar="S", type=duration,
                         help="power-off sample window before the reading, s (default 0: the "
                              "reading is the peak)")
     parser.add_argument("--engine", choices=NAMES, default="analytic",
@@ -47,6 +49,9 @@ def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
     state = pwm_state(model, args.power, args.freq, args.duty, args.window,
                       engine=args.engine, tref_c=args.tref)
+    warning = implausible_rise(state.peak_k, f"--power {args.power:g} W")
+    if warning:
+        print(f"spicethermal pwm: warning: {warning}", file=sys.stderr)
     if args.json:
         print(dumps_json(state.to_dict()))
         return 0

@@ -10,9 +10,9 @@ default 1 W nominal) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco``
 Prints the spectrum's summary, its peaks and the lumped Foster ladder; ``--json`` prints the
 spectrum (``spicethermal-spectrum/1``: ``tau_s``, ``r_density_k_per_w`` in K/W per unit ln τ,
 ``method``, ``resolution_decades``, ``t_resolved_s``, ``rth_k_per_w``) plus the lumped Foster
-stages; ``-o MODEL.json`` writes that ladder as a model file for ``export`` (an ``-o`` path
-ending in .png, .svg or .pdf is the figure, as before ``--plot``; ``--model`` is ``-o``'s old
-spelling).
+stages; ``-o MODEL.json`` writes that ladder as a model file for ``export``, as ``fit -o``
+does (deprecated: an ``-o`` path ending in .png, .svg or .pdf is the figure, as before
+``--plot``; ``--model`` is ``-o``'s old spelling).
 ``--bootstrap N`` (residual bootstrap, :mod:`spicethermal.fit.bootstrap`) adds the 95 % band of
 R(τ) to the figure and ``"bootstrap"`` to the JSON (``spectrum``: ``tau_s``,
 ``r_density_k_per_w_lo``, ``r_density_k_per_w_hi``, ``level``). The early-time correction (the
@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ... import __version__
@@ -34,7 +33,7 @@ from ...io.sources import early_time_json
 from ...model import ThermalModel
 from ...viz.plots import fig_spectrum
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
-from ._types import add_option
+from ._types import add_option, old_figure_output
 from ._types import count as _count
 from ._types import positive as _positive
 
@@ -102,12 +101,8 @@ def run(args: argparse.Namespace) -> int:
     curve = load_curve(args, args.source)
     spec = time_constant_spectrum(curve, **spectrum_options(args))
     foster = spec.to_foster(args.stages_per_decade, order=args.order)
-    model_path = None
-    for path in args.output or ():  # -o FIG.png: the figure, as before --plot
-        if Path(path).suffix.lower() in (".png", ".svg", ".pdf"):
-            args.plot = args.plot or path
-        else:
-            model_path = path
+    old_figure_output(args)  # -o FIG.png: the figure, as before --plot
+    model_path = args.output[-1] if args.output else None
     sb = None
     if args.bootstrap:
 

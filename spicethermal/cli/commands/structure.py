@@ -1,4 +1,4 @@
-"""``spicethermal structure SOURCE [SOURCE2] [-o FIG.png] [--json]``: structure functions.
+"""``spicethermal structure SOURCE [SOURCE2] [--plot FIG.png] [--json]``: structure functions.
 
 Each SOURCE (as for ``spicethermal spectrum``: bundle directory, Zth CSV, PyRth ``.txt``,
 T3Ster ``.raw``) goes Zth(t) → time-constant spectrum (NID) → Foster ladder
@@ -31,7 +31,7 @@ from ...identify.structure import SEPARATION_THRESHOLD, StructureFunction, separ
 from ...io.files import dumps_json
 from ...viz.plots import fig_structure
 from ._source import SOURCE_HELP
-from ._types import positive
+from ._types import add_option, positive
 from .spectrum import add_spectrum_arguments, load_curve, spectrum_options
 
 NAME = "structure"
@@ -41,8 +41,8 @@ HELP = "cumulative and differential structure functions; two sources: where they
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("sources", metavar="SOURCE", nargs="+",
                         help=f"one or two sources: {SOURCE_HELP}")
-    parser.add_argument("-o", "--output", metavar="FIG.png",
-                        help="write the figure (cumulative and differential structure "
+    add_option(parser, "--plot", old=("-o", "--output"), metavar="FIG.png",
+               help="write the figure (cumulative and differential structure "
                              "functions, separation marked)")
     parser.add_argument("--json", action="store_true",
                         help="print ΣR and ΣC as JSON (a list of two objects for two sources)")
@@ -69,10 +69,10 @@ def run(args: argparse.Namespace) -> int:
     if len(functions) == 2:
         threshold = SEPARATION_THRESHOLD if args.threshold is None else args.threshold
         sep = separation(functions[0], functions[1], threshold_decades=threshold)
-    if args.output and bands:
-        fig_structure_band(functions, bands, args.output, sep)
-    elif args.output:
-        fig_structure(functions, args.output, sep)
+    if args.plot and bands:
+        fig_structure_band(functions, bands, args.plot, sep)
+    elif args.plot:
+        fig_structure(functions, args.plot, sep)
     if args.json:
         docs = [sf.to_dict() for sf in functions]
         for doc, band in zip(docs, bands, strict=False):  # only with --bootstrap
@@ -87,6 +87,6 @@ def run(args: argparse.Namespace) -> int:
         print(sf)
     if sep is not None:
         print(sep)
-    if args.output:
-        print(f"wrote figure {args.output}")
+    if args.plot:
+        print(f"wrote figure {args.plot}")
     return 0

@@ -82,7 +82,5 @@ def run(args: argparse.Namespace) -> int:
         doc["early_time"] = early_time_json(curve)
         print(dumps_json(doc, indent=2))
     else:
-        if curve.early is not None:
-            print(f"early time: {curve.early}")
-        print(result.format())
+        print(result.format())  # the early-time correction included
     return 0
