@@ -59,7 +59,7 @@ from .where import localise
 if TYPE_CHECKING:  # pragma: no cover
     from ..io.bundle import Bundle
 
-__all__ = ["comparison_of", "diagnose", "verdict"]
+__all__ = ["comparison_of", "diagnose", "fit_with_effects", "verdict"]
 
 RIVAL, UNSHOWN = "rival", "unshown"
 
@@ -331,3 +331,42 @@ def _separate(steps: Sequence[Step]) -> str:
             needs = " and ".join(sorted(s.chosen.effect.plugin.traits.needs))
             out.append(f"{s.chosen.name}: a {needs} over the temperatures reached")
     return "; ".join(out)
+
+
+def fit_with_effects(bundle: Bundle, names: Sequence[str],
+                     provenance: dict | None = None) -> ThermalModel:
+    """The linear ladder and the named effects fitted jointly to every data set of
+    ``bundle``, as the diagnosis fits them: the baseline and its noise, then each effect in
+    turn (every form; the one with the lowest criterion kept) with the ladder and the effects
+    before it refitted.
+
+    Parameters
+    ----------
+    bundle : Bundle
+    names : sequence of str
+        Registered effects, in the order they are added.
+    provenance : dict, optional
+        Written into the model.
+
+    Returns
+    -------
+    ThermalModel
+    """
+    data = BundleData.from_bundle(bundle)
+    if not data.cooling:
+        raise DataFormatError(f"{data.source}: effects are fitted with a ladder, which needs a "
+                              f"cooling curve")
+    current, noise = _baseline(data, None)
+    n_points = sum(data.sizes().values())
+    for name in dict.fromkeys(names):
+        fits = fit_effect(data, noise, current, plugin(name), SCREEN_ROUNDS, REFINE_ROUNDS)
+        if not fits:
+            raise FitError(f"{data.source}: {name} cannot be fitted to these data (none of its "
+                           f"data sets, {', '.join(sorted(plugin(name).traits.shown_by))}, "
+                           f"shows it)")
+        current = min(fits, key=lambda m: bic(m, n_points))
+    return ThermalModel(current.foster, current.effects, bundle.reference,
+                        {**(provenance or {}), "fit": {
+                            "effects": list(dict.fromkeys(names)),
+                            "chi2": {k: round(v, 3) for k, v in current.chi2.items()},
+                            "noise_k": {k: round(v, 6) for k, v in noise.items()}}})

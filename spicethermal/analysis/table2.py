@@ -1,7 +1,9 @@
 """A table of measured vs simulated PWM readings (the paper's Table 2): what its numbers
-support, through the verdict rule of :mod:`spicethermal.analysis.verdict` with the simulated column
-as the baseline; its noise is the scatter of one measured reading beyond an offset per frequency
-(see :class:`TableAnalysis`).
+support. The simulated column is the baseline, the explanations the paper gives (the sample
+window, an error of the extrapolated early time) are fitted to Δ = measured − simulated, and
+the verdict follows the rules of the diagnosis (:mod:`spicethermal.analysis.rules`); the noise
+is the scatter of one measured reading beyond an offset per frequency (see
+:class:`TableAnalysis`).
 """
 
 from __future__ import annotations
@@ -17,27 +19,24 @@ import numpy as np
 
 from ..core.errors import DataFormatError
 from ..core.ladder import Foster
-from ..effects import Effect
+from ..effects import PWM, CATALOGUE
 from ..engines.pwm import steady_state
 from ..io.bundle import read_columns
-from ..model import ThermalModel
+from ..io.jsondoc import JsonDocument
 from .compare import Comparison, ComparisonPoint
-from .diagnosis import Candidate, Diagnosis, Step
-from .residuals import NOISE_FLOOR_K, localise, rms
-from .verdict import criterion, decisive, explained_fraction
+from .diagnosis import APPROXIMATE, DIAGNOSIS_FORMAT, NAMED, NONE, Verdict
+from .rules import MIN_APPROXIMATE, NOISE_FLOOR_K, beyond_noise, decisive, explained
+from .where import localise, rms
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-__all__ = ["TableAnalysis", "analyse_table", "diagnose_table"]
+__all__ = ["Explanation", "TableAnalysis", "TableDiagnosis", "analyse_table", "diagnose_table"]
 
 #: Time constants of the ladder fitted to a simulated column are kept within these bounds (s):
 #: the paper's cooling record, which its ladder was fitted to, starts at 100 µs (faster stages
 #: are not determined; a fit would make them instantaneous, which decides the window's effect).
 TABLE_TAU_BOUNDS_S = (1e-4, 1e3)
-#: A table's explanation must lower its RMS this many times and explain this fraction of Δ
-#: beyond the noise (a table has no second step nor a structured-residual check).
-TABLE_MIN_IMPROVEMENT, TABLE_MIN_EXPLAINED = 1.3, 0.6
 #: Order of that ladder (the paper used 4 stages; the 18 readings do not resolve more than 3).
 TABLE_LADDER_ORDER = 3
 
@@ -313,24 +312,98 @@ def _with_findings(a: TableAnalysis) -> TableAnalysis:
     return replace(a, findings=out)
 
 
-def _cands_rms(cands: Sequence[Candidate], name: str) -> float:
-    """RMS (K) of the named candidate."""
-    return next(c.rms_k for c in cands if c.effect.name == name)
+@dataclass(frozen=True, eq=False)
+class Explanation:
+    """One explanation of Δ fitted to the table: its label, the catalogued effect it is (None
+    for one that is no effect), its comparison, the pooled RMS gain, the share of the misfit
+    beyond the noise it removes, the criterion's drop and the sentence behind it."""
+
+    label: str
+    effect: str | None
+    comparison: Comparison
+    improvement: float
+    explained: float
+    delta_bic: float
+    evidence: str
+
+    def to_dict(self) -> dict:
+        return {"effect": self.effect, "explanation": self.label,
+                "rms_k": self.comparison.rms_k, "improvement": self.improvement,
+                "explained": self.explained, "delta_bic": self.delta_bic,
+                "evidence": self.evidence}
+
+
+@dataclass(frozen=True, eq=False)
+class TableDiagnosis(JsonDocument):
+    """What :func:`diagnose_table` found: the analysis, the explanations weighed (best
+    first) and the verdict. ``str()`` is the report, :meth:`to_dict` the
+    ``spicethermal-diagnosis/3`` document (no steps: a table has one baseline and no second
+    step)."""
+
+    source: str
+    analysis: TableAnalysis
+    baseline: Comparison
+    noise_k: Mapping[str, float]
+    candidates: tuple[Explanation, ...]
+    verdict: Verdict
+    elapsed_s: float = 0.0
+
+    @property
+    def effects(self) -> list[str]:
+        return list(self.verdict.effects)
+
+    @property
+    def verdict_effect(self) -> str | None:
+        return self.verdict.effect
+
+    def to_dict(self) -> dict:
+        return {"format": DIAGNOSIS_FORMAT, "source": self.source, "noise_k": dict(self.noise_k),
+                "points": len(self.baseline.points),
+                "baseline": {"rms_k": self.baseline.rms_k, "max_abs_k": self.baseline.max_abs_k,
+                             "worst": [{"dataset": p.dataset, "at": dict(p.at),
+                                        "residual_k": p.residual_k}
+                                       for p in self.baseline.worst(5)]},
+                "candidates": [c.to_dict() for c in self.candidates], "steps": [],
+                "verdict": self.verdict.to_dict(), "findings": dict(self.analysis.findings)}
+
+    def plot(self, out_dir: str | Path) -> list[Path]:
+        """The figure of the table and the explanations (``diagnosis_table2.png``)."""
+        from ..viz.diagnosis import fig_table2_diagnosis
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        return [fig_table2_diagnosis(self.analysis, out / "diagnosis_table2.png")]
+
+    def __str__(self) -> str:
+        lines = [f"diagnosis of {self.source}: {len(self.baseline.points)} PWM readings, "
+                 f"measured vs simulated",
+                 f"noise: one reading beyond a per-frequency offset, "
+                 f"{self.noise_k[PWM]:.3g} K",
+                 f"baseline (the simulated column): RMS {self.baseline.rms_k:.3g} K, worst "
+                 f"{self.baseline.max_abs_k:.3g} K", "explanations (best first):"]
+        for c in self.candidates:
+            lines.append(f"  {c.label:40s} ΔBIC {c.delta_bic:+8.1f}  RMS {c.comparison.rms_k:.3g}"
+                         f" K  {c.improvement:5.2f}×  explains {100 * max(c.explained, 0):.0f} %")
+        lines.append("findings (measured vs simulated table):")
+        lines += [f"  - {x}" for x in self.analysis.findings.values()]
+        v = self.verdict
+        lines.append(f"verdict: {v.cls}" + (f" — {', '.join(v.effects)}" if v.effects else "")
+                     + f": {v.reason}")
+        lines.append(f"({self.elapsed_s:.1f} s)")
+        return "\n".join(lines)
 
 
 def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float | None = None,
-                   window_s: float = 1e-4, ambient_c: float = 25.0) -> Diagnosis:
+                   window_s: float = 1e-4, ambient_c: float = 25.0) -> TableDiagnosis:
     """Diagnose a table of PWM readings with a measured and a simulated column (columns
     ``freq_hz, duty, tj_exp_c, tj_model_c``, as the paper's Table 2).
 
     The baseline is the simulated column itself (residual Δ = measured − simulated). The
-    candidates are the paper's two explanations, fitted to Δ on a ladder consistent with the
-    simulated column (:func:`analyse_table`): ``sample-window`` (its window) and
-    ``electrical-transient`` (the early time it forces to be extrapolated: the best change of
-    the ladder below the window; ``amplitude_k`` reports the largest reading change), each at
-    its best case over ladders with the given Rth.
-    The verdict follows the rule of :func:`diagnose`; the reason states what the numbers
-    support, and :attr:`Diagnosis.extra` holds the :class:`TableAnalysis`.
+    explanations are the paper's two, fitted to Δ on ladders consistent with the simulated
+    column (:func:`analyse_table`), each at its best case over ladders with the given Rth:
+    the sample window (the catalogue's effect shown by the PWM grid alone) and an error of
+    the extrapolated early time (the best change of the ladder below the window, which is no
+    effect). The verdict follows the diagnosis's rules.
 
     Parameters
     ----------
@@ -347,14 +420,13 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
 
     Returns
     -------
-    Diagnosis
-        The verdict and its reason; ``extra`` holds the :class:`TableAnalysis`.
+    TableDiagnosis
 
     Examples
     --------
     >>> from spicethermal.data import path
-    >>> diagnose_table(path("actuator_table2.csv")).verdict_effect is None
-    True
+    >>> diagnose_table(path("actuator_table2.csv")).verdict.cls
+    'none'
     """
     t0 = time.perf_counter()
     path = Path(path)
@@ -363,50 +435,51 @@ def diagnose_table(path: str | Path, rth_k_per_w: float = 146.0, power_w: float 
 
     def cmp(pred: NDArray) -> Comparison:
         return Comparison(tuple(
-            ComparisonPoint("pwm", {"freq_hz": float(fi), "duty": float(di)}, float(x),
+            ComparisonPoint(PWM, {"freq_hz": float(fi), "duty": float(di)}, float(x),
                             float(m + p), {"power_w": a.power_w, "window_s": 0.0})
             for fi, di, x, m, p in zip(f, d, exp_c, mod_c, pred, strict=True)))
 
     base = cmp(np.zeros(f.size))
-    noise = {"pwm": a.reading_noise_k}  # one reading's scatter beyond per-session offsets
-    bic0 = criterion(base, noise, 0)
+    noise = {PWM: a.reading_noise_k}  # one reading's scatter beyond per-session offsets
+    n = f.size
+    chi0 = {PWM: float(np.sum((base.residuals_k / noise[PWM]) ** 2))}
+    window = next(p.name for p in CATALOGUE.values()
+                  if p.traits.catalogued and p.traits.shown_by == {PWM})
     cands = []
-    ep = a.early_pred_k
-    early_amp = float(ep[int(np.argmax(np.abs(ep)))])
-    for effect, lad, pred, k, ev in (
-            (Effect.create("sample-window", window_s=a.window_s), a.window_ladder,
-             a.paper_window_pred_k, 2 * TABLE_LADDER_ORDER - 1, a.findings["window"]),
-            (Effect.create("electrical-transient", masked_s=a.window_s, amplitude_k=early_amp),
-             a.ladder, ep, 2, a.findings["early"])):
+    for label, effect, pred, k, ev in (
+            (f"the {a.window_s * 1e6:g} µs sample window", window, a.paper_window_pred_k,
+             2 * TABLE_LADDER_ORDER - 1, a.findings["window"]),
+            (f"an error of the extrapolated first {a.window_s * 1e6:g} µs", None,
+             a.early_pred_k, 2, a.findings["early"])):
         c = cmp(pred)
-        cands.append(Candidate(effect, lad, c, k, criterion(c, noise, k),
-                               base.rms_k / c.rms_k if c.rms_k > 0 else math.inf, ev,
-                               explained_fraction(base, c, noise), 0.0))
-    cands.sort(key=lambda c: c.bic)
-    where = tuple(localise(base, noise))
-    effect, reason = None, ""
-    # one explanation of a single table, no second step: the stricter thresholds
-    if decisive(cands[0], bic0, TABLE_MIN_IMPROVEMENT, TABLE_MIN_EXPLAINED):
-        c = cands[0]
-        effect = c.effect.name
-        reason = (f"{effect} lowers the RMS {c.improvement:.3g}× ({base.rms_k:.3g} → "
-                  f"{c.rms_k:.3g} K) and the BIC by {bic0 - c.bic:.0f}")
-    else:
-        early_gain = base.rms_k / _cands_rms(cands, "electrical-transient")
-        reason = (f"neither explanation the paper gives fits the numbers: the "
-                  f"{a.window_s * 1e6:g} µs sample window lowers the RMS only "
-                  f"{base.rms_k / _cands_rms(cands, 'sample-window'):.2f}× and predicts no "
-                  f"positive Δ and no Δ growing with frequency; an error of the extrapolated "
-                  f"early time, at its best (up to {abs(early_amp):.2f} K, one sign, shrinking "
-                  f"with frequency), only {early_gain:.2f}×; they support instead a "
-                  f"simulated column that is not a constant-power periodic steady state "
-                  f"({'rises with frequency, ' if 'rises' in a.findings['simulated'] else ''}"
-                  f"best ladder fit RMS {a.ladder_rms_k:.2f} K; Δ follows its departure from "
-                  f"D·P·Rth, correlation {a.departure_corr:+.2f}) and a measured column equal "
-                  f"to D·P·Rth plus per-frequency offsets of up to "
-                  f"{max(abs(x) for x in a.offsets_k.values()):.2f} K")
-    model = ThermalModel(a.ladder, (), "ambient", {"tool": "spicethermal diagnose",
-                                                   "fitted to": f"{path.name} tj_model_c"})
-    steps = (Step(cands[0], tuple(cands)),) if effect is not None else ()
-    return Diagnosis(base, model, noise, bic0, tuple(cands), effect, reason, where, {},
-                     time.perf_counter() - t0, str(path), {"table2": a}, steps)
+        chi = {PWM: float(np.sum((c.residuals_k / noise[PWM]) ** 2))}
+        cands.append(Explanation(label, effect, c, base.rms_k / max(c.rms_k, 1e-300),
+                                 explained(chi0, chi, {PWM: n}),
+                                 chi0[PWM] - chi[PWM] - k * math.log(n), ev))
+    cands.sort(key=lambda c: -c.delta_bic)
+    best = cands[0]
+    if decisive(0.0, -best.delta_bic, best.explained) and best.effect is not None:
+        at_noise = not beyond_noise(float(np.sum((best.comparison.residuals_k / noise[PWM])
+                                                 ** 2)), n, best.comparison.residuals_k)
+        if at_noise or best.explained >= MIN_APPROXIMATE:
+            return TableDiagnosis(str(path), a, base, noise, tuple(cands), Verdict(
+                NAMED if at_noise else APPROXIMATE, (best.effect,),
+                f"{best.label} lowers the RMS {best.improvement:.3g}× ({base.rms_k:.3g} → "
+                f"{best.comparison.rms_k:.3g} K) and the BIC by {best.delta_bic:.0f}"),
+                time.perf_counter() - t0)
+    gain = {c.effect is None: c.improvement for c in cands}
+    early_amp = float(np.max(np.abs(a.early_pred_k)))
+    reason = (f"neither explanation the paper gives fits the numbers: the "
+              f"{a.window_s * 1e6:g} µs sample window lowers the RMS only {gain[False]:.2f}× "
+              f"and predicts no positive Δ and no Δ growing with frequency; an error of the "
+              f"extrapolated early time, at its best (up to {early_amp:.2f} K, one sign, "
+              f"shrinking with frequency), only {gain[True]:.2f}×; they support instead a "
+              f"simulated column that is not a constant-power periodic steady state "
+              f"({'rises with frequency, ' if 'rises' in a.findings['simulated'] else ''}"
+              f"best ladder fit RMS {a.ladder_rms_k:.2f} K; Δ follows its departure from "
+              f"D·P·Rth, correlation {a.departure_corr:+.2f}) and a measured column equal "
+              f"to D·P·Rth plus per-frequency offsets of up to "
+              f"{max(abs(x) for x in a.offsets_k.values()):.2f} K")
+    where = tuple(localise(base, noise, {PWM: True}))
+    return TableDiagnosis(str(path), a, base, noise, tuple(cands),
+                          Verdict(NONE, (), reason, where=where), time.perf_counter() - t0)

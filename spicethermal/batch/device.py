@@ -165,7 +165,7 @@ def _work(local: Path, source: Source, options: Options) -> dict[str, Any]:
     if source.kind == "bundle":
         bundle = Bundle.read(local)
         device = bundle.device or source.name
-        if options.diagnose and (bundle.cooling or bundle.pwm or bundle.calibration):
+        if options.diagnose and bundle.cooling:
             diagnosis = diagnose(bundle, None, options.effects)
             verdict = diagnosis.verdict_effect or "none"
             best = diagnosis.best or (diagnosis.candidates[0] if diagnosis.candidates else None)

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import sys
 import threading
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import TypeVar
 
-__all__ = ["bar", "enabled", "task"]
+__all__ = ["bar", "enabled", "status_line", "task"]
 
 T = TypeVar("T")
 
@@ -95,3 +95,39 @@ def task(desc: str, *, quiet: bool = False) -> Iterator[None]:
             stop.set()
             clock.join()
             shown.update(1)
+
+
+@contextmanager
+def status_line(*, quiet: bool = False) -> Iterator[Callable[[str], None]]:
+    """A one-line status on stderr that each call overwrites (what a long computation is
+    doing now), cleared at the end; a function that does nothing when not :func:`enabled`.
+
+    Parameters
+    ----------
+    quiet : nothing shown (the commands' ``-q``).
+
+    Returns
+    -------
+    A context manager giving ``say(text)``.
+
+    Examples
+    --------
+    >>> with status_line(quiet=True) as say:
+    ...     say("fitting")
+    """
+    if not enabled(quiet):
+        yield lambda _text: None
+        return
+    width = [0]
+
+    def say(text: str) -> None:
+        line = text[:100]
+        sys.stderr.write("\r" + line + " " * max(width[0] - len(line), 0))
+        sys.stderr.flush()
+        width[0] = len(line)
+
+    try:
+        yield say
+    finally:
+        sys.stderr.write("\r" + " " * width[0] + "\r")
+        sys.stderr.flush()

@@ -170,23 +170,26 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
     secs.append(s)
 
     s = Section("diagnosis", "6. Diagnosis: what the linear ladder misses")
-    s.verdict = f"Verdict: {', '.join(diagnosis.effects) or 'no catalogued effect'} — " \
-                f"{diagnosis.verdict_reason}"
+    doc = diagnosis.to_dict()
+    s.verdict = (f"Verdict: {doc['verdict']['class']}"
+                 + (f" — {', '.join(doc['verdict']['effects'])}" if doc["verdict"]["effects"]
+                    else "") + f": {doc['verdict']['reason']}")
     s.table(["where", "at", "residual (K)"],
             [[w["dataset"], _at(w["at"]), _signed(w["residual_k"])]
-             for w in diagnosis.to_json()["baseline"]["worst"]],
-            "Worst misfits of the linear ladder "
-            f"(RMS {diagnosis.to_json()['baseline']['rms_k']:.3g} K)")
-    s.table(["candidate effect", "form", "fitted parameters", "RMS (K)", "improvement",
-             "evidence"],
-            [[c["effect"], c["form"],
+             for w in doc["baseline"]["worst"]],
+            f"Worst misfits of the baseline, the linear {doc['baseline']['order']}-stage ladder "
+            f"fitted to every data set (RMS {doc['baseline']['rms_k']:.3g} K)")
+    s.table(["candidate effect", "form", "fitted parameters", "ΔBIC", "RMS (K)",
+             "improvement", "evidence"],
+            [[c["effect"] + ("" if c["catalogued"] else " (not in the catalogue)"), c["form"],
               ", ".join(f"{k} = {_g(v, 3)}" for k, v in c["params"].items()),
-              f"{c['rms_k']:.3g}", f"{c['improvement']:.3g}×", c["evidence"]]
-             for c in diagnosis.to_json()["candidates"]], "Candidates, best first")
+              f"{c['delta_bic']:+.1f}", f"{c['rms_k']:.3g}", f"{c['improvement']:.3g}×",
+              c["evidence"]]
+             for c in doc["candidates"]], "Candidates, best first")
     if better is not None:
         s.paragraphs.append(
             f"With {', '.join(diagnosis.effects)} added (fitted parameters in the candidates "
-            f"table below), the RMS "
+            f"table above), the RMS "
             f"error over every data set falls from {before.rms_k:.3g} K to {after.rms_k:.3g} K "
             f"({before.rms_k / max(after.rms_k, 1e-12):.3g}× lower; RMS staircase: "
             f"{diagnosis.staircase()}); worst from {before.max_abs_k:.3g} K to "

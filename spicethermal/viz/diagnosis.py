@@ -16,7 +16,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
     from ..analysis.compare import Comparison
-    from ..analysis.diagnose import Diagnosis, TableAnalysis
+    from ..analysis.diagnosis import Diagnosis
+    from ..analysis.table2 import TableAnalysis
 
 from .base import axes, new_figure, save_figure
 
@@ -103,9 +104,10 @@ def plot_candidates(result: Diagnosis, ax: Axes | None = None) -> Axes:
     """Pooled RMS of the baseline and of every candidate effect (log scale), the verdict's
     candidate highlighted, the improvement written on each bar."""
     ax = axes(ax, 6.4, 3.2)
-    names = ["baseline"] + [c.effect.name for c in result.candidates]
+    names = ["baseline"] + [c.name + ("" if c.catalogued else " (rival)")
+                            for c in result.candidates]
     values = [result.baseline.rms_k] + [c.rms_k for c in result.candidates]
-    colors = ["0.6"] + ["C2" if c.effect.name == result.verdict_effect else "C0"
+    colors = ["0.6"] + ["C2" if c.name in result.effects else "C0" if c.catalogued else "0.8"
                         for c in result.candidates]
     y = np.arange(len(names))[::-1]
     ax.barh(y, values, color=colors)
@@ -115,7 +117,9 @@ def plot_candidates(result: Diagnosis, ax: Axes | None = None) -> Axes:
     ax.set_xscale("log")
     ax.set_xlabel("RMS over every data set (K)")
     ax.grid(True, axis="x", which="both", alpha=0.3)
-    ax.set_title(f"verdict: {result.verdict_effect or 'none'}", fontsize=10, loc="left")
+    ax.set_title(f"verdict: {result.verdict.cls}"
+                 + (f" ({', '.join(result.effects)})" if result.effects else ""),
+                 fontsize=10, loc="left")
     return ax
 
 
@@ -132,12 +136,12 @@ def plot_staircase(result: Diagnosis, ax: Axes | None = None) -> Axes:
     ax = axes(ax, 6.4, 3.2)
     labels = ["baseline"] + [f"+ {s.chosen.effect.name}\n({s.chosen.effect.form})"
                              for s in result.steps]
-    values = [result.baseline.rms_k] + [s.chosen.rms_k for s in result.steps]
+    values = [result.baseline.rms_k] + [s.comparison.rms_k for s in result.steps]
     x = np.arange(len(values))
     ax.step(x, values, where="mid", color="C0")
     ax.plot(x, values, "o", color="C0")
     for xi, s in zip(x[1:], result.steps, strict=True):
-        ax.annotate(f"{s.chosen.improvement:.3g}×", (xi, s.chosen.rms_k), fontsize=8,
+        ax.annotate(f"{s.chosen.improvement:.3g}×", (xi, s.comparison.rms_k), fontsize=8,
                     textcoords="offset points", xytext=(4, 4))
     noise = float(np.sqrt(np.mean([v ** 2 for v in result.noise_k.values()])))
     ax.axhline(noise, color="0.5", ls="--", lw=1, label=f"noise ≈ {noise:.2g} K")
@@ -161,9 +165,8 @@ def diagnosis_figures(result: Diagnosis, out_dir: str | os.PathLike) -> list[Pat
     """The diagnosis figures, written into ``out_dir``: the RMS staircase of the steps
     (``diagnosis_steps.png``), the residuals before and after the effects found
     (``diagnosis_before_after.png``; after = the best candidate when no effect was found),
-    before and after each step when there are several (``diagnosis_step_K.png``), the
-    candidates (``diagnosis_candidates.png``) and, for a Table-2 diagnosis, Δ(f, D) with the
-    explanations tried (``diagnosis_table2.png``).
+    before and after each step when there are several (``diagnosis_step_K.png``) and the
+    candidates (``diagnosis_candidates.png``).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -179,14 +182,11 @@ def diagnosis_figures(result: Diagnosis, out_dir: str | os.PathLike) -> list[Pat
         prev, prev_label = result.baseline, "baseline"
         for k, s in enumerate(result.steps, 1):
             name = f"+ {s.chosen.effect.name}"
-            paths.append(fig_before_after(prev, s.chosen.comparison,
+            paths.append(fig_before_after(prev, s.comparison,
                                           out / f"diagnosis_step_{k}.png", (prev_label, name)))
-            prev, prev_label = s.chosen.comparison, name
+            prev, prev_label = s.comparison, name
     if result.candidates:
         paths.append(fig_candidates(result, out / "diagnosis_candidates.png"))
-    table2 = result.extra.get("table2")
-    if table2 is not None:
-        paths.append(fig_table2_diagnosis(table2, out / "diagnosis_table2.png"))
     return paths
 
 

@@ -23,7 +23,7 @@ from ...batch.population import write_population
 from ...batch.runner import check_output, cluster_client, find_sources, run_batch
 from ...batch.summary import summarize
 from ...core.errors import DataFormatError
-from ...effects import spec
+from ...effects import plugin
 from ...spice.lib import DIALECTS, TOPOLOGIES
 from ._types import count as _count
 from ._types import frequency, positive_power
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     if any(d > 1 for d in args.duty):
         raise DataFormatError(f"--duty {max(args.duty):g}: a duty cycle is at most 1")
     for name in args.effect or ():
-        spec(name)
+        plugin(name)
     sources = list(args.sources)
     out = Path(args.output)
     if sources:

@@ -18,9 +18,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ...analysis.diagnose import diagnose, diagnose_table, write_report
+from ...analysis.diagnose import diagnose
+from ...analysis.table2 import diagnose_table
 from ...core.errors import DataFormatError
-from ...effects import spec
+from ...core.progress import status_line
+from ...effects import plugin
+from ...report.diagnosis import write_report
 from ...io.files import dumps_json
 from ...io.sources import csv_header
 from ...model import ThermalModel
@@ -45,12 +48,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="baseline model (default: the linear ladder fitted from the "
                              "bundle's cooling curves)")
     parser.add_argument("--json", action="store_true",
-                        help="print the spicethermal-diagnosis/2 document")
+                        help="print the spicethermal-diagnosis/3 document")
     parser.add_argument("--report", metavar="DIR",
                         help="write an HTML report with the before/after figures into DIR")
     parser.add_argument("--effect", action="append", metavar="NAME",
-                        help="candidate effect to try (repeatable; default every catalogued "
-                             "effect)")
+                        help="candidate effect to try (repeatable; default every registered "
+                             "effect, the rivals outside the catalogue included)")
     table = parser.add_argument_group("for a table of measured vs simulated PWM readings")
     table.add_argument("--rth", type=_positive, metavar="K_PER_W", default=146.0,
                        help="Rth of the simulated ladder (default 146, the paper's)")
@@ -64,7 +67,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "paper); for a raw record, the temperature at its end (anchors the "
                             "calibration) or the reference of a cooling CSV")
     parser.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress bar on stderr (none either when it is not a terminal)")
+                        help="no progress line on stderr (none either when it is not a terminal)")
     add_source_arguments(parser, curve=False, power=False, rth=False, tref=False, early=False)
 
 
@@ -80,19 +83,17 @@ def run(args: argparse.Namespace) -> int:
     else:
 
         for name in args.effect or ():
-            spec(name)
-        model = None
-        if args.model:
-
-            model = ThermalModel.load(args.model)
+            plugin(name)
+        model = ThermalModel.load(args.model) if args.model else None
         bundle = comparable_source(args, args.source, rth=False)
-        result = diagnose(bundle, model, args.effect, quiet=args.quiet)
+        with status_line(quiet=args.quiet) as say:
+            result = diagnose(bundle, model, args.effect, progress=say)
     if args.report:
         page = write_report(result, args.report)
         if not args.json and not args.quiet:
             print(f"wrote {page}")
     if args.json:
-        print(dumps_json(result.to_json(), indent=2))
+        print(dumps_json(result.to_dict(), indent=2))
     else:
         print(result)
     return 0

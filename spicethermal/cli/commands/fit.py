@@ -20,9 +20,9 @@ from pathlib import Path
 from ... import __version__
 from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
-from ...effects import spec
+from ...analysis.diagnose import fit_with_effects
+from ...effects import plugin
 from ...fit.bootstrap import fig_fit_band, fit_bootstrap
-from ...fit.fitters import fit_with_effects
 from ...fit.ladder import check_rth, fit_model
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
@@ -85,11 +85,11 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     """``--effect``: the ladder and the named effects fitted to every data set of a bundle
     (:func:`spicethermal.analysis.diagnose.fit_with_effects`)."""
     for name in args.effect:
-        spec(name)
+        plugin(name)
     if not source.is_dir():
         raise DataFormatError(f"{source}: --effect needs a bundle directory (the effects are "
                               f"fitted to its cooling curves, PWM grid and calibration)")
-    model = fit_with_effects(Bundle.read(source), args.effect, order=args.order,
+    model = fit_with_effects(Bundle.read(source), args.effect,
                              provenance={"tool": f"spicethermal {__version__} fit",
                                          "source": str(source)})
     if args.topology != model.ladder.topology:
@@ -97,9 +97,7 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     out = model.save(args.output)
     if not args.quiet:
         print(f"{model.ladder.order}-stage ladder, Rth = {model.rth:.5g} K/W; effects: "
-              + "; ".join(f"{e.name} (" + ", ".join(f"{k} = {v:.4g}" for k, v in
-                                                     e.params.items()) + ")"
-                          for e in model.effects))
+              + "; ".join(f"{e.name} ({e.form}): {e.describe()}" for e in model.effects))
         print(f"wrote {out}")
     return 0
 

@@ -1,0 +1,103 @@
+"""The one forward model: every data set's prediction, each measurement effect's reading
+against its closed form, and the effects composed without being named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from spicethermal.core.ladder import Foster
+from spicethermal.effects import Effect
+from spicethermal.engines.pwm import stage_peaks, steady_state
+from spicethermal.fit.forward import predict_model
+from spicethermal.fit.measurement import BundleData
+from spicethermal.io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
+
+LADDER = Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0])
+T = np.geomspace(1e-5, 100.0, 31)
+F = np.array([500.0, 5e3, 25e3, 500.0, 5e3, 25e3])
+D = np.array([0.2, 0.2, 0.2, 0.8, 0.8, 0.8])
+
+
+def _data(window_s: float = 1e-4, steady: bool = True) -> BundleData:
+    cal = CalibrationTable(np.arange(20.0, 101.0, 10.0), 0.65 - 2e-3 * np.arange(-5.0, 76.0, 10))
+    return BundleData.from_bundle(Bundle(
+        ambient_c=25.0, calibration=cal,
+        cooling=(CoolingTable(T, 0.12, tj_c=np.zeros(T.size),
+                              tj_steady_c=0.0 if steady else None, tref_steady_c=25.0),
+                 CoolingTable(T, 0.30, tj_c=np.zeros(T.size),
+                              tj_steady_c=0.0 if steady else None, tref_steady_c=25.0)),
+        pwm=PwmTable(F, D, np.zeros(F.size), power_w=0.1, sample_window_s=window_s)))
+
+
+def test_the_linear_model_is_the_ladders_closed_forms():
+    pred = predict_model(_data(), LADDER)
+    assert pred["cooling_2"] == pytest.approx(25.0 + 0.3 * LADDER.cooling(T), rel=1e-9)
+    assert pred["steady"] == pytest.approx(25.0 + np.array([0.12, 0.3]) * LADDER.rth)
+    assert pred["pwm"] == pytest.approx(
+        [25.0 + steady_state(LADDER, 0.1, f, d, 1e-4).reading_k for f, d in zip(F, D)],
+        rel=1e-9)
+    assert pred["calibration"] == pytest.approx(np.arange(20.0, 101.0, 10.0))
+
+
+def test_without_steady_readings_there_is_no_steady_data_set():
+    assert "steady" not in predict_model(_data(steady=False), LADDER)
+
+
+def test_an_electrical_transient_adds_its_closed_form_to_the_cooling_readings():
+    base = predict_model(_data(), LADDER)
+    e = Effect.create("electrical-transient", "power", k_per_w=-10.0, masked_s=1e-4)
+    pred = predict_model(_data(), LADDER, [e])
+    assert pred["cooling_2"] - base["cooling_2"] == pytest.approx(
+        -10.0 * 0.3 * np.exp(-5 * T / 1e-4))
+    assert pred["pwm"] == pytest.approx(base["pwm"]) and pred["steady"] == \
+        pytest.approx(base["steady"])
+
+
+@pytest.mark.parametrize("form", ["end", "average"])
+def test_a_sample_window_reads_where_it_says(form):
+    w = 3e-4
+    pred = predict_model(_data(), LADDER, [Effect.create("sample-window", form, window_s=w)])
+    r, tau = np.array(LADDER.r), np.array(LADDER.tau)
+    peaks = 0.1 * stage_peaks(r, tau, 1 / F[:, None], D[:, None])
+    if form == "end":
+        exact = (peaks * np.exp(-w / tau)).sum(axis=1)
+    else:  # Σ pᵢ τᵢ/w (1 − e^{−w/τᵢ})
+        exact = (peaks * tau / w * -np.expm1(-w / tau)).sum(axis=1)
+    assert pred["pwm"] == pytest.approx(25.0 + exact, abs=1e-6)
+
+
+def test_a_tsp_bends_the_calibration_and_through_its_line_every_reading():
+    q = 5e-4
+    e = Effect.create("tsp-nonlinearity", quad_k_per_k2=q, t_cal_c=25.0)
+    pred = predict_model(_data(), LADDER, [e])
+    temps = np.arange(20.0, 101.0, 10.0)
+    u = (temps - 25.0) ** 2
+    a = np.column_stack([np.ones_like(temps), temps])
+    bow = u - a @ np.linalg.lstsq(a, u, rcond=None)[0]
+    slope = np.linalg.lstsq(a, u, rcond=None)[0][1]
+    assert pred["calibration"] - temps == pytest.approx(q * bow / (1 + q * slope), abs=1e-9)
+    held = predict_model(_data(), LADDER, [e.with_params(through_line=0.0)])
+    base = predict_model(_data(), LADDER)
+    assert held["cooling_1"] == pytest.approx(base["cooling_1"])
+    assert not np.allclose(pred["cooling_1"], base["cooling_1"])
+
+
+def test_rivals_read_as_they_say():
+    base = predict_model(_data(), LADDER)
+    g = predict_model(_data(), LADDER, [Effect.create("power-error", gamma_per_w=0.5)])
+    assert g["cooling_2"] - 25.0 == pytest.approx((base["cooling_2"] - 25.0) / 1.15)
+    d = predict_model(_data(), LADDER, [Effect.create("reference-drift", rate_k_per_s=0.01)])
+    assert d["cooling_1"] - base["cooling_1"] == pytest.approx(0.01 * T)
+
+
+def test_effects_compose_in_the_order_of_their_stage():
+    e1 = Effect.create("electrical-transient", amplitude_k=-2.0, masked_s=1e-4)
+    e2 = Effect.create("tsp-nonlinearity", quad_k_per_k2=5e-4, t_cal_c=25.0)
+    one = predict_model(_data(), LADDER, [e1, e2])
+    other = predict_model(_data(), LADDER, [e2, e1])
+    assert one["cooling_1"] == pytest.approx(other["cooling_1"])
+    tsp_only = predict_model(_data(), LADDER, [e2])
+    # the transient is added to the reading: after the sensor's law
+    assert one["cooling_1"] - tsp_only["cooling_1"] == pytest.approx(
+        -2.0 * np.exp(-5 * T / 1e-4))

@@ -1,0 +1,120 @@
+"""The one network simulator against closed forms and against the independent validation
+network (its own stiff integrator, shared physics code none)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import lambertw
+
+from spicethermal.core.ladder import Cauer, Foster
+from spicethermal.effects import Effect
+from spicethermal.engines.network import NetworkBatch
+from spicethermal.validation.network import LatentHeat, Network, ResistanceLaw
+
+R4, C4 = (4.0, 12.0, 40.0, 90.0), (2e-5, 4e-4, 8e-3, 0.3)
+T = np.geomspace(1e-5, 100.0, 41)
+P, TREF = 0.3, 25.0
+
+
+def test_a_linear_ladder_is_its_foster_form_exactly(actuator):
+    net = NetworkBatch.of(actuator)
+    r, tau = net.foster()
+    assert np.sort(r[0]) == pytest.approx(np.sort(actuator.r), rel=1e-9)
+    assert np.sort(tau[0]) == pytest.approx(np.sort(actuator.tau), rel=1e-9)
+    assert net.cooling(P, TREF, T)[0] == pytest.approx(P * actuator.cooling(T), rel=1e-9)
+    theta = net.steady(P, TREF)[0]
+    assert theta[0] == pytest.approx(P * actuator.rth, rel=1e-12)
+
+
+def test_a_single_layer_whose_resistance_follows_its_junction_is_lambert_w():
+    # C dθ/dt = −θ / (R0 (1 + αθ)) (the reference at T0): t = −C R0 (ln(θ/θ0) + α(θ − θ0))
+    r0, c0, alpha, p = 10.0, 0.1, 5e-3, 2.0
+    e = Effect.create("temperature-coefficient", alpha_per_k=alpha, t0_c=TREF)
+    net = NetworkBatch.of(Cauer([r0], [c0]), [e])
+    theta0 = float(net.steady(p, TREF)[0, 0])
+    assert theta0 == pytest.approx(p * r0 / (1 - alpha * p * r0), rel=1e-10)
+    t = np.array([0.1, 1.0, 3.0])
+    # θ e^{αθ} = θ0 e^{αθ0} e^{−t/(R0 C)}
+    exact = np.real(lambertw(alpha * theta0 * np.exp(alpha * theta0 - t / (r0 * c0)))) / alpha
+    assert net.cooling(p, TREF, t)[0] == pytest.approx(exact, abs=2e-4 * theta0)
+
+
+CASES = {
+    "tc-junction": (dict(laws=(ResistanceLaw("linear", -6e-3),) * 4, control="junction"),
+                    [Effect.create("temperature-coefficient", alpha_per_k=-6e-3)]),
+    "tc-local": (dict(laws=(ResistanceLaw("linear", 6e-3),) * 4),
+                 [Effect.create("temperature-coefficient", "local", alpha_per_k=6e-3)]),
+    "tc-outer-power": (dict(laws=(None, None, ResistanceLaw("power", exponent=2.0),
+                                  ResistanceLaw("power", exponent=2.0)),
+                            c_slope_per_k=(0.0, 0.0, 3e-3, 3e-3)),
+                       [Effect.create("temperature-coefficient", "power-law", exponent=2.0,
+                                      c_slope_per_k=3e-3, first_layer=2)]),
+    "pc-gaussian-junction": (dict(latent=(LatentHeat(0, 0.02, 60.0, 1.5, "gaussian"),)),
+                             [Effect.create("phase-change", "gaussian", t_c=60.0, width_k=1.5,
+                                            latent_j=0.02)]),
+    "pc-logistic-2": (dict(latent=(LatentHeat(2, 0.2, 50.0, 2.0, "logistic"),)),
+                      [Effect.create("phase-change", t_c=50.0, width_k=2.0, latent_j=0.2,
+                                     node=2)]),
+    "pc-plateau-2": (dict(latent=(LatentHeat(2, 0.3, 45.0, 4.0, "plateau"),)),
+                     [Effect.create("phase-change", "plateau", t_c=45.0, width_k=4.0,
+                                    edge_k=0.4, latent_j=0.3, node=2)]),
+}
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_cooling_matches_the_independent_network(name):
+    changes, effects = CASES[name]
+    truth = Network(R4, C4, **changes)
+    start = truth.steady(P, TREF)
+    _, rows = truth.integrate(start, T[-1], 0.0, TREF, t_eval=T)
+    net = NetworkBatch.of(Cauer(R4, C4), effects)
+    assert net.steady(P, TREF)[0] + TREF == pytest.approx(start, abs=1e-9)
+    rise = net.cooling(P, TREF, T)[0]
+    # 3 mK on a rise of 40 to 60 K: the transients' tolerance
+    assert np.max(np.abs(rise + TREF - rows[:, 0])) < 3e-3
+
+
+def test_a_batch_is_its_members_side_by_side():
+    e = Effect.create("phase-change", t_c=50.0, width_k=2.0, latent_j=0.2, node=2)
+    one = NetworkBatch.of(Cauer(R4, C4), [e])
+    big = one.repeat(3)
+    big.r = big.r * np.array([[1.0], [1.1], [0.9]])
+    together = big.cooling(P, TREF, T)
+    for k, scale in enumerate((1.0, 1.1, 0.9)):
+        alone = NetworkBatch.of(Cauer(np.array(R4) * scale, C4), [e]).cooling(P, TREF, T)[0]
+        assert together[k] == pytest.approx(alone, abs=2e-3)
+
+
+def test_a_member_in_thermal_runaway_is_nan_and_the_others_stand():
+    e = Effect.create("temperature-coefficient", alpha_per_k=1e-2)
+    net = NetworkBatch.of(Cauer(R4, C4), [e]).repeat(2)
+    power = np.array([[0.1], [5.0]])  # α·P·Rth = 0.15 and 7.3: the second runs away
+    theta = net.steady(power, TREF)
+    assert np.all(np.isfinite(theta[0])) and np.all(np.isnan(theta[1]))
+
+
+def test_pwm_frozen_at_the_mean_is_exact_for_a_linear_ladder(actuator):
+    from spicethermal.engines.pwm import stage_peaks
+
+    net = NetworkBatch.of(actuator)
+    f, d = np.array([1e3, 25e3]), np.array([0.5, 0.2])
+    r, tau = net.frozen_foster(np.array([0.1, 0.1]), f, d, np.array([25.0, 25.0]))
+    peaks = (0.1 * stage_peaks(r[0], tau[0], 1 / f[:, None], d[:, None])).sum(axis=1)
+    exact = [0.1 * stage_peaks(np.array(actuator.r), np.array(actuator.tau), 1 / fi,
+                               di).sum() for fi, di in zip(f, d, strict=True)]
+    assert peaks == pytest.approx(exact, rel=1e-9)
+
+
+def test_model_simulation_is_the_network_simulator():
+    from spicethermal.model import Schedule, ThermalModel
+
+    e = Effect.create("temperature-coefficient", "local", alpha_per_k=6e-3)
+    model = ThermalModel(Foster.from_cauer(Cauer(R4, C4)), (e,))
+    x0 = model.steady_nodes(P, TREF)
+    tr = model.simulate(T, Schedule((0.0,), (0.0,)), TREF, x0)
+    net = NetworkBatch.of(Cauer(R4, C4), [e])
+    assert tr.tj_k == pytest.approx(net.cooling(P, TREF, T)[0], abs=3e-3)
+    assert math.isclose(x0[0], float(net.steady(P, TREF)[0, 0]), rel_tol=1e-9)
