@@ -44,7 +44,9 @@ MAX_POINTS = 2000
 
 
 def resolution(readings: NDArray) -> float:
-    """The step ``q`` of quantised readings (0 when they are not quantised).
+    """The step ``q`` of quantised readings (0 when they are not quantised): every gap
+    between distinct values is a whole number of steps, and the readings span at least 20
+    steps (a few evenly spaced values, such as calibration temperatures, are no quantisation).
 
     Parameters
     ----------
@@ -54,19 +56,21 @@ def resolution(readings: NDArray) -> float:
     -------
     float
 
-    >>> resolution(np.array([1.0, 1.25, 1.5, 2.0, 1.25]))
+    >>> resolution(np.round(np.linspace(1.0, 9.0, 50) / 0.25) * 0.25)
     0.25
+    >>> resolution(np.arange(20.0, 80.0, 5.0))  # evenly spaced, not quantised
+    0.0
     """
     u = np.unique(np.asarray(readings, dtype=float))
-    if u.size < 3:
+    if u.size < 8:
         return 0.0
     d = np.diff(u)
     q = float(np.min(d))
     if q <= 0:
         return 0.0
     ratio = d / q
-    # quantised: every gap a whole number of steps, and most of them few steps
-    if np.all(np.abs(ratio - np.round(ratio)) < 0.02 * ratio) and np.median(ratio) < 20:
+    if np.all(np.abs(ratio - np.round(ratio)) < 0.02 * ratio) and np.median(ratio) < 20 \
+            and (u[-1] - u[0]) >= 20 * q:
         return q
     return 0.0
 

@@ -104,8 +104,8 @@ class Traits:
 @dataclass(frozen=True, eq=False)
 class CurveEvidence:
     """One cooling curve as a guess sees it: readings and the model so far (°C) at ``t_s``,
-    the power cut, the reference, and the model's node temperatures (°C) just before the
-    cut (junction first, on the model's Cauer form)."""
+    the power cut, the reference, the model's node temperatures (°C) just before the cut
+    (junction first, on the model's Cauer form) and at every reading (``(N, n)``)."""
 
     t_s: NDArray
     reading_c: NDArray
@@ -113,6 +113,7 @@ class CurveEvidence:
     power_w: float
     tref_c: float
     nodes_c: NDArray
+    node_paths_c: NDArray | None = None
 
     @property
     def residual_k(self) -> NDArray:
@@ -137,8 +138,10 @@ class Evidence:
     calibration: tuple[NDArray, NDArray] | None = None
     rth_k_per_w: float = 1.0
     n_nodes: int = 1
-    #: Heat capacity (J/K) of every Cauer node of the model so far, junction first.
+    #: Heat capacity (J/K) of every Cauer node of the model so far, junction first ...
     node_c_j_per_k: tuple[float, ...] = ()
+    #: ... and the resistance (K/W) of every Cauer layer.
+    layer_r_k_per_w: tuple[float, ...] = ()
     #: Time constants (s) of the model so far (its Foster form), fastest first.
     tau_s: tuple[float, ...] = ()
     #: Whether the cooling readings were converted from TSP voltages through the bundle's

@@ -181,19 +181,38 @@ class PhaseChange(DeviceEffect):
 
     def guess(self, form: str, fixed: Mapping[str, float],
               evidence: Evidence) -> Sequence[Mapping[str, float]]:
+        """Starts from what the band would leave in the cooling curves. Heat ``L`` given off
+        at node ``k`` while the curve cools through the band keeps the junction above the
+        model by a bump whose integral over time is ``L`` times the transfer resistance from
+        node ``k`` to the junction: ``L ≈ ∫ r dt / Σ_{i≥k} R_i``, on the curve where that
+        integral is largest; the band sits where the model's node ``k`` is when the bump
+        peaks, about as wide as that node's fall over the bump's half-height span. Two more
+        starts place a band of that heat at fractions of the node's hottest rise."""
         node = int(fixed.get("node", 0))
-        tops = [float(c.nodes_c[node]) for c in evidence.cooling if node < c.nodes_c.size]
-        if not tops:
+        curves = [c for c in evidence.cooling if c.node_paths_c is not None
+                  and node < c.node_paths_c.shape[1] and c.t_s.size >= 3]
+        if not curves:
             return ()
         tref = min(c.tref_c for c in evidence.cooling)
-        rise = max(max(tops) - tref, 1e-3)
-        c_node = (evidence.node_c_j_per_k[node] if node < len(evidence.node_c_j_per_k)
-                  else 0.0)
-        latent = max(0.1 * c_node * rise, 1e-12)
-        width = 0.06 * rise
-        return tuple({"t_c": tref + f * rise, "width_k": width, "latent_j": latent,
-                      **({"edge_k": 0.1 * width} if form == "plateau" else {})}
-                     for f in START_FRACTIONS)
+        rise = max(max(float(c.nodes_c[node]) for c in curves) - tref, 1e-3)
+        r_layers = evidence.layer_r_k_per_w
+        transfer = sum(r_layers[node:]) if r_layers else evidence.rth_k_per_w
+        best = max(curves, key=lambda c: float(np.trapezoid(c.residual_k, c.t_s)))
+        area = float(np.trapezoid(best.residual_k, best.t_s))
+        latent = max(area / max(transfer, 1e-30), 1e-12)
+        peak = int(np.argmax(best.residual_k))
+        path = best.node_paths_c[:, node]
+        half = best.residual_k >= 0.5 * best.residual_k[peak]
+        span = np.nonzero(half)[0]
+        width = max(0.25 * float(path[span[0]] - path[span[-1]]), 0.01 * rise) \
+            if span.size else 0.05 * rise
+        found = {"t_c": float(path[peak]), "width_k": width, "latent_j": latent}
+        starts = [found] + [{"t_c": tref + f * rise, "width_k": 0.06 * rise, "latent_j": latent}
+                            for f in START_FRACTIONS]
+        if form == "plateau":
+            starts = [{**s, "width_k": 4 * s["width_k"], "edge_k": s["width_k"] / 2}
+                      for s in starts]
+        return tuple(starts)
 
     def spice_stored_heat(self, effect: Effect, node: int, t_node: str,
                           c_node: float) -> str | None:

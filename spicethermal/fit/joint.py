@@ -1,7 +1,8 @@
 """Joint fits of a ladder and its effects to every data set of a bundle.
 
-One problem layout (:class:`Layout`): the Cauer ladder's ``log R`` and ``log C`` (unless the
-ladder is held) and the fitted parameters of each effect (on a log scale where the parameter
+One problem layout (:class:`Layout`): the ladder's Foster ``log R`` and ``log τ`` (unless the
+ladder is held; the network is simulated on the Cauer form of each trial ladder,
+:func:`~spicethermal.engines.network.cauer_of_foster`) and the fitted parameters of each effect (on a log scale where the parameter
 says so), the other parameters held at each start's values. Residuals are each data set's
 readings minus the forward model's (:func:`~spicethermal.fit.forward.predict`) over the data
 set's noise, so ``2·cost`` is the noise-weighted χ². Many starts (and discrete variants such as
@@ -16,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -24,7 +26,7 @@ from ..core.errors import DataFormatError, FitError
 from ..core.ladder import Cauer, Foster
 from ..effects.base import DeviceEffect, EffectPlugin, MeasurementEffect
 from ..effects.registry import Effect
-from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch, as_cauer
+from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch, as_cauer, cauer_of_foster
 from ..identify.curves import ZthCurve
 from .forward import MeasurementTerm, predict
 from .ladder import fit_foster
@@ -40,7 +42,7 @@ __all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "f
 MAX_ORDER = 8
 #: ... and stops after this many orders in a row that do not lower the criterion.
 ORDER_PATIENCE = 2
-#: Bounds of a ladder's ``log R`` and ``log C`` in a fit.
+#: Bounds of a ladder's ``log R`` and ``log τ`` in a fit.
 LOG_BOUND = 60.0
 
 
@@ -119,7 +121,11 @@ class Layout:
         return self.ladder_size + sum(len(n) for n in self.names)
 
     def pack(self, start: Start) -> NDArray:
-        x = [] if self.hold_ladder else [np.log(start.ladder.r), np.log(start.ladder.c)]
+        if self.hold_ladder:
+            x = []
+        else:
+            foster = start.ladder.to_foster()
+            x = [np.log(foster.r), np.log(foster.tau)]
         for (p, _f), names, values in zip(self.slots, self.names, start.values, strict=True):
             x.append([_to_fit(p.params[n], values[n]) for n in names])
         return np.concatenate([np.asarray(v, dtype=float) for v in x]) if x else np.zeros(0)
@@ -168,9 +174,9 @@ class _Problem:
         lay = self.layout
         if lay.hold_ladder:
             r, c = self.ladders_r[rows], self.ladders_c[rows]
-        else:
+        else:  # the ladder moves in its Foster coordinates, simulated on its Cauer form
             n = lay.n_nodes
-            r, c = np.exp(x[:, :n]), np.exp(x[:, n:2 * n])
+            r, c = cauer_of_foster(np.exp(x[:, :n]), np.exp(x[:, n:2 * n]))
         col = lay.ladder_size
         devices, measures = [], []
         for (p, form), names, values in zip(lay.slots, lay.names, self.values, strict=True):
@@ -258,20 +264,34 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
 
 def start_ladders(data: BundleData, orders: Sequence[int]) -> dict[int, Cauer]:
     """Linear ladders of each order fitted to the Zth of the lowest-power cooling curve (the
-    transient masked and extrapolated by √t), as Cauer ladders: the baseline's starts."""
-    c = data.reference_curve
-    curve = ZthCurve.from_cooling(c.t_s, c.tj_c, c.power_w, c.tj_steady_c,
-                                  c.tref_c if c.has_tref_column else None, c.tref_steady_c,
-                                  label=c.name)
+    transient masked and extrapolated by √t), as Cauer ladders: the baseline's starts, and a
+    start of every candidate's joint refit (the least heated curve is the one the effects,
+    which grow with temperature, change least). Each is computed once per data."""
     out = {}
     for m in orders:
-        try:
-            f = fit_foster(curve.t_s, curve.zth_k_per_w, order=m,
-                           rth_k_per_w=curve.rth_k_per_w).foster
-            out[m] = as_cauer(f)
-        except (FitError, DataFormatError, ValueError, ArithmeticError):
-            continue
+        ladder = _reference_ladder(data, m)
+        if ladder is not None:
+            out[m] = ladder
     return out
+
+
+@lru_cache(maxsize=64)
+def _reference_curve(data: BundleData) -> ZthCurve:
+    c = data.reference_curve
+    return ZthCurve.from_cooling(c.t_s, c.tj_c, c.power_w, c.tj_steady_c,
+                                 c.tref_c if c.has_tref_column else None, c.tref_steady_c,
+                                 label=c.name)
+
+
+@lru_cache(maxsize=256)
+def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
+    curve = _reference_curve(data)
+    try:
+        f = fit_foster(curve.t_s, curve.zth_k_per_w, order=order,
+                       rth_k_per_w=curve.rth_k_per_w).foster
+        return as_cauer(f)
+    except (FitError, DataFormatError, ValueError, ArithmeticError):
+        return None
 
 
 def fit_baseline(data: BundleData, noise: Mapping[str, float],

@@ -94,7 +94,7 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
     r = fun(x, rows_all)
     cost = _cost(r)
     work = p_count
-    lam = np.full(p_count, 1e-3)
+    lam = np.full(p_count, 1e-2)
     nu = np.full(p_count, 2.0)
     active = np.isfinite(cost)
     converged = np.zeros(p_count, dtype=bool)
@@ -106,32 +106,35 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
             break
         need = [i for i in idx if jac[i] is None]
         if need:
+            # each Jacobian is evaluated with its own base point in the same batch: a forward
+            # model whose adaptive steps are shared across a batch then differences on one grid
             h = FD_STEP * np.maximum(np.abs(x[need]), typ)  # (q, k)
-            # step away from a bound that would be crossed
-            h = np.where(x[need] + h > hi_a, -h, h)
-            xs = np.repeat(x[need], k, axis=0) + (np.tile(np.eye(k), (len(need), 1))
-                                                   * np.repeat(h, k, axis=0))
-            rs = fun(xs, np.repeat(np.asarray(need), k)).reshape(len(need), k, -1)
-            work += len(need) * k
+            h = np.where(x[need] + h > hi_a, -h, h)  # step away from a bound it would cross
+            offsets = np.vstack([np.zeros((1, k)), np.eye(k)])  # (k + 1, k)
+            xs = (np.repeat(x[need], k + 1, axis=0)
+                  + np.tile(offsets, (len(need), 1)) * np.repeat(h, k + 1, axis=0))
+            rs = fun(xs, np.repeat(np.asarray(need), k + 1)).reshape(len(need), k + 1, -1)
+            work += len(need) * (k + 1)
             for q, i in enumerate(need):
-                j = ((rs[q] - r[i][None, :]) / h[q][:, None]).T  # (N, k)
+                j = ((rs[q, 1:] - rs[q, :1]) / h[q][:, None]).T  # (N, k)
                 jac[i] = np.where(np.isfinite(j), j, 0.0)
         trials = np.empty((idx.size, k))
         predicted = np.empty(idx.size)
         for q, i in enumerate(idx):
             j = jac[i]
-            a = j.T @ j
-            g = j.T @ r[i]
-            d = np.diag(a).copy()
-            d[d <= 0] = 1e-12 * max(float(np.max(d)), 1e-300)
-            try:
-                step = np.linalg.solve(a + lam[i] * np.diag(d), -g)
-            except np.linalg.LinAlgError:
-                step = -g / (d * (1 + lam[i]))
+            # the damped step on columns scaled to unit norm, solved by least squares on the
+            # augmented system (never the normal equations, whose condition is squared)
+            norms = np.linalg.norm(j, axis=0)
+            norms = np.where(norms > 0, norms, 1.0)
+            js = j / norms
+            aug = np.vstack([js, np.sqrt(lam[i]) * np.eye(k)])
+            rhs = np.concatenate([-r[i], np.zeros(k)])
+            step = np.linalg.lstsq(aug, rhs, rcond=None)[0] / norms
             trial = np.clip(x[i] + step, lo_a, hi_a)
             step = trial - x[i]
             trials[q] = trial
-            predicted[q] = -(g @ step + 0.5 * step @ a @ step)
+            lin = j @ step
+            predicted[q] = -(r[i] @ lin + 0.5 * lin @ lin)
         rt = fun(trials, idx)
         work += idx.size
         ct = _cost(rt)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..effects.base import CurveEvidence, EffectPlugin, Evidence
 from ..engines.network import NetworkBatch
-from .joint import Layout, ModelFit, Start, fit_starts
+from .joint import MAX_ORDER, Layout, ModelFit, Start, bic, fit_starts, start_ladders
 from .measurement import BundleData
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -51,9 +51,10 @@ def evidence(data: BundleData, model: ModelFit, noise: Mapping[str, float]) -> E
     net = NetworkBatch.of(model.ladder, model.effects)
     curves = []
     for c in data.cooling:
-        nodes = net.steady(c.power_w, c.tref_steady_c)[0] + c.tref_steady_c
+        theta = net.steady(c.power_w, c.tref_steady_c)
+        paths = net.response(theta, c.t_s, 0.0, c.tref_steady_c)[0] + c.tref_steady_c
         curves.append(CurveEvidence(c.t_s, c.tj_c, model.predictions[c.name], c.power_w,
-                                    c.tref_steady_c, nodes))
+                                    c.tref_steady_c, theta[0] + c.tref_steady_c, paths))
     pwm = None
     if data.pwm is not None:
         p = data.pwm
@@ -65,7 +66,8 @@ def evidence(data: BundleData, model: ModelFit, noise: Mapping[str, float]) -> E
     return Evidence(cooling=tuple(curves), pwm=pwm,
                     declared_window_s=data.pwm.window_s if data.pwm is not None else 0.0,
                     calibration=cal, rth_k_per_w=foster.rth, n_nodes=model.ladder.order,
-                    node_c_j_per_k=tuple(model.ladder.c), tau_s=tuple(sorted(foster.tau)),
+                    node_c_j_per_k=tuple(model.ladder.c),
+                    layer_r_k_per_w=tuple(model.ladder.r), tau_s=tuple(sorted(foster.tau)),
                     reference_c=data.reference_c, noise_k=dict(noise),
                     in_volts=data.in_volts)
 
@@ -131,7 +133,7 @@ def _clip(plugin: EffectPlugin, values: Mapping[str, float]) -> dict[str, float]
 
 def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                plugin: EffectPlugin, screen_rounds: int, refine_rounds: int,
-               forms: Sequence[str] | None = None) -> list[ModelFit]:
+               forms: Sequence[str] | None = None, grow: bool = False) -> list[ModelFit]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
     docstring); forms whose guess gives no start are left out.
 
@@ -146,6 +148,11 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         Rounds of the screen and of the joint refit.
     forms : sequence of str, optional
         The forms to fit (default: all).
+    grow : bool
+        Also refit the best form on a ladder one stage longer (started from the linear ladder
+        of that order): the model's order was chosen without the effect, whose misfit may
+        have taken or hidden a stage. The longer ladder replaces the form's fit when its
+        criterion (two parameters more) is lower.
 
     Returns
     -------
@@ -179,13 +186,48 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                 tuple(sorted(pairs[i][0].items())) for i in done)]
         best = got[done[0]]
         assert best is not None
-        full = Layout((*slots, (plugin, form)), model.ladder.order)
-        refined = fit_starts(data, noise, full,
-                             [Start(best.ladder, tuple(dict(e.params) for e in best.effects))],
-                             refine_rounds)[0]
-        work = sum(m.work for m in got if m is not None) + (refined.work if refined else 0)
-        pick = refined if refined is not None and refined.chi2_total <= best.chi2_total \
-            else best
-        out.append(ModelFit(pick.ladder, pick.effects, pick.predictions, pick.chi2,
-                            pick.n_params, work, pick.converged))
+        out.append(_refine(data, noise, best, refine_rounds, sum(
+            m.work for m in got if m is not None)))
+    if grow and out:
+        n_points = sum(data.sizes().values())
+        k = min(range(len(out)), key=lambda i: bic(out[i], n_points))
+        longer = _longer(data, noise, out[k], refine_rounds)
+        if longer is not None and bic(longer, n_points) < bic(out[k], n_points):
+            out[k] = longer
     return out
+
+
+def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds: int,
+            work: int) -> ModelFit:
+    """``fit`` refitted jointly (ladder and every effect) from its own ladder and from the
+    linear ladder of the least heated curve of the same order, side by side; the better
+    (``fit`` itself when neither lowers χ²)."""
+    n = fit.ladder.order
+    values = tuple(dict(e.params) for e in fit.effects)
+    starts = [Start(fit.ladder, values)]
+    ref = start_ladders(data, [n]).get(n)
+    if ref is not None:
+        starts.append(Start(ref, values))
+    got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds)
+           if m is not None]
+    spent = work + sum(m.work for m in got)
+    pick = min([*got, fit], key=lambda m: m.chi2_total)
+    return ModelFit(pick.ladder, pick.effects, pick.predictions, pick.chi2, pick.n_params,
+                    spent, pick.converged)
+
+
+def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
+            rounds: int) -> ModelFit | None:
+    """``fit`` refitted on a ladder one stage longer (the linear ladder of that order as the
+    start, the effects' values as they are)."""
+    n = fit.ladder.order + 1
+    if n > MAX_ORDER:
+        return None
+    ladder = start_ladders(data, [n]).get(n)
+    if ladder is None:
+        return None
+    values = tuple(dict(e.params) for e in fit.effects)
+    got = fit_starts(data, noise, Layout(_slots(fit), n), [Start(ladder, values)], rounds)[0]
+    return None if got is None else ModelFit(got.ladder, got.effects, got.predictions,
+                                             got.chi2, got.n_params, fit.work + got.work,
+                                             got.converged)
