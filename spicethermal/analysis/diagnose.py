@@ -118,7 +118,8 @@ def _rechi(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
 
 def _candidate(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
                p: EffectPlugin, n_points: int, sizes: dict) -> tuple[Candidate, int] | None:
-    fits = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS, grow=True)
+    fits = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS,
+                      grow=lambda m: any(_beyond(data, m).values()))
     if not fits:
         return None
     b0 = bic(current, n_points)

@@ -123,9 +123,9 @@ class Layout:
     def pack(self, start: Start) -> NDArray:
         if self.hold_ladder:
             x = []
-        else:
-            foster = start.ladder.to_foster()
-            x = [np.log(foster.r), np.log(foster.tau)]
+        else:  # every mode of the Cauer ladder, even one the junction hardly sees
+            r, tau = NetworkBatch(np.array([start.ladder.r]), np.array([start.ladder.c])).foster()
+            x = [np.log(np.maximum(r[0], 1e-300)), np.log(tau[0])]
         for (p, _f), names, values in zip(self.slots, self.names, start.values, strict=True):
             x.append([_to_fit(p.params[n], values[n]) for n in names])
         return np.concatenate([np.asarray(v, dtype=float) for v in x]) if x else np.zeros(0)
@@ -270,7 +270,7 @@ def start_ladders(data: BundleData, orders: Sequence[int]) -> dict[int, Cauer]:
     out = {}
     for m in orders:
         ladder = _reference_ladder(data, m)
-        if ladder is not None:
+        if ladder is not None and ladder.order == m:
             out[m] = ladder
     return out
 

@@ -36,7 +36,7 @@ __all__ = ["FTOL", "MAX_ROUNDS", "LMResult", "levenberg_marquardt"]
 #: Rounds (one Jacobian and one trial step each) a fit may take at most.
 MAX_ROUNDS = 40
 #: A problem has converged when an accepted step lowers its cost by less than this fraction.
-FTOL = 1e-7
+FTOL = 1e-5
 #: Relative finite-difference step (of each parameter's size or typical size).
 FD_STEP = 1e-6
 

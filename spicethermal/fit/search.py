@@ -12,7 +12,7 @@ The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -133,7 +133,8 @@ def _clip(plugin: EffectPlugin, values: Mapping[str, float]) -> dict[str, float]
 
 def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                plugin: EffectPlugin, screen_rounds: int, refine_rounds: int,
-               forms: Sequence[str] | None = None, grow: bool = False) -> list[ModelFit]:
+               forms: Sequence[str] | None = None,
+               grow: Callable[[ModelFit], bool] | None = None) -> list[ModelFit]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
     docstring); forms whose guess gives no start are left out.
 
@@ -148,11 +149,12 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         Rounds of the screen and of the joint refit.
     forms : sequence of str, optional
         The forms to fit (default: all).
-    grow : bool
-        Also refit the best form on a ladder one stage longer (started from the linear ladder
-        of that order): the model's order was chosen without the effect, whose misfit may
-        have taken or hidden a stage. The longer ladder replaces the form's fit when its
-        criterion (two parameters more) is lower.
+    grow : callable, optional
+        When ``grow(fit)`` is true of the best form's fit (it leaves a data set beyond its
+        noise), that form is also refitted on a ladder one stage longer (started from the
+        linear ladder of that order): the model's order was chosen without the effect, whose
+        misfit may have taken or hidden a stage. The longer ladder replaces the form's fit
+        when its criterion (two parameters more) is lower.
 
     Returns
     -------
@@ -191,7 +193,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     if grow and out:
         n_points = sum(data.sizes().values())
         k = min(range(len(out)), key=lambda i: bic(out[i], n_points))
-        longer = _longer(data, noise, out[k], refine_rounds)
+        longer = _longer(data, noise, out[k], refine_rounds) if grow(out[k]) else None
         if longer is not None and bic(longer, n_points) < bic(out[k], n_points):
             out[k] = longer
     return out
