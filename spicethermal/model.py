@@ -23,7 +23,7 @@ from .core.errors import DataFormatError, SimulationError
 from .core.ladder import Cauer, Foster
 from .core.network import Network, Schedule, Trajectory, linear_response
 from .effects import DEVICE, Effect
-from .engines.network import NetworkBatch, as_cauer
+from .engines.network import TOL_REL, NetworkBatch, as_cauer
 from .engines.pwm import PwmState, check_drive, steady_state
 from .io.files import atomic_write_text, dumps_json, read_json
 
@@ -139,10 +139,12 @@ class ThermalModel:
                    segments: Sequence[tuple[float, float, float]], tref_c: float,
                    t_eval: NDArray | None = None, rtol: float = 1e-9,
                    atol: float = 1e-10) -> tuple[NDArray, list[NDArray]]:
-        """Integrate piece by piece (the network simulator's steps, its tolerance ``rtol``
-        of the largest rise); returns the end state and (t, θ) rows at ``t_eval``."""
+        """Integrate piece by piece with the network simulator (a step's tolerance, a
+        fraction of the largest rise, follows ``rtol``: its default tolerance for a loose
+        ``rtol``, a tenth of it at the tightest); returns the end state and (t, θ) rows at
+        ``t_eval``."""
         batch = self.batch()
-        batch.tol_rel = max(rtol, 1e-9)
+        batch.tol_rel = min(TOL_REL, max(rtol * 1e3, TOL_REL / 10))
         theta = np.asarray(theta0, dtype=float)
         rows: list[NDArray] = []
         for t0, t1, p in segments:

@@ -29,20 +29,24 @@ def actuator() -> Foster:
 
 @pytest.fixture
 def register_plugin(monkeypatch):
-    """``register_plugin(spec)``: ``spec`` offered through the ``spicethermal.effects``
-    entry-point group, as an installed third-party package would, for the test's duration
-    (the catalogue reloads its plugins; the built-in registry is restored afterwards)."""
-    from spicethermal.effects import ENTRY_POINT_GROUP, catalogue
+    """``register_plugin(cls)``: the plugin class ``cls`` offered through the
+    ``spicethermal.effects`` entry-point group beside the installed ones, as an installed
+    third-party package would, for the test's duration (the registry reloads its entry points;
+    it is restored afterwards)."""
+    from spicethermal.effects import ENTRY_POINT_GROUP, registry
 
-    def register(spec) -> None:
+    installed = list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
+
+    def register(cls) -> None:
         class EntryPoint:
             def load(self):
-                return spec
+                return cls
 
-        monkeypatch.setattr(catalogue, "_PLUGINS_LOADED", False)
-        monkeypatch.setattr(catalogue, "_REGISTRY", dict(catalogue._REGISTRY))
+        monkeypatch.setattr(registry, "_LOADED", False)
+        monkeypatch.setattr(registry, "_REGISTRY", {})
         monkeypatch.setattr(importlib.metadata, "entry_points",
-                            lambda group: [EntryPoint()] if group == ENTRY_POINT_GROUP else [])
+                            lambda group: [*installed, EntryPoint()]
+                            if group == ENTRY_POINT_GROUP else [])
 
     return register
 

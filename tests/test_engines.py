@@ -147,23 +147,30 @@ def test_a_plugin_device_effect_is_simulated_by_every_engine_and_exported(regist
     resistance falls with the junction temperature, ``R0 (1 − g (Tj − 25))``. The package
     knows it only through its hooks: the Python integration, ngspice -b and ngspice in
     process agree, and its exported .lib holds its own expression."""
-    from spicethermal.effects import DEVICE, EffectSpec, Param
+    from spicethermal.effects import COOLING, DeviceEffect, Param, Traits
     from spicethermal.effects.spice import number
     from spicethermal.spice.lib import render_lib
 
-    def scale(effect, layer, _t_layer_c, tj_c):
-        return 1.0 - effect.params["g_per_k"] * (tj_c - 25.0) if layer == 0 else 1.0
+    class Toy(DeviceEffect):
+        name = "toy-sink"
+        summary = "a toy: the first layer conducts better when hot"
+        params = {"g_per_k": Param("1/K", 0.0, 0.0, 0.01)}
+        traits = Traits(frozenset({COOLING}))
 
-    def spice_scale(effect, layer, _t_layer, t_junction):
-        if layer != 0:
-            return None
-        return f"(1-({number(effect.params['g_per_k'])})*({t_junction}-25))"
+        def resistance_scale(self, form, p, t_layer_c, t_junction_c):
+            out = np.ones_like(t_layer_c)
+            out[:, 0] = (1.0 - p["g_per_k"] * (t_junction_c - 25.0))[:, 0]
+            return out
 
-    toy = EffectSpec("toy-sink", DEVICE, "a toy: the first layer conducts better when hot",
-                     {"g_per_k": Param("1/K", 0.0, 0.0, 0.01)}, ("standard",),
-                     resistance_scale=scale, spice_resistance_scale=spice_scale)
+        def spice_resistance_scale(self, effect, layer, t_layer, t_junction):
+            if layer != 0:
+                return None
+            return f"(1-({number(effect.params['g_per_k'])})*({t_junction}-25))"
 
-    register_plugin(toy)
+        def guess(self, form, fixed, evidence):
+            return ({"g_per_k": 1e-3},)
+
+    register_plugin(Toy)
     model = ThermalModel(LADDER, (Effect.create("toy-sink", g_per_k=0.008),))
     assert not model.is_linear
     with pytest.raises(DataFormatError):

@@ -100,7 +100,7 @@ def test_a_band_away_from_the_junction_reads_as_the_version_meant(tmp_path, actu
     assert ThermalModel.load(m.save(tmp_path / "m.json")) == m
     old = {**m.to_dict(), "format": "spicethermal-model/2"}
     with pytest.raises(DataFormatError, match=r"v2.json: spicethermal-model/2 puts the "
-                                              r"phase-change band at node 1 of the Foster"):
+                                              r"phase-change at node 1 of the Foster"):
         ThermalModel.from_dict(old, "v2.json")
     cauer = m.with_topology("cauer")
     assert ThermalModel.from_dict({**cauer.to_dict(), "format": "spicethermal-model/2"}) == cauer

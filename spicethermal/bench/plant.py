@@ -143,13 +143,12 @@ class Plant:
         if hit is not None:
             return hit
         ends = np.append(temps, self.base_c)  # layer k joins node k to node k + 1
+        layers = 0.5 * (ends[:-1] + ends[1:])
         scales = np.ones(self.n)
         c = self.c0.copy()
         for e in self.device_effects:
-            for k in range(self.n):
-                scales[k] *= e.resistance_scale(k, 0.5 * float(ends[k] + ends[k + 1]),
-                                                float(temps[0]))
-                c[k] += e.extra_capacitance(k, float(temps[k]), float(self.c0[k]))
+            scales *= np.array(e.resistance_scales(layers, float(temps[0])))
+            c += np.array(e.extra_capacities(temps, self.c0))
         g = self.g0 if np.all(scales == 1.0) else \
             Cauer(np.asarray(self.cauer.r) * scales, self.cauer.c).state_matrices()[1]
         if len(self._cache) > 20000:

@@ -98,9 +98,11 @@ class Dynamics:
         the mean over the layers of each layer's factor with the layer at the junction
         temperature (exact for the junction form, an upper bound on the change otherwise)."""
         tj = self.tref + junction_k
-        return float(np.mean([np.prod([e.resistance_scale(k, tj, tj)
-                                       for e in self.model.device_effects])
-                              for k in range(self.model.ladder.order)]))
+        n = self.model.ladder.order
+        factors = np.ones(n)
+        for e in self.model.device_effects:
+            factors *= np.array(e.resistance_scales([tj] * n, tj))
+        return float(np.mean(factors))
 
     def ripple(self, duty: NDArray | float, junction_k: float = 0.0) -> NDArray:
         """Periodic-steady-state junction peak minus mean (K) at ``duty``."""

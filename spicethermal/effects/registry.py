@@ -10,12 +10,14 @@ own. :func:`register` adds one at run time (tests, notebooks).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+import numpy as np
+
 from ..core.errors import DataFormatError
-from .base import DEVICE, EffectPlugin
+from .base import DEVICE, EffectPlugin, scalar_params
 
 __all__ = ["CATALOGUE", "ENTRY_POINT_GROUP", "Effect", "known_names", "plugin", "register",
            "rival_names"]
@@ -198,6 +200,11 @@ class Effect:
         return Effect(self.name, {**self.params, **params}, self.form)
 
     @property
+    def default_form(self) -> str:
+        """The first form of the effect's plugin (model files leave it out)."""
+        return self.plugin.forms[0]
+
+    @property
     def plugin(self) -> EffectPlugin:
         """The effect's plugin (its physics)."""
         return plugin(self.name)
@@ -226,3 +233,47 @@ class Effect:
     def describe(self) -> str:
         """One sentence: what the effect says physically."""
         return self.plugin.describe(self)
+
+    # -- a device effect's physics for one model (its plugin's hooks; none for the others) --
+    def resistance_scales(self, t_layer_c: Sequence[float], tj_c: float) -> list[float]:
+        """Factor on each layer's resistance of one ladder, given each layer's mean
+        temperature and the junction's (°C); ones for an effect that changes none.
+
+        >>> Effect.create("temperature-coefficient", alpha_per_k=0.01).resistance_scales(
+        ...     [30.0, 28.0], 35.0)
+        [1.1, 1.1]
+        """
+        t = np.asarray(t_layer_c, dtype=float)[None, :]
+        p = self.plugin
+        got = p.resistance_scale(self.form, scalar_params(self), t,  # type: ignore[attr-defined]
+                                 np.full((1, 1), float(tj_c))) if self.kind == DEVICE else None
+        return [1.0] * t.shape[1] if got is None else [float(x) for x in np.asarray(got)[0]]
+
+    def extra_capacities(self, t_node_c: Sequence[float],
+                         c_node: Sequence[float]) -> list[float]:
+        """Heat capacity (J/K) the effect adds at each node of one ladder (the derivative of
+        the heat it stores), given the nodes' temperatures (°C) and linear capacities.
+
+        >>> e = Effect.create("phase-change", "gaussian", t_c=60.0, width_k=1.0, latent_j=2.0)
+        >>> [round(x, 6) for x in e.extra_capacities([60.0, 40.0], [1.0, 1.0])]
+        [0.797885, 0.0]
+        """
+        t = np.asarray(t_node_c, dtype=float)[None, :]
+        got = self.plugin.stored_heat(  # type: ignore[attr-defined]
+            self.form, scalar_params(self), t, np.asarray(c_node, dtype=float)[None, :]) \
+            if self.kind == DEVICE else None
+        return [0.0] * t.shape[1] if got is None else [float(x) for x in np.asarray(got[1])[0]]
+
+    def spice_resistance_scale(self, layer: int, t_layer: str, t_junction: str) -> str | None:
+        """The factor on layer ``layer``'s resistance as a SPICE expression, or None."""
+        if self.kind != DEVICE:
+            return None
+        return self.plugin.spice_resistance_scale(self, layer, t_layer,  # type: ignore
+                                                  t_junction)
+
+    def spice_stored_heat(self, node: int, t_node: str, c_node: float = 0.0) -> str | None:
+        """The heat stored at ``node`` beyond its linear capacity as a SPICE expression, or
+        None."""
+        if self.kind != DEVICE:
+            return None
+        return self.plugin.spice_stored_heat(self, node, t_node, c_node)  # type: ignore

@@ -195,8 +195,11 @@ class SpicePwm:
     # -- the exported model ----------------------------------------------------------------
     @cached_property
     def _model(self) -> ThermalModel:
-        """The model in the topology that is exported (the .ic nodes are this ladder's)."""
-        return self.model.with_topology(self.topology or self.model.ladder.topology)
+        """The model in the topology that is exported (the .ic nodes are this ladder's): the
+        model's own, or its Cauer form when it has device effects (their physics, and the
+        model's simulation that starts the runs, are on the Cauer form's layers)."""
+        own = "cauer" if self.model.device_effects else self.model.ladder.topology
+        return self.model.with_topology(self.topology or own)
 
     @cached_property
     def lib_text(self) -> str:

@@ -36,7 +36,8 @@ from .measurement import BundleData
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-__all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts"]
+__all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts",
+           "start_ladders", "tau_range"]
 
 #: The baseline's order is searched up to this many stages ...
 MAX_ORDER = 8
@@ -130,10 +131,14 @@ class Layout:
             x.append([_to_fit(p.params[n], values[n]) for n in names])
         return np.concatenate([np.asarray(v, dtype=float) for v in x]) if x else np.zeros(0)
 
-    def bounds(self) -> tuple[NDArray, NDArray, NDArray]:
-        """``(lo, hi, typical)`` in fit space."""
-        lo = [-LOG_BOUND] * self.ladder_size
-        hi = [LOG_BOUND] * self.ladder_size
+    def bounds(self, tau_s: tuple[float, float] = (0.0, math.inf)
+               ) -> tuple[NDArray, NDArray, NDArray]:
+        """``(lo, hi, typical)`` in fit space; the ladder's time constants within ``tau_s``."""
+        n = self.ladder_size // 2
+        t_lo = max(math.log(tau_s[0]), -LOG_BOUND) if tau_s[0] > 0 else -LOG_BOUND
+        t_hi = min(math.log(tau_s[1]), LOG_BOUND) if math.isfinite(tau_s[1]) else LOG_BOUND
+        lo = [-LOG_BOUND] * n + [t_lo] * n
+        hi = [LOG_BOUND] * n + [t_hi] * n
         typ = [1.0] * self.ladder_size
         for (p, _f), names in zip(self.slots, self.names, strict=True):
             for n in names:
@@ -214,6 +219,25 @@ class _Problem:
         return ModelFit(Cauer(r[0], c[0]), tuple(effects), preds, chi2, k, work, converged)
 
 
+def tau_range(data: BundleData) -> tuple[float, float]:
+    """Time constants a fitted ladder may take: from a thousandth of the shortest time the
+    data resolve (the first cooling reading, a PWM period) to a thousand times the longest
+    record. A stage outside is invisible to every reading: left free, a fit parks it where no
+    gradient brings it back, and a far faster one makes the network uselessly stiff.
+
+    >>> from spicethermal.io.bundle import Bundle, PwmTable
+    >>> tau_range(BundleData.from_bundle(Bundle(pwm=PwmTable([1e3], [0.5], [30.0],
+    ...                                                       power_w=0.1))))
+    (1e-06, inf)
+    """
+    shortest = [float(c.t_s[0]) for c in data.cooling if c.t_s.size]
+    if data.pwm is not None:
+        shortest.append(float(np.min(1.0 / data.pwm.freq_hz)))
+    longest = [float(c.t_s[-1]) for c in data.cooling if c.t_s.size]
+    return (1e-3 * min(shortest) if shortest else 0.0,
+            1e3 * max(longest) if longest else math.inf)
+
+
 def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
                starts: Sequence[Start], rounds: int = MAX_ROUNDS,
                n_ladder_params: int | None = None,
@@ -244,7 +268,7 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
         return []
     prob = _Problem(data, noise, layout, starts, tol_rel)
     x0 = np.array([layout.pack(s) for s in starts])
-    lo, hi, typ = layout.bounds()
+    lo, hi, typ = layout.bounds(tau_range(data))
     k_ladder = 2 * layout.n_nodes if n_ladder_params is None else n_ladder_params
     k = k_ladder + sum(len(p.fitted_names(f)) for p, f in layout.slots)
     if x0.shape[1] == 0:
