@@ -52,8 +52,9 @@ _API: dict[str, str] = {
     "compare": "analysis.compare",
     "Comparison": "analysis.compare",
     "diagnose": "analysis.diagnose",
-    "diagnose_table": "analysis.diagnose",
-    "Diagnosis": "analysis.diagnose",
+    "diagnose_table": "analysis.table2",
+    "Diagnosis": "analysis.diagnosis",
+    "fit_with_effects": "analysis.diagnose",
     "table1": "io.datasheet",
     "time_constant_spectrum": "identify.spectrum",
     "structure_function": "identify.structure",
@@ -62,7 +63,10 @@ _API: dict[str, str] = {
     "export": "spice.lib",
     # effects
     "Effect": "effects",
-    "EffectSpec": "effects",
+    "DeviceEffect": "effects",
+    "MeasurementEffect": "effects",
+    "Param": "effects",
+    "Traits": "effects",
     "register_effect": "effects",
     "known_effects": "effects",
     # many devices

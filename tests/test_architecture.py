@@ -193,9 +193,13 @@ HEAVY = {
 #: Function-local imports of something light, (importer, imported module): the reason they
 #: must stay local. Keep it empty unless the import is truly dynamic.
 LOCAL_IMPORT_EXCEPTIONS: dict[tuple[str, str], str] = {
-    ("spicethermal.effects.catalogue", "importlib"):
-        "third-party effects are plugins found through entry points when the catalogue is "
-        "first read; importlib.metadata (~40 ms: email, zipfile) would load with every command",
+    ("spicethermal.effects.registry", "importlib"):
+        "every effect is a plugin found through entry points when the registry is first "
+        "read; importlib.metadata (~40 ms: email, zipfile) would load with every command",
+    ("spicethermal.analysis.diagnosis", "spicethermal.viz.plots"):
+        "a result's .plot() draws it: computation never imports presentation at module level",
+    ("spicethermal.analysis.table2", "spicethermal.viz.diagnosis"):
+        "a result's .plot() draws it: computation never imports presentation at module level",
 }
 
 
@@ -295,3 +299,100 @@ def test_the_light_command_list_says_what_the_command_modules_say() -> None:
     for name, info in command_modules().items():
         module = importlib.import_module(f"spicethermal.cli.commands.{info.name}")
         assert (module.NAME, module.HELP) == (name, command_help(info))
+
+
+def all_imports(name: str) -> set[str]:
+    """Modules of the package that module ``name`` imports anywhere: at module level, under
+    ``TYPE_CHECKING`` and in function bodies (a lazy import is still an arrow)."""
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(MODULES[name].read_text())):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names if a.name in MODULES)
+        elif isinstance(node, ast.ImportFrom):
+            target = resolve(name, node)
+            subs = {f"{target}.{a.name}" for a in node.names} & MODULES.keys()
+            out.update(subs)
+            if target in MODULES and len(subs) < len(node.names):
+                out.add(target)
+    out.discard(name)
+    return {m for m in out if not (name.startswith(m + ".") and MODULES[m].name == "__init__.py")}
+
+
+#: Cycles through type-only imports still being taken apart: shrink, never grow.
+TYPE_CYCLES = [["spicethermal.bench.client", "spicethermal.bench.link"],
+               ["spicethermal.drive.optimize", "spicethermal.drive.result",
+                "spicethermal.viz.pwm"]]
+
+
+def test_no_import_cycle_even_through_type_only_or_lazy_imports() -> None:
+    graph = {name: all_imports(name) for name in MODULES}
+    found = cycles(graph)
+    assert all(c in TYPE_CYCLES for c in found), f"import cycles (any import): {found}"
+
+
+#: Computation (the rooms below) never imports presentation; a result's ``.plot()`` is the
+#: one way in, lazily (:data:`LOCAL_IMPORT_EXCEPTIONS`).
+COMPUTATION = ("core", "effects", "engines", "fit", "identify", "analysis", "drive", "io")
+PRESENTATION = ("spicethermal.viz", "spicethermal.report", "spicethermal.cli")
+
+
+#: Still importing presentation, being reworked: shrink, never grow.
+PRESENTATION_IMPORTS = {("spicethermal.analysis.demo", "spicethermal.report.html"),
+                        ("spicethermal.analysis.demo", "spicethermal.viz.plots"),
+                        ("spicethermal.drive.result", "spicethermal.viz.pwm"),
+                        ("spicethermal.fit.bootstrap", "spicethermal.viz.plots")}
+
+
+def test_computation_never_imports_presentation_at_module_level() -> None:
+    bad = {(name, dep) for name in MODULES
+           if name.split(".")[1:2] and name.split(".")[1] in COMPUTATION
+           for dep in imports_on_load(name) if dep.startswith(PRESENTATION)}
+    assert bad <= PRESENTATION_IMPORTS, sorted(bad - PRESENTATION_IMPORTS)
+
+
+#: io modules still interpreting (building calibrations, Zth curves): shrink, never grow.
+IO_TO_IDENTIFY = {("spicethermal.io.bundle", "spicethermal.identify.calibration"),
+                  ("spicethermal.io.bundle_read", "spicethermal.identify.calibration"),
+                  ("spicethermal.io.datasets", "spicethermal.identify.calibration"),
+                  ("spicethermal.io.datasheet", "spicethermal.identify.curves"),
+                  ("spicethermal.io.importers", "spicethermal.identify.calibration"),
+                  ("spicethermal.io.sources", "spicethermal.identify.calibration"),
+                  ("spicethermal.io.sources", "spicethermal.identify.curves")}
+
+
+def test_io_reads_files_and_identify_interprets_them_not_both_ways() -> None:
+    io_to_identify = {(n, d) for n in MODULES if n.startswith("spicethermal.io")
+                      for d in all_imports(n) if d.startswith("spicethermal.identify")}
+    assert io_to_identify <= IO_TO_IDENTIFY, sorted(io_to_identify - IO_TO_IDENTIFY)
+
+
+#: The simulated bench still names the effects it simulates: shrink, never grow.
+NAMING_EFFECTS = {"spicethermal.bench.devices", "spicethermal.bench.plant",
+                  "spicethermal.bench.simulator"}
+
+
+def test_no_effect_is_named_outside_the_effects_package() -> None:
+    """Effects are plugins: nothing outside ``spicethermal/effects/`` spells one's name (the
+    independent validation generator, which holds each case's truth as a label, excepted)."""
+    from spicethermal.effects import CATALOGUE
+
+    names = set(CATALOGUE)
+    found = []
+    for name, path in MODULES.items():
+        if name.startswith(("spicethermal.effects", "spicethermal.validation")) \
+                or name in NAMING_EFFECTS:
+            continue
+        tree = ast.parse(path.read_text())
+        docs = {id(n.body[0].value) for n in ast.walk(tree)  # docstrings document, not code
+                if isinstance(n, ast.Module | ast.ClassDef | ast.FunctionDef)
+                and n.body and isinstance(n.body[0], ast.Expr)
+                and isinstance(n.body[0].value, ast.Constant)}
+        for node in ast.walk(tree):
+            if id(node) in docs:
+                continue
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                text = node.value
+                hits = [n for n in names if n == text or f'"{n}"' in text or f"'{n}'" in text]
+                if hits:
+                    found.append((name, node.lineno, hits))
+    assert not found, found

@@ -9,9 +9,10 @@ import json
 import numpy as np
 import pytest
 from conftest import DATA
+from scenarios import DUTIES, FREQS_HZ, actuator
 
-from spicethermal.analysis.diagnose import DIAGNOSIS_FORMAT, diagnose_table
-from spicethermal.analysis.scenarios import DUTIES, FREQS_HZ, actuator
+from spicethermal.analysis.diagnosis import DIAGNOSIS_FORMAT
+from spicethermal.analysis.table2 import diagnose_table
 from spicethermal.cli.main import main
 from spicethermal.engines.pwm import steady_state
 from spicethermal.io.bundle import format_columns
@@ -36,7 +37,7 @@ def _rows():
 
 def test_paper_table_baseline_is_the_published_delta(paper):
     f, d, e, m = _rows()
-    doc = paper.to_json()
+    doc = paper.to_dict()
     assert doc["format"] == DIAGNOSIS_FORMAT
     assert doc["baseline"]["rms_k"] == pytest.approx(float(np.sqrt(np.mean((e - m) ** 2))))
     worst = doc["baseline"]["worst"][0]
@@ -47,11 +48,10 @@ def test_paper_table_baseline_is_the_published_delta(paper):
 
 def test_paper_explanations_do_not_fit(paper):
     """The window and early-time hypotheses at their best case leave most of Δ: no verdict."""
-    a = paper.extra["table2"]
-    assert paper.verdict_effect is None
-    assert paper.verdict_reason.startswith("neither explanation the paper gives fits")
-    assert {c.effect.name for c in paper.candidates} == {"sample-window",
-                                                         "electrical-transient"}
+    a = paper.analysis
+    assert paper.verdict.cls == "none" and paper.verdict_effect is None
+    assert paper.verdict.reason.startswith("neither explanation the paper gives fits")
+    assert {c.effect for c in paper.candidates} == {"sample-window", None}
     assert all(c.improvement < 2 for c in paper.candidates)
     # the window's prediction is never positive, while Δ is positive at two points
     assert np.all(a.paper_window_pred_k <= 1e-12)
@@ -65,7 +65,7 @@ def test_paper_explanations_do_not_fit(paper):
 
 def test_paper_simulated_column_is_not_a_periodic_steady_state(paper):
     f, d, e, m = _rows()
-    a = paper.extra["table2"]
+    a = paper.analysis
     for duty in (0.2, 0.5):  # rises with frequency by more than two standard errors
         slope, se = a.slopes_k_per_decade[("simulated", duty)]
         sel = d == duty
@@ -75,7 +75,7 @@ def test_paper_simulated_column_is_not_a_periodic_steady_state(paper):
     k = float(d @ e / (d @ d))  # the measured column is D·P·Rth plus per-frequency offsets
     assert a.mean_model["measured"][0] == pytest.approx(k)
     assert a.offsets_rms_k < 0.5 * a.mean_model["measured"][1]
-    assert "per-frequency offsets" in paper.verdict_reason
+    assert "per-frequency offsets" in paper.verdict.reason
     assert a.departure_corr < -0.5
 
 
@@ -94,9 +94,9 @@ def _synthetic_table(tmp_path, window_s: float):
 
 def test_a_real_sample_window_is_recognised(tmp_path):
     d = diagnose_table(_synthetic_table(tmp_path, 1e-4))
-    assert d.verdict_effect == "sample-window", d.verdict_reason
-    assert d.best.improvement > 3
-    a = d.extra["table2"]
+    assert d.verdict_effect == "sample-window", d.verdict.reason
+    assert d.candidates[0].improvement > 3
+    a = d.analysis
     assert a.ladder_rms_k < 0.01  # a linear ladder reproduces this simulated column
     assert a.power_w == pytest.approx(0.1, rel=1e-3)
 

@@ -35,7 +35,7 @@ def test_the_linear_model_is_the_ladders_closed_forms():
     assert pred["cooling_2"] == pytest.approx(25.0 + 0.3 * LADDER.cooling(T), rel=1e-9)
     assert pred["steady"] == pytest.approx(25.0 + np.array([0.12, 0.3]) * LADDER.rth)
     assert pred["pwm"] == pytest.approx(
-        [25.0 + steady_state(LADDER, 0.1, f, d, 1e-4).reading_k for f, d in zip(F, D)],
+        [25.0 + steady_state(LADDER, 0.1, f, d, 1e-4).reading_k for f, d in zip(F, D, strict=True)],
         rel=1e-9)
     assert pred["calibration"] == pytest.approx(np.arange(20.0, 101.0, 10.0))
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,7 +37,8 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError
 from ..effects.base import CALIBRATION, EffectPlugin
 from ..effects.registry import CATALOGUE, plugin
-from ..fit.joint import ModelFit, bic, fit_baseline
+from ..engines.network import as_cauer
+from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData
 from ..fit.search import fit_effect, without
 from ..model import ThermalModel
@@ -81,8 +83,6 @@ def _beyond(data: BundleData, fit: ModelFit) -> dict[str, bool]:
 
 def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, dict]:
     """The baseline and the noise, each estimated from the other in turn."""
-    from ..fit.joint import Layout, Start, fit_starts
-
     noise = {n: 1.0 for n in data.datasets}
     if data.calibration is not None:
         noise[CALIBRATION] = max(calibration_degree(data.calibration.temp_c,
@@ -92,8 +92,6 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
         if model is None:
             fit = fit_baseline(data, noise)
         else:
-            from ..engines.network import as_cauer
-
             slots = tuple((e.plugin, e.form) for e in model.effects)
             ladder = as_cauer(model.ladder)
             fit = fit_starts(data, noise, Layout(slots, ladder.order, hold_ladder=True,
@@ -109,8 +107,6 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
 
 
 def _rechi(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
-    from dataclasses import replace
-
     chi2 = {n: float(np.sum(((fit.predictions[n] - data.measured(n)) / noise[n]) ** 2))
             for n in data.datasets}
     return replace(fit, chi2=chi2)
@@ -158,10 +154,19 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
 
     Examples
     --------
-    >>> from spicethermal.analysis.scenarios import scenario_bundle
-    >>> d = diagnose(scenario_bundle("sample-window", seed=0))
+    A linear ladder's cooling curves, read with 20 mK of noise: nothing is missing.
+
+    >>> import numpy as np
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.io.bundle import Bundle, CoolingTable
+    >>> ladder = Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0])
+    >>> t, rng = np.geomspace(1e-4, 100.0, 50), np.random.default_rng(0)
+    >>> curves = tuple(CoolingTable(t, p, tj_c=25 + p * ladder.cooling(t)
+    ...                             + rng.normal(0, 0.02, t.size), tref_steady_c=25.0)
+    ...                for p in (0.1, 0.3))
+    >>> d = diagnose(Bundle(ambient_c=25.0, cooling=curves))
     >>> d.verdict.cls, d.effects
-    ('named', ['sample-window'])
+    ('none', [])
     """
     t_start = time.perf_counter()
     say = progress or (lambda _text: None)

@@ -12,12 +12,12 @@ from typing import TYPE_CHECKING, Any
 
 from ..effects.base import CALIBRATION, STEADY
 from ..io.jsondoc import JsonDocument
+from ..model import ThermalModel
 from .where import fmt_time
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..effects import Effect
     from ..fit.joint import ModelFit
-    from ..model import ThermalModel
     from .compare import Comparison
 
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "Candidate",
@@ -172,8 +172,6 @@ class Diagnosis(JsonDocument):
 
     def model(self) -> ThermalModel:
         """The model after the last step: its ladder (Foster) and every effect fitted."""
-        from ..model import ThermalModel
-
         fit = self.final_fit
         base = self.baseline_model
         provenance = {**base.provenance, "diagnosis": self.verdict.cls,

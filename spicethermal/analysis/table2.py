@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,7 +19,7 @@ import numpy as np
 
 from ..core.errors import DataFormatError
 from ..core.ladder import Foster
-from ..effects import PWM, CATALOGUE
+from ..effects import CATALOGUE, PWM
 from ..engines.pwm import steady_state
 from ..io.bundle import read_columns
 from ..io.jsondoc import JsonDocument

@@ -32,14 +32,12 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
-
-    from .registry import Effect
 
 __all__ = ["CALIBRATION", "COOLING", "DEVICE", "KINDS", "MEASUREMENT", "PWM", "STEADY",
            "CurveEvidence", "DeviceEffect", "EffectPlugin", "Evidence", "MeasurementEffect",
@@ -58,11 +56,26 @@ KINDS = (COOLING, STEADY, PWM, CALIBRATION)
 class Param:
     """A parameter of an effect.
 
-    ``unit``, ``default`` and the allowed range ``[low, high]``; ``forms``: the forms that use
-    it (empty: every form); ``fitted``: whether a fit moves it (false for a reference such as
-    the temperature a law is written at, or a discrete choice such as a node, which
-    :meth:`EffectPlugin.variants` enumerates); ``log``: a fit moves it on a log scale (a
-    positive span, a heat); ``typical``: its typical size, which scales a fit's steps.
+    Attributes
+    ----------
+    unit : str
+        Its unit.
+    default : float
+        Its value when none is given.
+    low, high : float
+        The allowed range.
+    doc : str
+        What it is.
+    forms : tuple of str
+        The forms that use it (empty: every form).
+    fitted : bool
+        Whether a fit moves it (false for a reference such as the temperature a law is
+        written at, or a discrete choice such as a node, which
+        :meth:`EffectPlugin.variants` enumerates).
+    log : bool
+        Whether a fit moves it on a log scale (a positive span, a heat).
+    typical : float
+        Its typical size, which scales a fit's finite-difference steps.
     """
 
     unit: str
@@ -84,14 +97,22 @@ class Param:
 class Traits:
     """What an effect's data look like, as data instead of tables elsewhere.
 
-    ``shown_by``: the kinds of data set (:data:`KINDS`) in which the effect can show at all
-    (a fit is not tried without one of them). ``needs``: kinds without which the effect
-    cannot be told from others (a TSP's curvature without a calibration reads like a device
-    effect): without them it is never named alone. ``cost``: relative work of one forward
-    evaluation (1: closed form; an integrated device effect more). ``confusable_with``: other
-    effects' names, each with the measurement that tells them apart. ``catalogued``: false
-    for a *rival* (an explanation outside the catalogue that the diagnosis weighs but never
-    names, such as a heating power other than the recorded one).
+    Attributes
+    ----------
+    shown_by : frozenset of str
+        The kinds of data set (:data:`KINDS`) in which the effect can show at all (a fit is
+        not tried without one of them).
+    needs : frozenset of str
+        Kinds without which the effect cannot be told from others (a TSP's curvature without
+        a calibration reads like a device effect): without them it is never named alone.
+    cost : float
+        Relative work of one forward evaluation (1: closed form; an integrated device effect
+        more).
+    confusable_with : mapping of str to str
+        Other effects' names, each with the measurement that tells them apart.
+    catalogued : bool
+        False for a *rival*: an explanation outside the catalogue that the diagnosis weighs
+        but never names (a heating power other than the recorded one).
     """
 
     shown_by: frozenset[str]
@@ -174,6 +195,18 @@ class Observation:
     after_off: Callable[[NDArray | float], NDArray] | None = None
 
 
+class Effect(Protocol):
+    """A configured effect as the hooks see it (:class:`spicethermal.effects.Effect` is one):
+    its name, form and parameter values."""
+
+    name: str
+    form: str
+    params: Mapping[str, float]
+
+    @property
+    def form_params(self) -> dict[str, float]: ...
+
+
 def scalar_params(effect: Effect) -> dict[str, NDArray]:
     """An effect's parameters as the ``(1, 1)`` arrays the hooks take (a batch of one).
 
@@ -204,7 +237,7 @@ class EffectPlugin(ABC):
     forms: ClassVar[tuple[str, ...]] = ("standard",)
     traits: ClassVar[Traits]
 
-    def check(self, effect: Effect) -> None:
+    def check(self, effect: Effect) -> None:  # noqa: B027 - optional hook, none by default
         """Reject parameter values the form cannot use (raise ``DataFormatError``)."""
 
     def variants(self, form: str, evidence: Evidence) -> Sequence[Mapping[str, float]]:
@@ -235,6 +268,21 @@ class DeviceEffect(EffectPlugin):
     Its physics are two hooks of the one network simulator, on the Cauer form of the ladder
     (node 0 the junction, layer ``i`` from node ``i`` to node ``i + 1``, the last layer to the
     reference, every node's heat capacity to the thermal ground).
+
+    Attributes
+    ----------
+    name : str
+        Catalogue name (the registry's key).
+    kind : str
+        :data:`DEVICE`.
+    summary : str
+        One line: what it is.
+    params : mapping of str to Param
+        Its parameters.
+    forms : tuple of str
+        Its forms, the default first.
+    traits : Traits
+        What its data look like.
     """
 
     kind = DEVICE
@@ -271,7 +319,25 @@ class DeviceEffect(EffectPlugin):
 
 
 class MeasurementEffect(EffectPlugin):
-    """An artefact of the bench: how a true junction temperature becomes a reading."""
+    """An artefact of the bench: how a true junction temperature becomes a reading.
+
+    Attributes
+    ----------
+    name : str
+        Catalogue name (the registry's key).
+    kind : str
+        :data:`MEASUREMENT`.
+    summary : str
+        One line: what it is.
+    params : mapping of str to Param
+        Its parameters.
+    forms : tuple of str
+        Its forms, the default first.
+    traits : Traits
+        What its data look like.
+    stage : float
+        Where it acts on a reading (see the class attribute).
+    """
 
     kind = MEASUREMENT
     #: Order in which readings pass through measurement effects: what is sampled (0), what

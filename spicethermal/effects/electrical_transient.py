@@ -29,12 +29,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .base import COOLING, PWM, STEADY, Evidence, MeasurementEffect, Observation, Param, Traits
+from .base import COOLING, Evidence, MeasurementEffect, Observation, Param, Traits
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 #: The error decays as ``exp(−RATE · t / masked_s)``: 1 % is left after ``masked_s``.
 RATE = 5.0

@@ -42,13 +42,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.special import expit, log_expit, ndtr
 
+from ..core.errors import DataFormatError
 from .base import COOLING, PWM, STEADY, DeviceEffect, Evidence, Param, Traits, scalar_params
 from .spice import number
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 #: Bound on |Φ_SPICE(z) − Φ(z)| of the gaussian form's SPICE rendering (fraction of L).
 GAUSSIAN_SPICE_ERROR = 1.5e-4
@@ -170,8 +171,6 @@ class PhaseChange(DeviceEffect):
         return int(effect.params["node"]) > 0
 
     def check(self, effect: Effect) -> None:
-        from ..core.errors import DataFormatError
-
         if effect.params["node"] != math.floor(effect.params["node"]):
             raise DataFormatError(f"effect phase-change: node = {effect.params['node']!r} is "
                                   f"not a node index")

@@ -21,7 +21,7 @@ from .base import COOLING, PWM, STEADY, Evidence, MeasurementEffect, Observation
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 
 class PowerError(MeasurementEffect):

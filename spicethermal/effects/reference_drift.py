@@ -18,7 +18,7 @@ from .base import COOLING, Evidence, MeasurementEffect, Observation, Param, Trai
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 
 class ReferenceDrift(MeasurementEffect):

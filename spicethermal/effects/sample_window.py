@@ -18,7 +18,7 @@ from .base import PWM, Evidence, MeasurementEffect, Observation, Param, Traits
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 #: The window's mean is Gauss–Legendre on these sub-spans (fractions of the window, log
 #: spaced: the fast stages decay at its start), 4 nodes each.
@@ -48,7 +48,8 @@ class SampleWindow(MeasurementEffect):
         total = 0.0
         for a, b in zip(SPANS[:-1], SPANS[1:], strict=True):
             for x, wt in zip(_NODES, _WEIGHTS, strict=True):
-                total = total + 0.5 * (b - a) * wt * obs.after_off(w * (a + 0.5 * (b - a) * (x + 1)))
+                at = w * (a + 0.5 * (b - a) * (x + 1))
+                total = total + 0.5 * (b - a) * wt * obs.after_off(at)
         return total
 
     def guess(self, form: str, fixed: Mapping[str, float],

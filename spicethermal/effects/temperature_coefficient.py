@@ -43,7 +43,7 @@ from .spice import number
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 KELVIN = 273.15
 #: Forms whose resistances follow their own layer's temperature (simulated on a Cauer ladder).
@@ -208,8 +208,9 @@ class TemperatureCoefficient(DeviceEffect):
 
     def describe(self, effect: Effect) -> str:
         p = effect.params
+        last = "last" if p["last_layer"] >= LAST else str(int(p["last_layer"]))
         where = ("every layer on the junction temperature" if effect.form == "junction" else
-                 f"layers {int(p['first_layer'])}..{'last' if p['last_layer'] >= LAST else int(p['last_layer'])} on their own temperature")
+                 f"layers {int(p['first_layer'])}..{last} on their own temperature")
         if effect.form == "power-law":
             law_text = f"R ∝ T^{p['exponent']:.3g} (T in kelvin)"
         else:

@@ -41,7 +41,7 @@ from .base import (
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .registry import Effect
+    from .base import Effect
 
 
 def _sensor(form: str, p: Mapping[str, NDArray], t: NDArray) -> NDArray:

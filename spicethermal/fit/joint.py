@@ -2,11 +2,12 @@
 
 One problem layout (:class:`Layout`): the ladder's Foster ``log R`` and ``log τ`` (unless the
 ladder is held; the network is simulated on the Cauer form of each trial ladder,
-:func:`~spicethermal.engines.network.cauer_of_foster`) and the fitted parameters of each effect (on a log scale where the parameter
-says so), the other parameters held at each start's values. Residuals are each data set's
-readings minus the forward model's (:func:`~spicethermal.fit.forward.predict`) over the data
-set's noise, so ``2·cost`` is the noise-weighted χ². Many starts (and discrete variants such as
-a node or a layer subset) are fitted side by side (:func:`~spicethermal.fit.lm.levenberg_marquardt`).
+:func:`~spicethermal.engines.network.cauer_of_foster`) and the fitted parameters of each
+effect (on a log scale where the parameter says so), the other parameters held at each
+start's values. Residuals are each data set's readings minus the forward model's
+(:func:`~spicethermal.fit.forward.predict`) over the data set's noise, so ``2·cost`` is the
+noise-weighted χ². Many starts (and discrete variants such as a node or a layer subset) are
+fitted side by side (:func:`~spicethermal.fit.lm.levenberg_marquardt`).
 
 :func:`fit_baseline` is the linear ladder fitted to every data set, its order chosen by the
 Bayesian information criterion.
@@ -24,7 +25,7 @@ import numpy as np
 
 from ..core.errors import DataFormatError, FitError
 from ..core.ladder import Cauer, Foster
-from ..effects.base import DeviceEffect, EffectPlugin, MeasurementEffect
+from ..effects.base import DeviceEffect, EffectPlugin
 from ..effects.registry import Effect
 from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch, as_cauer, cauer_of_foster
 from ..identify.curves import ZthCurve
@@ -339,7 +340,7 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
         raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
     best: ModelFit | None = None
     worse = 0
-    for m, ladder in sorted(starts.items()):
+    for _, ladder in sorted(starts.items()):
         fit = fit_starts(data, noise, Layout((), ladder.order), [Start(ladder)])[0]
         if fit is None:
             continue

@@ -12,7 +12,6 @@ from pathlib import Path
 from .. import __version__
 from ..core.ladder import Foster
 from ..data import path as data_path
-from ..effects import Effect
 from ..io.files import atomic_write_text
 from ..io.vendor import import_model
 from ..model import ThermalModel
@@ -34,16 +33,19 @@ HEATSINK_EXAMPLE = {"heatsink_c": 2.0, "heatsink_r": 1.0, "ambient_c": 25.0, "po
                     "on_s": 1.0, "tstop_s": 10.0, "tmax_s": 1e-3}
 
 
+#: The model file of the example with device effects (kept beside the golden files it makes).
+EFFECTS_EXAMPLE = Path(__file__).resolve().parents[2] / "netlists" / \
+    "actuator_effects.model.json"
+
+
 def golden_models() -> dict[str, ThermalModel]:
-    """The paper-like actuator (linear) and the same with device effects: a temperature
-    coefficient and its cavity's methanol, a latent-heat band at layer 2 (so its ``.lib``
-    files are Cauer ladders only: a Foster network has no such layer)."""
+    """The paper-like actuator (linear) and the same with device effects, read from
+    ``netlists/actuator_effects.model.json``: a temperature coefficient and its cavity's
+    methanol, a latent-heat band at layer 2 (so its ``.lib`` files are Cauer ladders only: a
+    Foster network has no such layer)."""
     actuator = ThermalModel(Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0]),
                             provenance={"source": "example: paper-like actuator, Rth 146 K/W"})
-    effects = actuator.with_effects([
-        Effect.create("temperature-coefficient", alpha_per_k=-3e-3, t0_c=25.0),
-        Effect.create("phase-change", t_c=64.7, width_k=2.0, latent_j=0.05, node=2)])
-    return {"actuator": actuator, "actuator_effects": effects}
+    return {"actuator": actuator, "actuator_effects": ThermalModel.load(EFFECTS_EXAMPLE)}
 
 
 def _lib(key: str, dialect: str, topology: str) -> Callable[[], str]:

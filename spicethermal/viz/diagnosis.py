@@ -5,21 +5,55 @@ the RMS staircase of the iterative diagnosis and the paper's Table 2 analysis.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from collections.abc import Sequence
-
     from matplotlib.axes import Axes
 
     from ..analysis.compare import Comparison
-    from ..analysis.diagnosis import Diagnosis
-    from ..analysis.table2 import TableAnalysis
 
 from .base import axes, new_figure, save_figure
+
+
+class Diagnosis(Protocol):
+    """What the figures read of a diagnosis (:class:`spicethermal.analysis.diagnosis.Diagnosis`:
+    the figures know its shape, not its module, which draws itself through them)."""
+
+    baseline: Comparison
+    candidates: Sequence[Any]
+    steps: Sequence[Any]
+    verdict: Any
+    noise_k: Mapping[str, float]
+
+    @property
+    def effects(self) -> list[str]: ...
+
+    @property
+    def final(self) -> Comparison: ...
+
+    @property
+    def best(self) -> Any: ...
+
+
+class TableAnalysis(Protocol):
+    """What the figure reads of a measured-vs-simulated table's analysis
+    (:class:`spicethermal.analysis.table2.TableAnalysis`)."""
+
+    freq_hz: Any
+    duty: Any
+    exp_k: Any
+    model_k: Any
+    window_s: float
+    mean_model: Mapping[str, tuple[float, float]]
+    paper_window_pred_k: Any
+    early_pred_k: Any
+
+    @property
+    def delta_k(self) -> Any: ...
 
 
 # ---------------------------------------------- diagnosis: before/after residuals (diagnose.py)

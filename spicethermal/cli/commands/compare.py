@@ -47,10 +47,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     model = ThermalModel.load(args.model)
     engine(args.engine, model)  # --engine analytic refuses device effects in one line
-    # judged on what a fit describes: without an electrical-transient effect, the samples fit
-    # masks as the transient are left out (and counted)
+    # judged on what its fit described: a ladder fitted to a Zth (its provenance records the
+    # early-time treatment) leaves out, and counts, the samples that fit masked as the
+    # electrical transient; a model fitted to every reading (fit --effect, diagnose) is
+    # compared on every reading
     bundle = comparable_source(args, args.bundle, model_reference=model.reference,
-                               mask_transient=model.effect("electrical-transient") is None)
+                               mask_transient="early_time" in model.provenance)
     result = compare(model, bundle, args.engine, window_s=args.window, quiet=args.quiet)
     if args.json:
         print(dumps_json(result.to_json(), indent=2))

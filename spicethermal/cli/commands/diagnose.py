@@ -23,10 +23,10 @@ from ...analysis.table2 import diagnose_table
 from ...core.errors import DataFormatError
 from ...core.progress import status_line
 from ...effects import plugin
-from ...report.diagnosis import write_report
 from ...io.files import dumps_json
 from ...io.sources import csv_header
 from ...model import ThermalModel
+from ...report.diagnosis import write_report
 from ._source import SOURCE_HELP, add_source_arguments, comparable_source
 from ._types import number as _number
 from ._types import positive as _positive

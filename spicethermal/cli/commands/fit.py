@@ -18,9 +18,9 @@ from dataclasses import replace
 from pathlib import Path
 
 from ... import __version__
+from ...analysis.diagnose import fit_with_effects
 from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
-from ...analysis.diagnose import fit_with_effects
 from ...effects import plugin
 from ...fit.bootstrap import fig_fit_band, fit_bootstrap
 from ...fit.ladder import check_rth, fit_model
