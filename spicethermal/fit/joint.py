@@ -16,7 +16,7 @@ Bayesian information criterion.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING
@@ -38,7 +38,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
 __all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts",
-           "start_ladders", "tau_range"]
+           "reference_order", "start_ladders", "tau_range"]
 
 #: The baseline's order is searched up to this many stages ...
 MAX_ORDER = 8
@@ -301,6 +301,18 @@ def start_ladders(data: BundleData, orders: Sequence[int]) -> dict[int, Cauer]:
 
 
 @lru_cache(maxsize=64)
+def reference_order(data: BundleData) -> int:
+    """The order the automatic ladder fit chooses for the least heated curve's Zth: the
+    order of the linear network where the effects, which grow with temperature, are
+    weakest (the joint baseline's order may have grown with their misfit)."""
+    curve = _reference_curve(data)
+    try:
+        return fit_foster(curve.t_s, curve.zth_k_per_w, rth_k_per_w=curve.rth_k_per_w).order
+    except (FitError, DataFormatError, ValueError, ArithmeticError):
+        return 0
+
+
+@lru_cache(maxsize=64)
 def _reference_curve(data: BundleData) -> ZthCurve:
     c = data.reference_curve
     return ZthCurve.from_cooling(c.t_s, c.tj_c, c.power_w, c.tj_steady_c,
@@ -320,14 +332,20 @@ def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
 
 
 def fit_baseline(data: BundleData, noise: Mapping[str, float],
+                 adequate: Callable[[ModelFit], bool] | None = None,
                  max_order: int = MAX_ORDER) -> ModelFit:
     """The linear ladder fitted to every data set (cooling curves, steady readings, PWM
-    grid), its order the one with the lowest ``χ² + 2m ln N``.
+    grid), its order the one with the lowest ``χ² + 2m ln N`` among the ladders that are
+    ``adequate`` (bring every data set to its noise). When none is, more stages only chase a
+    misfit that is no matter of order (an effect's): the order is then at most that of the
+    least heated curve (:func:`reference_order`), where the effects are weakest.
 
     Parameters
     ----------
     data : BundleData
     noise : mapping of data set name to its noise (K)
+    adequate : callable, optional
+        Whether a fitted ladder leaves every data set at its noise (default: every one is).
     max_order : int
 
     Returns
@@ -338,12 +356,14 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
     starts = start_ladders(data, range(1, max_order + 1))
     if not starts:
         raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
+    fits: list[ModelFit] = []
     best: ModelFit | None = None
     worse = 0
     for _, ladder in sorted(starts.items()):
         fit = fit_starts(data, noise, Layout((), ladder.order), [Start(ladder)])[0]
         if fit is None:
             continue
+        fits.append(fit)
         if best is None or bic(fit, n_points) < bic(best, n_points):
             best, worse = fit, 0
         else:
@@ -352,4 +372,11 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
                 break
     if best is None:
         raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
-    return best
+    if adequate is None or adequate(best):
+        return best
+    good = [f for f in fits if adequate(f)]
+    if good:
+        return min(good, key=lambda f: bic(f, n_points))
+    limit = max(reference_order(data), 1)
+    return min((f for f in fits if f.ladder.order <= limit), default=best,
+               key=lambda f: bic(f, n_points))

@@ -2,9 +2,10 @@
 
 The problems of one call share their residual function and the layout of their parameters
 (the same model, from different starts or with different discrete choices); each moves on its
-own. Every round evaluates, in one batched call of the residual function, the finite-difference
-Jacobians of the problems that need one, then in a second call every problem's trial step, so
-the forward model's fixed cost per call is paid once for all of them.
+own. Every round evaluates, in one batched call of the residual function, every problem's
+trial step together with its finite-difference Jacobian there (ready when the step is
+accepted, as most are), so the forward model's fixed cost per call is paid once a round for
+all of them.
 
 The work is counted, never timed: a fit stops after :data:`MAX_ROUNDS` rounds (or the caller's
 ``rounds``) whatever the machine, so the same input gives the same result on every machine
@@ -36,7 +37,7 @@ __all__ = ["FTOL", "MAX_ROUNDS", "LMResult", "levenberg_marquardt"]
 #: Rounds (one Jacobian and one trial step each) a fit may take at most.
 MAX_ROUNDS = 40
 #: A problem has converged when an accepted step lowers its cost by less than this fraction.
-FTOL = 1e-5
+FTOL = 1e-4
 #: Relative finite-difference step (of each parameter's size or typical size).
 FD_STEP = 1e-6
 
@@ -90,34 +91,32 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
     lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     typ = np.ones(k) if typical is None else np.abs(np.asarray(typical, dtype=float))
     x = np.clip(x, lo_a, hi_a)
-    rows_all = np.arange(p_count)
-    r = fun(x, rows_all)
+    offsets = np.vstack([np.zeros((1, k)), np.eye(k)])  # (k + 1, k)
+
+    def stencil(points: NDArray, which: NDArray) -> tuple[NDArray, NDArray]:
+        """Residuals at ``points`` and their finite-difference Jacobians, each point with its
+        own perturbations in one batch: a forward model whose adaptive steps are shared
+        across a batch then differences on one grid."""
+        h = FD_STEP * np.maximum(np.abs(points), typ)
+        h = np.where(points + h > hi_a, -h, h)  # step away from a bound it would cross
+        xs = (np.repeat(points, k + 1, axis=0)
+              + np.tile(offsets, (len(points), 1)) * np.repeat(h, k + 1, axis=0))
+        rs = fun(xs, np.repeat(which, k + 1)).reshape(len(points), k + 1, -1)
+        j = np.swapaxes((rs[:, 1:] - rs[:, :1]) / h[:, :, None], 1, 2)  # (q, N, k)
+        return rs[:, 0], np.where(np.isfinite(j), j, 0.0)
+
+    r, jac = stencil(x, np.arange(p_count))
     cost = _cost(r)
-    work = p_count
+    work = p_count * (k + 1)
     lam = np.full(p_count, 1e-2)
     nu = np.full(p_count, 2.0)
     active = np.isfinite(cost)
     converged = np.zeros(p_count, dtype=bool)
-    jac: list[NDArray | None] = [None] * p_count
     done_rounds = 0
     for done_rounds in range(1, rounds + 1):  # noqa: B007 - the count is returned
         idx = np.nonzero(active)[0]
         if not idx.size:
             break
-        need = [i for i in idx if jac[i] is None]
-        if need:
-            # each Jacobian is evaluated with its own base point in the same batch: a forward
-            # model whose adaptive steps are shared across a batch then differences on one grid
-            h = FD_STEP * np.maximum(np.abs(x[need]), typ)  # (q, k)
-            h = np.where(x[need] + h > hi_a, -h, h)  # step away from a bound it would cross
-            offsets = np.vstack([np.zeros((1, k)), np.eye(k)])  # (k + 1, k)
-            xs = (np.repeat(x[need], k + 1, axis=0)
-                  + np.tile(offsets, (len(need), 1)) * np.repeat(h, k + 1, axis=0))
-            rs = fun(xs, np.repeat(np.asarray(need), k + 1)).reshape(len(need), k + 1, -1)
-            work += len(need) * (k + 1)
-            for q, i in enumerate(need):
-                j = ((rs[q, 1:] - rs[q, :1]) / h[q][:, None]).T  # (N, k)
-                jac[i] = np.where(np.isfinite(j), j, 0.0)
         trials = np.empty((idx.size, k))
         predicted = np.empty(idx.size)
         for q, i in enumerate(idx):
@@ -126,17 +125,15 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
             # augmented system (never the normal equations, whose condition is squared)
             norms = np.linalg.norm(j, axis=0)
             norms = np.where(norms > 0, norms, 1.0)
-            js = j / norms
-            aug = np.vstack([js, np.sqrt(lam[i]) * np.eye(k)])
+            aug = np.vstack([j / norms, np.sqrt(lam[i]) * np.eye(k)])
             rhs = np.concatenate([-r[i], np.zeros(k)])
             step = np.linalg.lstsq(aug, rhs, rcond=None)[0] / norms
-            trial = np.clip(x[i] + step, lo_a, hi_a)
-            step = trial - x[i]
-            trials[q] = trial
-            lin = j @ step
+            trials[q] = np.clip(x[i] + step, lo_a, hi_a)
+            lin = j @ (trials[q] - x[i])
             predicted[q] = -(r[i] @ lin + 0.5 * lin @ lin)
-        rt = fun(trials, idx)
-        work += idx.size
+        # the trial points and, ready for those accepted, their Jacobians: one batch
+        rt, jt = stencil(trials, idx)
+        work += idx.size * (k + 1)
         ct = _cost(rt)
         for q, i in enumerate(idx):
             gain = cost[i] - ct[q]
@@ -144,8 +141,7 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
                 rho = gain / predicted[q] if predicted[q] > 0 else 0.0
                 small = gain < FTOL * cost[i] or np.all(np.abs(trials[q] - x[i])
                                                         <= 1e-10 * (np.abs(x[i]) + typ))
-                x[i], r[i], cost[i] = trials[q], rt[q], ct[q]
-                jac[i] = None
+                x[i], r[i], cost[i], jac[i] = trials[q], rt[q], ct[q], jt[q]
                 lam[i] *= max(1 / 3, 1 - (2 * rho - 1) ** 3)
                 nu[i] = 2.0
                 if small:

@@ -19,7 +19,16 @@ import numpy as np
 
 from ..effects.base import CurveEvidence, EffectPlugin, Evidence
 from ..engines.network import NetworkBatch
-from .joint import MAX_ORDER, Layout, ModelFit, Start, bic, fit_starts, start_ladders
+from .joint import (
+    MAX_ORDER,
+    Layout,
+    ModelFit,
+    Start,
+    bic,
+    fit_starts,
+    reference_order,
+    start_ladders,
+)
 from .measurement import BundleData
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -136,7 +145,10 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                forms: Sequence[str] | None = None,
                grow: Callable[[ModelFit], bool] | None = None) -> list[ModelFit]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
-    docstring); forms whose guess gives no start are left out.
+    docstring); forms whose guess gives no start are left out. The first form is screened
+    from the plugin's starts for every variant and refitted jointly; each other form is
+    screened on the best joint refit's ladder (from the plugin's starts for the best variants
+    and from that refit's own values) and refitted jointly only when it already fits better.
 
     Parameters
     ----------
@@ -162,21 +174,29 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         One per form fitted, in the plugin's order of forms.
     """
     ev = evidence(data, model, noise)
-    slots, values = _slots(model), _values(model)
+    slots = _slots(model)
     defaults = {k: p.default for k, p in plugin.params.items()}
+    n_points = sum(data.sizes().values())
     ranked: dict[frozenset[str], list[Mapping[str, float]]] = {}
-    out = []
+    out: list[ModelFit] = []
+    lead: ModelFit | None = None  # the best joint refit so far: its ladder screens the rest
     for form in forms or plugin.forms:
         variants = list(plugin.variants(form, ev))
         keys = frozenset().union(*(v.keys() for v in variants))
         if keys and keys in ranked:
             variants = [v for v in ranked[keys] if v in variants][:VARIANTS_KEPT] or variants
         pairs = [(v, s) for v in variants for s in plugin.guess(form, v, ev)]
+        base = lead or model
+        others = tuple(dict(e.params) for e in base.effects if e.name != plugin.name)
+        if lead is not None:  # the lead's own values, as far as this form shares them
+            mine = lead.effect(plugin.name)
+            shared = {k: v for k, v in mine.params.items() if plugin.params[k].used_by(form)}
+            pairs.append(({k: v for k, v in shared.items() if k in keys}, shared))
         if not pairs:
             continue
-        starts = [Start(model.ladder, (*values, _clip(plugin, {**defaults, **v, **s})))
+        starts = [Start(base.ladder, (*others, _clip(plugin, {**defaults, **v, **s})))
                   for v, s in pairs]
-        screen = Layout((*slots, (plugin, form)), model.ladder.order, hold_ladder=True,
+        screen = Layout((*slots, (plugin, form)), base.ladder.order, hold_ladder=True,
                         move=(False,) * len(slots) + (True,))
         got = fit_starts(data, noise, screen, starts, screen_rounds, tol_rel=SCREEN_TOL_REL)
         done = [i for i, m in enumerate(got) if m is not None]
@@ -188,10 +208,18 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                 tuple(sorted(pairs[i][0].items())) for i in done)]
         best = got[done[0]]
         assert best is not None
-        out.append(_refine(data, noise, best, refine_rounds, sum(
-            m.work for m in got if m is not None)))
+        work = sum(m.work for m in got if m is not None)
+        # a form is refitted jointly when, on the best ladder so far, it already fits better
+        # than the best joint refit (the first form always)
+        if lead is None or bic(best, n_points) < bic(lead, n_points):
+            fit = _refine(data, noise, best, refine_rounds, work)
+            if lead is None or bic(fit, n_points) < bic(lead, n_points):
+                lead = fit
+        else:
+            fit = ModelFit(best.ladder, best.effects, best.predictions, best.chi2,
+                           best.n_params, work, best.converged)
+        out.append(fit)
     if grow and out:
-        n_points = sum(data.sizes().values())
         k = min(range(len(out)), key=lambda i: bic(out[i], n_points))
         longer = _longer(data, noise, out[k], refine_rounds) if grow(out[k]) else None
         if longer is not None and bic(longer, n_points) < bic(out[k], n_points):
@@ -202,8 +230,10 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
 def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds: int,
             work: int) -> ModelFit:
     """``fit`` refitted jointly (ladder and every effect) from its own ladder and from the
-    linear ladder of the least heated curve of the same order, side by side; the better
-    (``fit`` itself when neither lowers χ²)."""
+    linear ladder of the least heated curve of the same order, side by side, and from that
+    curve's ladder of its own order (:func:`~spicethermal.fit.joint.reference_order`: the
+    model's order may have grown with the misfit the effect explains); the one with the
+    lowest criterion (``fit`` itself when none lowers χ²)."""
     n = fit.ladder.order
     values = tuple(dict(e.params) for e in fit.effects)
     starts = [Start(fit.ladder, values)]
@@ -212,8 +242,14 @@ def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds:
         starts.append(Start(ref, values))
     got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds)
            if m is not None]
+    m_ref = reference_order(data)
+    other = start_ladders(data, [m_ref]).get(m_ref) if 0 < m_ref != n else None
+    if other is not None:
+        got += [m for m in fit_starts(data, noise, Layout(_slots(fit), m_ref),
+                                      [Start(other, values)], rounds) if m is not None]
     spent = work + sum(m.work for m in got)
-    pick = min([*got, fit], key=lambda m: m.chi2_total)
+    n_points = sum(data.sizes().values())
+    pick = min([*got, fit], key=lambda m: bic(m, n_points))
     return ModelFit(pick.ladder, pick.effects, pick.predictions, pick.chi2, pick.n_params,
                     spent, pick.converged)
 
