@@ -364,6 +364,9 @@ def score(meta: dict[str, dict], results: dict[str, dict], limit_s: float = 60.0
             times = [r["cpu_s"] for r in group if r["cpu_s"] is not None]
             table[key] = {"n": len(group), "counted": len(counted),
                           "right": sum(r["right"] for r in counted),
+                          "near": sum(r.get("near", False) for r in group
+                                      if r.get("near_counted")),
+                          "near_counted": sum(bool(r.get("near_counted")) for r in group),
                           "ambiguous": sum(r.get("ambiguous", False) for r in counted),
                           "wrong_name_bundles": sum(bool(r["wrong"]) for r in group),
                           "failures": sum(bool(r["failure"]) for r in group),
@@ -410,13 +413,15 @@ def report(s: dict, limit_s: float) -> str:
         lines.append(f"CPU per bundle: median {s['cpu_median_s']:.2f} s, max "
                      f"{s['cpu_max_s']:.2f} s")
     for axis in ("kind", "device"):
-        lines.append(f"\nper {axis}: n, counted, right, ambiguous, bundles with a wrong name, "
-                     "failures, CPU median")
+        lines.append(f"\nper {axis}: bundles, counted, right (singles: named first; pairs: "
+                     "both; others: no wrong name), near-catalogue named/counted, ambiguous, "
+                     "bundles with a wrong name, failures, CPU median")
         for key, b in s["breakdown"][axis].items():
             med = "-" if b["cpu_median_s"] is None else f"{b['cpu_median_s']:.1f} s"
+            near = f"{b['near']}/{b['near_counted']}" if b["near_counted"] else "-"
             lines.append(f"  {key:34s} {b['n']:4d} {b['counted']:4d} {b['right']:4d} "
-                         f"{b['ambiguous']:4d} {b['wrong_name_bundles']:4d} {b['failures']:4d} "
-                         f"{med:>8s}")
+                         f"{near:>6s} {b['ambiguous']:4d} {b['wrong_name_bundles']:4d} "
+                         f"{b['failures']:4d} {med:>8s}")
     return "\n".join(lines)
 
 
@@ -462,13 +467,17 @@ def main(argv: list[str] | None = None) -> int:
           flush=True)
     if args.generate_only:
         return 0
-    store = out / "results.json"
+    store = out / "results.json"  # kept per bundle and engine: a run resumes where it stopped
     done = json.loads(store.read_text()) if store.exists() else {}
-    done = {n: r for n, r in done.items() if n in meta and r.get("key") == meta[n]["key"]}
+
+    def key(name: str) -> str:
+        return f"{meta[name]['key']} {args.engine} {args.entry} {args.limit:g} {args.kill:g}"
+
+    done = {n: r for n, r in done.items() if n in meta and r.get("key") == key(n)}
     if not args.score_only:
         def save(results: dict) -> None:
             for n in results:
-                results[n]["key"] = meta[n]["key"]
+                results[n]["key"] = key(n)
             store.write_text(json.dumps(results, indent=1, default=str))
 
         done = run_diagnoses({c.name: folder_of(out, c) for c in cases}, args, done, save)

@@ -90,11 +90,14 @@ def _tau_fast(dev: Device) -> float:
 
 def _band(rng: random.Random, dev: Device, shape: str, lo: float, hi: float,
           frac: tuple[float, float], node: int | None = None) -> LatentHeat:
+    """A band at ``node`` (drawn: the junction, the next node or the cavity) centred from
+    ``lo`` to ``hi`` of the node's rise, its latent heat ``frac`` of the heat that the node and
+    the next one store over that rise."""
     node = rng.choice((0, 1, dev.cavity_node)) if node is None else node
     rise = dev.node_rise_k(node)
     t_c = dev.bench.tref_c + rng.uniform(lo, hi) * rise
     width = rng.uniform(0.03, 0.2 if shape != "skewed" else 0.1) * rise
-    latent = _logu(rng, *frac) * sum(dev.c_j_per_k[node:node + 3]) * rise
+    latent = _logu(rng, *frac) * sum(dev.c_j_per_k[node:node + 2]) * rise
     return LatentHeat(node, latent, t_c, width, shape)
 
 
@@ -104,7 +107,7 @@ def _effect(rng: random.Random, effect: str, dev: Device, noise_k: float) -> Dra
     n = len(dev.r_k_per_w)
     if effect == "temperature-coefficient":
         form = rng.choice(("junction", "local", "power", "outer", "inner"))
-        delta = _logu(rng, 0.01, 0.4)  # relative change of R over the rise
+        delta = _logu(rng, 0.002, 0.4)  # relative change of R over the rise
         if form == "power":
             n_exp, beta = delta * (dev.bench.tref_c + 273.15) / rise, _logu(rng, 1e-4, 3e-3)
             return form, {"laws": laws_on(dev, ResistanceLaw("power", exponent=n_exp)),
@@ -118,12 +121,12 @@ def _effect(rng: random.Random, effect: str, dev: Device, noise_k: float) -> Dra
         return form, changes, {}, f"{alpha:.2g}/K", {"alpha_per_k": alpha}
     if effect == "phase-change":
         shape = rng.choice(("gaussian", "logistic", "plateau"))
-        band = _band(rng, dev, shape, 0.35, 0.8, (0.01, 0.6))
+        band = _band(rng, dev, shape, 0.35, 0.8, (0.005, 3.0))
         return f"{shape}@{band.node}", {"latent": (band,)}, {}, f"{band.latent_j:.2g}J", \
             {"band": repr(band)}
     if effect == "electrical-transient":
         kind = rng.choice(("fixed", "power", "ringing"))
-        amp = -_logu(rng, 0.3, 8.0) * max(1.0, noise_k / 0.05)
+        amp = -_logu(rng, 0.05, 8.0) * max(1.0, noise_k / 0.05)
         if kind == "power":
             amp /= dev.top_power_w
         tau = dev.transient_tau_s * _logu(rng, 0.3, 3.0)
@@ -132,12 +135,12 @@ def _effect(rng: random.Random, effect: str, dev: Device, noise_k: float) -> Dra
     if effect == "tsp-nonlinearity":
         order = rng.choice(("quadratic", "cubic"))
         span = rise + 10.0
-        bow = _sign(rng) * _logu(rng, 0.003, 0.05)  # relative bow over the calibrated span
+        bow = _sign(rng) * _logu(rng, 2e-3, 0.05)  # relative bow over the calibrated span
         key, value = ("quad", bow / span) if order == "quadratic" else ("cubic", bow / span ** 2)
         return order, {}, {"tsp": replace(dev.bench.tsp, **{key: value})}, f"{value:.2g}", \
             {key: value}
     mode = rng.choice(("end", "average"))
-    w = dev.bench.declared_window_s * _logu(rng, 0.3, 4.0) * (2.0 if mode == "average" else 1.0)
+    w = dev.bench.declared_window_s * _logu(rng, 0.05, 4.0) * (2.0 if mode == "average" else 1.0)
     return mode, {}, {"window_s": w, "window_mode": mode, "declared_window_s": 0.0}, \
         f"{w:.2g}s", {"window_s": w, "mode": mode}
 
@@ -146,7 +149,7 @@ def _smooth(rng: random.Random, dev: Device) -> Draw:
     """A resistance law that is in no catalogue."""
     rise, n, tref = dev.node_rise_k(0), len(dev.r_k_per_w), dev.bench.tref_c
     law_kind = rng.choice(("exp", "quadratic", "saturating", "kmin"))
-    delta = _logu(rng, 0.03, 0.4)
+    delta = _logu(rng, 0.01, 0.4)
     if law_kind == "exp":
         law = ResistanceLaw("exp", alpha_per_k=math.log(1.0 + _sign(rng) * delta) / rise)
     elif law_kind == "quadratic":
@@ -176,13 +179,13 @@ def _phase(rng: random.Random, dev: Device, variant: dict) -> Draw:
             return found
         form = "skewed"  # no node leaves room for a gap beyond the ripple
     if form == "skewed":
-        band = _band(rng, dev, "skewed", 0.4, 0.8, (0.03, 0.6))
+        band = _band(rng, dev, "skewed", 0.4, 0.8, (0.05, 3.0))
         return form, {"latent": (band,)}, {}, f"{band.latent_j:.2g}J", {"bands": [repr(band)]}
     if form == "two-bands":
         bands = (_band(rng, dev, rng.choice(("gaussian", "logistic", "plateau")), 0.3, 0.5,
-                       (0.03, 0.4)),
+                       (0.05, 2.0)),
                  _band(rng, dev, rng.choice(("gaussian", "logistic", "plateau")), 0.6, 0.85,
-                       (0.03, 0.4)))
+                       (0.05, 2.0)))
         return form, {"latent": bands}, {}, "+".join(f"{b.latent_j:.2g}J" for b in bands), \
             {"bands": [repr(b) for b in bands]}
     raise AssertionError(form)
@@ -203,7 +206,7 @@ def _hysteresis(rng: random.Random, dev: Device, variant: dict) -> Draw | None:
         t_s = dev.bench.tref_c + rng.uniform(0.25, 0.5) * rise
         t_s = min(t_s, top - 3.0 * width - gap)
         if t_s > dev.bench.tref_c + 0.1 * rise + 3.0 * width:
-            latent = _logu(rng, 0.05, 0.6) * sum(dev.c_j_per_k[node:node + 3]) * rise
+            latent = _logu(rng, 0.1, 3.0) * sum(dev.c_j_per_k[node:node + 2]) * rise
             band = LatentHeat(node, latent, t_s + gap, width, rng.choice(("gaussian",
                                                                           "logistic")), gap)
             return "hysteresis", {"latent": (band,)}, {}, f"{latent:.2g}J gap {gap:.2g}K", \
