@@ -363,7 +363,7 @@ def _single(dev: Device, effect: str, form: str, s: int, i: int) -> Case:
         variant["n_curves"] = max(variant["n_curves"], 2)
     return Case(f"{effect}/{form}/{STRENGTHS[s]}", "effect", (effect,), dev.name,
                 dev.network(**net_changes), bench_for(dev, variant, **bench_changes), 1000 + i,
-                form, STRENGTHS[s], truth)
+                form, STRENGTHS[s], truth, kind=f"effect/{effect}")
 
 
 def _uncatalogued(i: int) -> list[Case]:
@@ -386,8 +386,12 @@ def _uncatalogued(i: int) -> list[Case]:
          {"drop": 0.3, "t_switch_c": 34.0, "width_k": 1.5,
           "note": "outer convection resistance drops 30 % above 34 degC (layer mean)"}),
     ]
+    because = {"ambient-drift": "reference-drift", "cold-plate-drift": "reference-drift",
+               "remounted-contact": "remount-two", "remounted-contact-diode": "remount-two"}
     return [Case(f"uncatalogued/{name}", "uncatalogued", (), dev.name, net, bench, 3000 + i + k,
-                 name, "", truth) for k, (name, dev, net, bench, truth) in enumerate(out)]
+                 name, "", truth, acceptable=acceptable_for(because.get(name, name)),
+                 kind=f"uncatalogued/{name}")
+            for k, (name, dev, net, bench, truth) in enumerate(out)]
 
 
 _PAIRS = (
