@@ -1,20 +1,19 @@
-"""Diagnosis on *random* draws of the independent validation physics: a check beyond the fixed
-catalogue (issue 14: "other forms, strengths, combinations").
+"""Diagnosis on the earlier random draws of the validation physics (actuator, MOSFET and diode
+only), kept so that the figures recorded on them reproduce; new reports use a fresh seed of
+``bench/bench_validation.py --seed S`` (:mod:`spicethermal.validation.draws`).
 
-The fixed set (:mod:`bench.bench_validation`) has three strengths per form. Here every case
-draws its strength log-uniformly from a range that runs from below the weak value to above the
-strong one, its device class and its bench variant at random, pairs of *any* two effects of
-different kinds (not only the six fixed pairs), and uncatalogued physics (ambient drift, heater
-sag, a remounted contact, convection switching) at random magnitudes. The same scoring as the
-fixed set: detectable single effects must be named first, pairs both, clean and uncatalogued
-bundles nothing. Undetectable cases (the exact truth not clearly better than the best linear
-ladder, :mod:`spicethermal.validation.detect`) are not counted.
+Every case draws its strength log-uniformly from a range that runs from below the fixed set's
+weak value to above its strong one, its device class and its bench variant at random, pairs of
+any two effects of different kinds, and uncatalogued physics (ambient drift, heater sag, a
+remounted contact, convection switching) at random magnitudes. Scored by
+``bench/bench_validation.py`` (its scorer, ``--set earlier``).
 
 Plain script (not a test)::
 
-    .venv/bin/python bench/bench_validation_random.py [N] [--seed S] [--workers 2] [--only KIND]
+    .venv/bin/python bench/bench_validation_random.py [N] [--seed S] [--only KIND] [...]
 
-``--only pair`` (or ``effect``, ``clean``, ``uncatalogued``) draws ``N`` cases of that kind.
+``--only pair`` (or ``effect``, ``clean``, ``uncatalogued``) draws ``N`` cases of that kind;
+other options are passed to ``bench/bench_validation.py``.
 """
 
 from __future__ import annotations
@@ -25,21 +24,21 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import math  # noqa: E402
-import multiprocessing as mp  # noqa: E402
 import random  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_validation import mark, run_diagnoses, scored_report  # noqa: E402
-
-from spicethermal.validation.cases import DEVICES, Case, _bench, _laws, _variant  # noqa: E402
+from spicethermal.validation.cases import DEVICES as ALL_DEVICES  # noqa: E402
+from spicethermal.validation.cases import Case  # noqa: E402
+from spicethermal.validation.cases import bench_for as _bench  # noqa: E402
+from spicethermal.validation.cases import bench_variant as _variant  # noqa: E402
+from spicethermal.validation.cases import laws_on as _laws  # noqa: E402
 from spicethermal.validation.measure import Transient  # noqa: E402
 from spicethermal.validation.network import LatentHeat, ResistanceLaw  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
+#: The device classes these draws knew (the later ones would change every draw).
+DEVICES = {name: ALL_DEVICES[name] for name in ("actuator", "mosfet", "diode")}
 
 
 def _log(rng: random.Random, lo: float, hi: float) -> float:
@@ -173,33 +172,15 @@ def draw(n: int, seed: int, only: str | None = None) -> list[Case]:
     return out
 
 
-def _generate(args: tuple[Case, str]) -> tuple[str, dict]:
-    case, out = args
-    folder = Path(out) / "bundles" / case.name.replace("/", "__").replace(" ", "_")
-    return case.name, {**mark(case, folder), "folder": str(folder)}
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("n", nargs="?", type=int, default=40, help="number of cases (default 40)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--timeout", type=float, default=60.0, metavar="S")
-    ap.add_argument("--only", choices=sorted(KINDS), help="draw only cases of this kind")
-    ap.add_argument("--out", default=str(ROOT / "out" / "validation-random"), metavar="DIR")
-    args = ap.parse_args(argv)
-    cases = draw(args.n, args.seed, args.only)
-    out = Path(args.out)
-    (out / "bundles").mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    with mp.get_context("fork").Pool(args.workers) as pool:
-        meta = dict(pool.map(_generate, [(c, str(out)) for c in cases], chunksize=1))
-    print(f"{len(cases)} random bundles (seed {args.seed}) ready in "
-          f"{time.perf_counter() - t0:.0f} s", flush=True)
-    results = run_diagnoses({c.name: Path(meta[c.name]["folder"]) for c in cases},
-                            args.workers, args.timeout)
-    scored_report({c.name: meta[c.name] for c in cases}, results, out)
-    return 0
+    args, rest = ap.parse_known_args(argv)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench_validation import main as scorer
+
+    return scorer(["--set", "earlier", "--seed", str(args.seed), "--n", str(args.n), *rest])
 
 
 if __name__ == "__main__":

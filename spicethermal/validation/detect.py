@@ -14,8 +14,9 @@ A case is **detectable** when some data set of at least :data:`MIN_POINTS` point
 ``gain ≥`` :data:`MIN_GAIN` (the truth is clearly better where it matters) and
 ``Δχ² ≥`` :data:`MIN_CHI2` overall (the gain is not luck).
 
->>> from spicethermal.validation.cases import case
->>> d = detectability(case("clean/mosfet-2").record())
+>>> from spicethermal.validation.cases import catalogue
+>>> clean = next(c for c in catalogue() if c.family == "clean")
+>>> d = detectability(clean.record())
 >>> d.detectable, round(d.max_gain, 1) < 1.2
 (False, True)
 """

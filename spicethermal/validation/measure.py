@@ -9,13 +9,18 @@ own:
 * **electrical transient** (:class:`Transient`): cooling readings off by ``A e^{−t/τ}``, with
   ``A`` fixed, proportional to the power at cut-off, or as a damped ringing
   ``A e^{−t/τ} cos(2π f t)``;
-* **TSP** (:class:`Tsp`): the diode voltage ``V = V25 + K (u + q u² + c u³)``, ``u = T − 25``;
-  the bench converts voltages through the least-squares line of its own (noisy) calibration
-  points, so a nonlinear TSP bends every reading; ``volts`` stores raw voltages instead;
+* **TSP** (:class:`Tsp`): the sensor voltage ``V = V25 + K (u + q u² + c u³)``, ``u = T − 25``
+  (``K`` < 0 for a diode, > 0 for a resistive sensor); the bench converts voltages through the
+  least-squares line of its own (noisy) calibration points, so a nonlinear TSP bends every
+  reading; ``volts`` stores raw voltages instead;
 * **noise**: white, ``noise_k`` on every reading (``noise_k·|K|`` in volts);
-* uncatalogued physics: the reference drifting during the cooling curves without a
-  ``tref_c`` column (``drift_k_per_s``), a contact resistance added to the last layer from the
-  second cooling curve on (``contact_k_per_w``: the device was remounted).
+* artefacts that are in no catalogue: the reference drifting during the cooling curves without
+  a ``tref_c`` column (``drift_k_per_s``), a contact resistance added to the last layer from
+  the second cooling curve on (``contact_k_per_w``: the device was remounted), a trigger delay
+  (``time_offset_s``: a cooling reading recorded at ``t`` was taken at ``t + time_offset_s``),
+  and an acquisition gain and offset error that the calibration, taken with another
+  instrument, does not share (``adc_gain``, ``adc_offset_v``: ``V' = V (1 + gain) + offset``
+  on every reading but the calibration's).
 
 :func:`measure` returns a :class:`Record`: the bundle (``spicethermal-bundle/1``, built with
 :class:`spicethermal.io.bundle.Bundle`) and the noise-free and measured readings in kelvin that
@@ -31,14 +36,12 @@ import numpy as np
 
 from ..io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
 from .network import Network
-from .periodic import pwm_reading
+from .periodic import pwm_reading, ripple_bound
 
 __all__ = ["Bench", "Record", "Transient", "Tsp", "measure"]
 
 FREQS_HZ = (500.0, 1e3, 3e3, 5e3, 10e3, 25e3)
 DUTIES = (0.2, 0.5, 0.8)
-SPARSE_FREQS_HZ = (1e3, 5e3, 25e3)
-SPARSE_DUTIES = (0.2, 0.8)
 
 
 @dataclass(frozen=True)
@@ -106,6 +109,11 @@ class Bench:
     drift_k_per_s: float = 0.0
     contact_k_per_w: float = 0.0
     cal_step_k: float = 5.0
+    freqs_hz: tuple[float, ...] = FREQS_HZ
+    duties: tuple[float, ...] = DUTIES
+    time_offset_s: float = 0.0
+    adc_gain: float = 0.0
+    adc_offset_v: float = 0.0
 
     def times(self) -> np.ndarray:
         """Cooling sample times: ``per_decade`` log-spaced samples per decade."""
@@ -114,9 +122,14 @@ class Bench:
         return np.logspace(lo, hi, n)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
-        """PWM (frequency, duty) points, duty-major as the paper's Table 2."""
-        freqs, duties = ((FREQS_HZ, DUTIES) if self.dense_pwm
-                         else (SPARSE_FREQS_HZ, SPARSE_DUTIES))
+        """PWM (frequency, duty) points, duty-major as the paper's Table 2; the sparse grid has
+        every other frequency (from the second) at the lowest and highest duty.
+
+        >>> [len(a) for a in Bench((1.0,), 1.0, dense_pwm=False).grid()]
+        [6, 6]
+        """
+        freqs, duties = ((self.freqs_hz, self.duties) if self.dense_pwm
+                         else (self.freqs_hz[1::2], (self.duties[0], self.duties[-1])))
         f = np.array([fi for _ in duties for fi in freqs])
         d = np.array([di for di in duties for _ in freqs])
         return f, d
@@ -175,16 +188,22 @@ def measure(net: Network, bench: Bench, seed: int, device: str = "validation dev
             r[-1] += bench.contact_k_per_w
             nk = net.with_(r_k_per_w=tuple(r))
         start = nk.steady(p, tref)
-        if nk.is_linear and not bench.drift_k_per_s:
-            r_f, tau = nk.foster()
-            tj = tref + p * (r_f[None, :] * np.exp(-t[:, None] / tau[None, :])).sum(axis=1)
+        cool = nk.cooling_branch(start)
+        taken = t + bench.time_offset_s
+        if cool.is_linear and not bench.drift_k_per_s:
+            r_f, tau = cool.foster()
+            tj = tref + p * (r_f[None, :] * np.exp(-taken[:, None] / tau[None, :])).sum(axis=1)
         else:
-            _, path = nk.integrate(start, float(t[-1]), 0.0, tref, t_eval=t,
-                                   tref_rate_k_per_s=bench.drift_k_per_s)
+            _, path = cool.integrate(start, float(taken[-1]), 0.0, tref, t_eval=taken,
+                                     tref_rate_k_per_s=bench.drift_k_per_s)
             tj = path[:, 0]
         curves.append(tj)
         steadies.append(float(start[0]))
     f, d = bench.grid()
+    if any(ripple_bound(net, bench.pwm_power_w, f, d, h.node) > h.gap_k
+           for h in net.hysteretic):
+        raise ValueError("a band with hysteresis whose gap the PWM ripple exceeds: its "
+                         "periodic state would exchange latent heat (not simulated)")
     pwm = np.array([pwm_reading(net, bench.pwm_power_w, fi, di, tref, bench.window_s,
                                 bench.window_mode) for fi, di in zip(f, d, strict=True)])
 
@@ -198,6 +217,7 @@ def measure(net: Network, bench: Bench, seed: int, device: str = "validation dev
     def read_k(true_c: np.ndarray, offset_k: np.ndarray | float = 0.0) -> tuple:
         """(noise-free, noisy) readings in K through the bench's line, and noisy volts."""
         v_true = tsp.volts(true_c) + tsp.k_v_per_k * np.asarray(offset_k)
+        v_true = v_true * (1.0 + bench.adc_gain) + bench.adc_offset_v
         v_meas = v_true + rng.normal(0.0, bench.noise_k * kv, np.shape(true_c))
         return (v_true - a) / b, (v_meas - a) / b, v_meas
 

@@ -7,12 +7,14 @@ ground. In absolute temperatures (°C), with heat flows ``q_i = (T_i − T_{i+1}
 
     C_i(T_i) dT_i/dt = P(T_0)·[i = 0] + q_{i−1} − q_i
 
-* ``R_i`` follows a :class:`ResistanceLaw` of a *control* temperature: the layer's own mean
-  temperature ``(T_i + T_{i+1})/2`` (``control="local"``) or the junction's (``"junction"``);
-  linear ``R0 (1 + α (T − T0))`` (clipped at 5 % of R0) or a power law in kelvin
-  ``R0 ((T + 273.15)/(T0 + 273.15))^n`` (conductivity ``k ∝ T^−n``);
-* ``C_i(T) = C0_i (1 + β_i (T − T0))`` plus the latent heat of any :class:`LatentHeat` at node
-  ``i`` spread over a band (gaussian, logistic or plateau);
+* ``R_i`` follows a :class:`~.laws.ResistanceLaw` of a *control* temperature: the layer's own
+  mean temperature ``(T_i + T_{i+1})/2`` (``control="local"``) or the junction's
+  (``"junction"``); linear ``R0 (1 + α (T − T0))`` (clipped at 5 % of R0), a power law in
+  kelvin ``R0 ((T + 273.15)/(T0 + 273.15))^n`` (conductivity ``k ∝ T^−n``), or one of the
+  forms that are in no catalogue (:mod:`.laws`);
+* ``C_i(T) = C0_i (1 + β_i (T − T0))`` plus the latent heat of any :class:`~.laws.LatentHeat`
+  at node ``i`` spread over a band (gaussian, logistic, plateau or skewed), with or without
+  hysteresis (a cooling integrates the band's cooling branch, :meth:`Network.cooling_branch`);
 * the heater may sag with temperature, ``P(T_0) = P (1 − γ (T_0 − T0))`` (an effect that is in
   no catalogue).
 
@@ -29,7 +31,6 @@ absolute temperature. The linear network also has an exact Foster form (:meth:`N
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -37,107 +38,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
+from .laws import KELVIN, LatentHeat, ResistanceLaw
+
 __all__ = ["KELVIN", "LatentHeat", "Network", "ResistanceLaw"]
-
-KELVIN = 273.15
-SHAPES = ("gaussian", "logistic", "plateau")
-
-
-@dataclass(frozen=True)
-class ResistanceLaw:
-    """How a layer's resistance follows temperature: ``kind`` ``"linear"`` (``alpha_per_k``),
-    ``"power"`` (``exponent``, T in kelvin), both referred to ``t0_c``, or ``"switch"``: a
-    smooth step down by the fraction ``drop`` around ``t0_c`` over ``width_k`` (convection
-    changing regime).
-
-    >>> ResistanceLaw("power", exponent=1.0).factor(25.0 + 298.15)
-    2.0
-    """
-
-    kind: str = "linear"
-    alpha_per_k: float = 0.0
-    exponent: float = 0.0
-    t0_c: float = 25.0
-    drop: float = 0.0
-    width_k: float = 1.0
-
-    def factor(self, t_c: float) -> float:
-        """``R(T)/R0``."""
-        if self.kind == "switch":
-            return 1.0 - self.drop * _sigmoid((t_c - self.t0_c) / self.width_k)
-        if self.kind == "power":
-            return ((t_c + KELVIN) / (self.t0_c + KELVIN)) ** self.exponent
-        return max(0.05, 1.0 + self.alpha_per_k * (t_c - self.t0_c))
-
-    def slope(self, t_c: float) -> float:
-        """``d(R/R0)/dT`` (1/K)."""
-        if self.kind == "switch":
-            sig = _sigmoid((t_c - self.t0_c) / self.width_k)
-            return -self.drop * sig * (1.0 - sig) / self.width_k
-        if self.kind == "power":
-            x = (t_c + KELVIN) / (self.t0_c + KELVIN)
-            return self.exponent * x ** (self.exponent - 1.0) / (self.t0_c + KELVIN)
-        return self.alpha_per_k if 1.0 + self.alpha_per_k * (t_c - self.t0_c) > 0.05 else 0.0
-
-
-@dataclass(frozen=True)
-class LatentHeat:
-    """Latent heat ``latent_j`` absorbed at ``node`` over a band centred at ``t_c``.
-
-    ``width_k`` is the standard deviation for ``"gaussian"`` and ``"logistic"`` bands and the
-    full width for a ``"plateau"`` (flat top, logistic edges of ``width_k/10``).
-
-    >>> from scipy.integrate import quad
-    >>> h = LatentHeat(0, 0.5, 60.0, 2.0, "plateau")
-    >>> round(quad(h.capacity, 40, 80, points=[59, 61])[0], 6)
-    0.5
-    """
-
-    node: int
-    latent_j: float
-    t_c: float
-    width_k: float
-    shape: str = "gaussian"
-
-    def __post_init__(self) -> None:
-        if self.shape not in SHAPES:
-            raise ValueError(f"latent heat shape {self.shape!r}: expected one of {SHAPES}")
-
-    def _edges(self) -> list[tuple[float, float, float]]:
-        """(sign, centre, logistic scale) of the logistic edges of a plateau band."""
-        e = self.width_k / 10.0
-        return [(1.0, self.t_c - self.width_k / 2, e), (-1.0, self.t_c + self.width_k / 2, e)]
-
-    def capacity(self, t_c: float) -> float:
-        """Extra heat capacity (J/K) at temperature ``t_c``."""
-        if self.shape == "gaussian":
-            z = (t_c - self.t_c) / self.width_k
-            return self.latent_j * math.exp(-0.5 * z * z) / (self.width_k * math.sqrt(2 * math.pi))
-        if self.shape == "logistic":
-            s = self.width_k * math.sqrt(3.0) / math.pi
-            sig = _sigmoid((t_c - self.t_c) / s)
-            return self.latent_j * sig * (1.0 - sig) / s
-        return self.latent_j / self.width_k * sum(
-            sign * _sigmoid((t_c - c) / e) for sign, c, e in self._edges())
-
-    def capacity_slope(self, t_c: float) -> float:
-        """``d capacity / dT`` (J/K²)."""
-        if self.shape == "gaussian":
-            return -self.capacity(t_c) * (t_c - self.t_c) / self.width_k ** 2
-        if self.shape == "logistic":
-            s = self.width_k * math.sqrt(3.0) / math.pi
-            sig = _sigmoid((t_c - self.t_c) / s)
-            return self.latent_j * sig * (1.0 - sig) * (1.0 - 2.0 * sig) / s ** 2
-        total = 0.0
-        for sign, c, e in self._edges():
-            sig = _sigmoid((t_c - c) / e)
-            total += sign * sig * (1.0 - sig) / e
-        return self.latent_j / self.width_k * total
-
-
-def _sigmoid(z: float) -> float:
-    return 0.5 * (1.0 + math.tanh(0.5 * z))
-
 
 @dataclass(frozen=True)
 class Network:
@@ -196,6 +99,29 @@ class Network:
 
     def with_(self, **changes) -> Network:
         return replace(self, **changes)
+
+    @property
+    def hysteretic(self) -> tuple[LatentHeat, ...]:
+        """The latent heats that melt and solidify at different temperatures."""
+        return tuple(h for h in self.latent if h.gap_k > 0)
+
+    def cooling_branch(self, start: np.ndarray) -> Network:
+        """The network as it cools from ``start`` (a state reached by heating): every band with
+        hysteresis replaced by its cooling branch (:meth:`~.laws.LatentHeat.cooling_branch`)."""
+        if not self.hysteretic:
+            return self
+        return self.with_(latent=tuple(h.cooling_branch(float(start[h.node]))
+                                       for h in self.latent))
+
+    def pwm_network(self) -> Network:
+        """The network in a PWM periodic state: a band with hysteresis exchanges no heat there
+        as long as the ripple at its node stays within its gap (the melt fraction reached
+        on the way up can then only grow on heating and only shrink on cooling, and neither
+        branch is reached again), so it is left out (:func:`~.periodic.ripple_bound` checks
+        the ripple)."""
+        if not self.hysteretic:
+            return self
+        return self.with_(latent=tuple(h for h in self.latent if h.gap_k <= 0))
 
     # -- the right-hand side and its Jacobian ---------------------------------------------
     def _nodes(self, t: np.ndarray, tref: float) -> np.ndarray:
@@ -324,7 +250,7 @@ class Network:
 
     def foster(self) -> tuple[np.ndarray, np.ndarray]:
         """Exact Foster form of the junction's response of the linear network (``R0``,
-        ``C0``): ``Zth(t) = Σ r_k (1 − e^{−t/τ_k})``, ``τ`` ascending.
+        ``C0``): ``Zth(t) = Σ r_k (1 − e^{−t/τ_k})``, ``τ`` descending.
 
         With ``C^{−1/2} G C^{−1/2} = V Λ Vᵀ`` (symmetric), ``τ_k = 1/λ_k`` and
         ``r_k = (V_{0k})² / (C_0 λ_k)``.
