@@ -154,9 +154,11 @@ def _python_child(entry: str, folder: str, conn) -> None:
         t0, c0 = time.perf_counter(), time.process_time()
         result = diagnose(bundle)
         cpu, wall = time.process_time() - c0, time.perf_counter() - t0
-        doc = result.to_json()
-        if not isinstance(doc, dict):  # a JsonDocument
-            doc = json.loads(doc.dumps()) if hasattr(doc, "dumps") else dict(doc)
+        # a JsonDocument (to_dict(); to_json() is its text), or an older result whose
+        # to_json() is the document itself
+        doc = result.to_dict() if hasattr(result, "to_dict") else result.to_json()
+        if isinstance(doc, str):
+            doc = json.loads(doc)
         conn.send({"doc": _kept(doc), "cpu_s": cpu, "elapsed_s": wall})
     except BaseException as exc:  # a crash is a result here
         conn.send({"crash": f"{type(exc).__name__}: {exc}"[:300],

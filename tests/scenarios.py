@@ -60,10 +60,12 @@ def actuator() -> Foster:
     return Foster.from_tau(ACTUATOR_R, ACTUATOR_TAU)
 
 
-def scenario_bundle(name: str, seed: int = 0, noise_k: float = 0.02) -> Bundle:
+def scenario_bundle(name: str, seed: int = 0, noise_k: float = 0.02,
+                    effect: Effect | None = None) -> Bundle:
     """The bundle of scenario ``name`` with seeded white noise ``noise_k`` (K) on every reading
-    (the calibration voltages get the same in volts)."""
-    effect = hidden()[name]
+    (the calibration voltages get the same in volts); ``effect`` replaces the scenario's
+    hidden effect."""
+    effect = effect or hidden()[name]
     rng = np.random.default_rng(seed)
     f, d = (np.array(x) for x in zip(*[(f, d) for d in DUTIES for f in FREQS_HZ], strict=True))
     declared = 0.0 if effect is not None and effect.plugin.traits.shown_by == {"pwm"} \

@@ -40,7 +40,7 @@ from ..effects.registry import CATALOGUE, plugin
 from ..engines.network import as_cauer
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData
-from ..fit.search import fit_effect, without
+from ..fit.search import fit_effect, refit, without
 from ..model import ThermalModel
 from .compare import Comparison, ComparisonPoint
 from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, Candidate, Diagnosis, Step, Verdict
@@ -217,7 +217,10 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         tied = tuple(c for c in cands[1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained))
         status = _status(chosen, tied, data)
-        current = chosen.fit
+        # the model the next step starts from is converged: what a further refit would still
+        # gain is then no candidate's
+        current = refit(data, noise, chosen.fit, REFINE_ROUNDS)
+        work += current.work if current is not chosen.fit else 0
         dropped = []
         for e in [e for e in current.effects if e.name != chosen.name]:
             try:
