@@ -16,8 +16,9 @@ import sys
 import time
 from pathlib import Path
 
-from spicethermal.analysis.diagnose import diagnose, diagnose_table
 from spicethermal.analysis.scenarios import SCENARIOS, expected_effect, scenario_bundle
+
+from spicethermal.analysis.diagnose import diagnose, diagnose_table
 
 ROOT = Path(__file__).resolve().parent.parent
 TABLE2 = ROOT / "spicethermal" / "data" / "actuator_table2.csv"

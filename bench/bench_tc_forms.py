@@ -14,10 +14,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from spicethermal.fit.tcforward import local_cooling_rise
 
 from spicethermal.core.ladder import Cauer
 from spicethermal.effects import Effect
-from spicethermal.fit.tcforward import local_cooling_rise
 from spicethermal.validation.cases import DEVICES
 from spicethermal.validation.network import ResistanceLaw
 

@@ -90,8 +90,7 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
     fit = None
     for _ in range(3):
         if model is None:
-            fit = fit_baseline(data, noise,
-                               lambda m: not any(_beyond(data, _rechi(data, m, noise)).values()))
+            fit = fit_baseline(data, noise, lambda m: not any(_beyond(data, m).values()))
         else:
             slots = tuple((e.plugin, e.form) for e in model.effects)
             ladder = as_cauer(model.ladder)
