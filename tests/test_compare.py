@@ -323,17 +323,19 @@ def test_compare_on_the_record_a_model_was_fitted_to_leaves_out_what_fit_masked(
     assert re.search(r"^cooling_1\s+1\s+242\s+88 before 96 µs", text, re.M), text
 
 
-def test_a_model_with_the_electrical_transient_is_compared_on_every_sample(tmp_path, model,
-                                                                            capsys):
-    """That effect describes the early samples: nothing is left out."""
+def test_a_model_fitted_to_every_reading_is_compared_on_every_sample(tmp_path, model, capsys):
+    """A ladder fitted to a Zth (its provenance records the early-time treatment) is judged
+    without the samples fit masked; a model fitted to every reading (fit --effect, diagnose:
+    here with the transient it found) on every sample."""
     t = np.geomspace(1e-6, 10.0, 200)
     rise = POWER_W * model.ladder.cooling(t) - 2.0 * np.exp(-t / 2e-5)  # a 2 K transient
     b = Bundle(ambient_c=25.0, cooling=(CoolingTable(t, POWER_W, tj_c=25.0 + rise,
                                                      tref_steady_c=25.0),))
     path = b.write(tmp_path / "b")
+    zth_fit = ThermalModel(model.ladder, provenance={"early_time": {"masked_s": 1e-4}})
     with_effect = ThermalModel(model.ladder, (Effect.create(
         "electrical-transient", amplitude_k=2.0, masked_s=1e-4),))
-    for m, masked in ((model, True), (with_effect, False)):
+    for m, masked in ((zth_fit, True), (with_effect, False)):
         m.save(tmp_path / "m.json")
         assert main(["compare", str(tmp_path / "m.json"), str(path), "--json"]) == 0
         doc = json.loads(capsys.readouterr().out)

@@ -436,30 +436,3 @@ def test_a_short_settle_does_not_freeze_the_bench(tmp_path: Path, settle_s: floa
     out = run_bench("sim://actuator?seed=1", tmp_path / "b", actions=("rth",),
                     settle_s=settle_s)
     assert Bundle.read(out).extra["rth"]["readings"] == 16
-
-
-def test_a_budget_counts_the_calling_threads_cpu_only():
-    """Another thread's work (a BLAS pool, a batch's other fits) does not eat a fit's budget:
-    neither its work nor, for the budget's CPU backstop, its CPU time."""
-    import threading
-    import time
-
-    from spicethermal.fit.budget import check_time, time_limit
-
-    stop = threading.Event()
-
-    def spin():
-        while not stop.is_set():
-            pass
-
-    other = threading.Thread(target=spin)
-    other.start()
-    try:
-        with time_limit(0.05):
-            t0 = time.perf_counter()
-            while time.perf_counter() - t0 < 0.3:  # the other thread burns CPU meanwhile
-                time.sleep(0.01)
-                check_time()
-    finally:
-        stop.set()
-        other.join()

@@ -40,8 +40,9 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts",
            "reference_order", "start_ladders", "tau_range"]
 
-#: The baseline's order is searched up to this many stages ...
-MAX_ORDER = 8
+#: The baseline's order is searched up to this many stages (a distributed line or a continuous
+#: spectrum, read quietly, needs ten or more) ...
+MAX_ORDER = 12
 #: ... and stops after this many orders in a row that do not lower the criterion.
 ORDER_PATIENCE = 2
 #: Bounds of a ladder's ``log R`` and ``log τ`` in a fit.
@@ -331,6 +332,20 @@ def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
         return None
 
 
+def _one_stage_more(ladder: Cauer) -> Cauer:
+    """``ladder`` with a stage more that changes nothing yet: a Foster stage of a millionth
+    of its resistance, its time constant in the widest gap between the others."""
+    r, tau = NetworkBatch(np.array([ladder.r]), np.array([ladder.c])).foster()
+    r, tau = r[0], tau[0]
+    logs = np.sort(np.log(tau))
+    gaps = np.diff(np.concatenate([[logs[0] - 2.0], logs, [logs[-1] + 2.0]]))
+    k = int(np.argmax(gaps))
+    edges = np.concatenate([[logs[0] - 2.0], logs, [logs[-1] + 2.0]])
+    new_tau = math.exp(0.5 * (edges[k] + edges[k + 1]))
+    foster = Foster.from_tau(np.append(r, 1e-6 * r.sum()), np.append(tau, new_tau))
+    return as_cauer(foster)
+
+
 def fit_baseline(data: BundleData, noise: Mapping[str, float],
                  adequate: Callable[[ModelFit], bool] | None = None,
                  max_order: int = MAX_ORDER) -> ModelFit:
@@ -358,12 +373,19 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
         raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
     fits: list[ModelFit] = []
     best: ModelFit | None = None
+    previous: ModelFit | None = None
     worse = 0
-    for _, ladder in sorted(starts.items()):
-        fit = fit_starts(data, noise, Layout((), ladder.order), [Start(ladder)])[0]
-        if fit is None:
+    for m in range(1, max_order + 1):
+        # from the least heated curve's ladder of this order, and from the previous order's
+        # fit with one stage more (so that a stage more never fits worse)
+        tries = ([Start(starts[m])] if m in starts else []) + (
+            [Start(_one_stage_more(previous.ladder))] if previous is not None else [])
+        got = [f for f in fit_starts(data, noise, Layout((), m), tries) if f is not None]
+        if not got:
             continue
+        fit = min(got, key=lambda f: f.chi2_total)
         fits.append(fit)
+        previous = fit
         if best is None or bic(fit, n_points) < bic(best, n_points):
             best, worse = fit, 0
         else:
