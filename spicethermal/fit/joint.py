@@ -336,7 +336,7 @@ def _one_stage_more(ladder: Cauer) -> Cauer:
     """``ladder`` with a stage more that changes nothing yet: a Foster stage of a millionth
     of its resistance, its time constant in the widest gap between the others."""
     r, tau = NetworkBatch(np.array([ladder.r]), np.array([ladder.c])).foster()
-    r, tau = r[0], tau[0]
+    r, tau = np.maximum(r[0], 1e-9 * np.sum(r[0])), tau[0]
     logs = np.sort(np.log(tau))
     gaps = np.diff(np.concatenate([[logs[0] - 2.0], logs, [logs[-1] + 2.0]]))
     k = int(np.argmax(gaps))
@@ -380,6 +380,7 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
         # fit with one stage more (so that a stage more never fits worse)
         tries = ([Start(starts[m])] if m in starts else []) + (
             [Start(_one_stage_more(previous.ladder))] if previous is not None else [])
+        tries = [t for t in tries if t.ladder.order == m]
         got = [f for f in fit_starts(data, noise, Layout((), m), tries) if f is not None]
         if not got:
             continue

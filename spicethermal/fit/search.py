@@ -210,10 +210,21 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         assert best is not None
         work = sum(m.work for m in got if m is not None)
         # a form is refitted jointly when, on the best ladder so far, it already fits better
-        # than the best joint refit (the first form always)
-        if lead is None or bic(best, n_points) < bic(lead, n_points):
+        # than the best joint refit; the first form always, from its best screened point in
+        # each of its best variants (a screen holds the ladder, which favours a variant that
+        # needs no ladder to move)
+        if lead is None:
+            firsts = list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}
+                          .values())
+            heads = sorted(firsts, key=lambda i: got[i].chi2_total)[:VARIANTS_KEPT]
+            fits = [_refine(data, noise, got[i], refine_rounds, 0) for i in heads]
+            fit = min(fits, key=lambda m: bic(m, n_points))
+            fit = ModelFit(fit.ladder, fit.effects, fit.predictions, fit.chi2, fit.n_params,
+                           work + sum(m.work for m in fits), fit.converged)
+            lead = fit
+        elif bic(best, n_points) < bic(lead, n_points):
             fit = _refine(data, noise, best, refine_rounds, work)
-            if lead is None or bic(fit, n_points) < bic(lead, n_points):
+            if bic(fit, n_points) < bic(lead, n_points):
                 lead = fit
         else:
             fit = ModelFit(best.ladder, best.effects, best.predictions, best.chi2,

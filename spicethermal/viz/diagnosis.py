@@ -65,6 +65,8 @@ def _residual_axes_style(ax: Axes, dataset: str) -> None:
         ax.set_xlabel("PWM frequency (Hz)")
     elif dataset == "calibration":
         ax.set_xlabel("calibration temperature (°C)")
+    elif dataset == "steady":
+        ax.set_xlabel("power before the cut (W)")
     else:
         ax.set_xscale("log")
         ax.set_xlabel("time after the cut (s)")
@@ -97,6 +99,8 @@ def plot_dataset_residuals(comparison: Comparison, dataset: str, ax: Axes | None
             ax.legend(fontsize=7)
     elif dataset == "calibration":
         ax.plot([p.at["temp_c"] for p in sub.points], r, "o-", color=color or "C3", ms=4)
+    elif dataset == "steady":
+        ax.plot([p.at["power_w"] for p in sub.points], r, "s", color=color or "C4", ms=5)
     else:
         ax.plot([p.at["t_s"] for p in sub.points], r, "o-", color=color or "C0", ms=3, lw=0.8)
     _residual_axes_style(ax, dataset)
