@@ -11,12 +11,14 @@ the checkout.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from spicethermal.spice.lib import NgspiceBatch
@@ -121,3 +123,38 @@ def test_every_command_in_the_docs_runs(doc, tmp_path):
         assert proc.returncode == 0, (
             f"{where}: a command failed (exit {proc.returncode})\n{body}\n"
             f"--- stdout (tail)\n{proc.stdout[-2000:]}\n--- stderr (tail)\n{proc.stderr[-2000:]}")
+
+
+@pytest.mark.slow
+def test_the_readmes_diagnosis_of_the_sample_bundle_is_what_the_commands_print(tmp_path):
+    """The staircase, the verdict and the error falling, as the README's step 5 states them."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    quoted = re.search(r"```text\n(RMS staircase: .*?)\n(verdict: .*?)\n```", readme)
+    assert quoted, "the README quotes no staircase"
+    sample = ROOT / "spicethermal" / "data" / "sample_bundle"
+    cli = [sys.executable, "-m", "spicethermal.cli.main"]
+
+    def run(*args: str) -> str:
+        proc = subprocess.run([*cli, *args], cwd=tmp_path, capture_output=True, text=True,
+                              timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout
+
+    out = run("diagnose", str(sample))
+    assert quoted[1] in out.splitlines()
+    assert any(line.startswith(quoted[2]) for line in out.splitlines())
+    run("fit", str(sample), "-o", "model.json", "-q")
+    run("fit", str(sample), "--effect", "tsp-nonlinearity", "-o", "model2.json")
+    before = json.loads(run("compare", "model.json", str(sample), "--json"))
+    after = json.loads(run("compare", "model2.json", str(sample), "--json"))
+    falls = re.search(r"falls from ([0-9.]+) K .*? to ([0-9.]+) K over every data set, the "
+                      r"calibration's points from ([0-9.]+) K to\s+([0-9.]+) K", readme, re.S)
+    assert falls, "the README states no fall of the error"
+    assert f"{before['rms_k']:.3f}".rstrip("0") == falls[1].rstrip("0")
+    assert f"{after['rms_k']:.3f}".rstrip("0") == falls[2].rstrip("0")
+
+    def cal(doc: dict) -> float:
+        r = [p["residual_k"] for p in doc["points"] if p["dataset"] == "calibration"]
+        return float(np.sqrt(np.mean(np.square(r))))
+
+    assert f"{cal(before):.2g}" == falls[3] and f"{cal(after):.2g}" == falls[4]

@@ -158,7 +158,8 @@ class Comparison:
 
     def table(self) -> str:
         """Text, one table per kind of data set: PWM as the paper's Table 2 (the power in a
-        column when it varies), the cooling curves one row each, then all points.
+        column when it varies), the cooling curves one row each, the steady readings and the
+        calibration one row each, then all points.
 
         >>> pts = [ComparisonPoint("pwm", {"freq_hz": f, "duty": d}, 30.0, 29.5,
         ...                        {"power_w": 0.094 + f * 1e-9, "window_s": 1e-4})
@@ -174,9 +175,15 @@ class Comparison:
         if pwm.points:
             lines += _pwm_table(pwm.points, self.engine)
             lines += [_summary("pwm", pwm), ""]
-        cooling = [c for name, c in self.by_dataset().items() if name != "pwm"]
+        sets = self.by_dataset()
+        cooling = [c for name, c in sets.items() if name.startswith("cooling")]
         if cooling:
             lines += _cooling_table(cooling, self.left_out) + [""]
+        for name, what in (("steady", "steady readings just before each cut"),
+                           ("calibration", "the linear calibration's reading at each "
+                                           "calibration point")):
+            if name in sets:
+                lines += [f"{what.capitalize()}:", _summary(name, sets[name]), ""]
         lines.append(_summary("all data sets", self))
         return "\n".join(lines)
 
