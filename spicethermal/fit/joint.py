@@ -378,8 +378,12 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
     for m in range(1, max_order + 1):
         # from the least heated curve's ladder of this order, and from the previous order's
         # fit with one stage more (so that a stage more never fits worse)
-        tries = ([Start(starts[m])] if m in starts else []) + (
-            [Start(_one_stage_more(previous.ladder))] if previous is not None else [])
+        tries = [Start(starts[m])] if m in starts else []
+        if previous is not None:
+            try:
+                tries.append(Start(_one_stage_more(previous.ladder)))
+            except (DataFormatError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+                pass
         tries = [t for t in tries if t.ladder.order == m]
         got = [f for f in fit_starts(data, noise, Layout((), m), tries) if f is not None]
         if not got:

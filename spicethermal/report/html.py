@@ -179,7 +179,7 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
              for w in doc["baseline"]["worst"]],
             f"Worst misfits of the baseline, the linear {doc['baseline']['order']}-stage ladder "
             f"fitted to every data set (RMS {doc['baseline']['rms_k']:.3g} K)")
-    s.table(["candidate effect", "form", "fitted parameters", "ΔBIC", "RMS (K)",
+    s.table(["candidate effect", "form", "fitted parameters", "ΔBIC (1)", "RMS (K)",
              "improvement", "evidence"],
             [[c["effect"] + ("" if c["catalogued"] else " (not in the catalogue)"), c["form"],
               ", ".join(f"{k} = {_g(v, 3)}" for k, v in c["params"].items()),
@@ -189,7 +189,7 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
     if better is not None:
         s.paragraphs.append(
             f"With {', '.join(diagnosis.effects)} added (fitted parameters in the candidates "
-            f"table above), the RMS "
+            f"table below), the RMS "
             f"error over every data set falls from {before.rms_k:.3g} K to {after.rms_k:.3g} K "
             f"({before.rms_k / max(after.rms_k, 1e-12):.3g}× lower; RMS staircase: "
             f"{diagnosis.staircase()}); worst from {before.max_abs_k:.3g} K to "
@@ -242,7 +242,8 @@ DIAGNOSIS_CAPTIONS = {
     "diagnosis_before_after": "Residuals, measured − model in K, of every data set the effects "
                               "change: the linear ladder (left), the model with the effects "
                               "found (right)",
-    "diagnosis_step": "Residuals, measured − model in K, before and after diagnosis step {k}",
+    "diagnosis_step": "Residuals, measured − model in K, before and after the effect the "
+                      "diagnosis added in its step {k}",
     "diagnosis_candidates": "RMS error (K) of the linear ladder and of each candidate effect "
                             "fitted to the bundle, the verdict highlighted",
     "diagnosis_table2": "Table 2 residuals Δ(f, D) in K with the explanations the diagnosis "
@@ -266,7 +267,7 @@ def diagnosis_caption(path: str | os.PathLike) -> str:
     Examples
     --------
     >>> diagnosis_caption("figures/diagnosis_step_2.png")
-    'Residuals, measured − model in K, before and after diagnosis step 2'
+    'Residuals, measured − model in K, before and after the effect the diagnosis added in its step 2'
     """
     stem = Path(path).stem
     head, _, k = stem.rpartition("_")

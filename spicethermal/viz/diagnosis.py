@@ -119,21 +119,45 @@ def fig_before_after(before: Comparison, after: Comparison, path: str | os.PathL
     >>> fig_before_after(b, a, pathlib.Path(tempfile.mkdtemp()) / "ba.png").exists()
     True
     """
-    names = list(dict.fromkeys([*before.datasets, *after.datasets]))
-    names = [n for n in names if before.dataset(n) != after.dataset(n)] or names  # no twins
-    fig = new_figure(9.0, 2.3 * max(len(names), 1) + 0.4)
-    axes = fig.subplots(max(len(names), 1), 2, squeeze=False)
+    return fig_stages((before, after), path, titles)
+
+
+def fig_stages(stages: Sequence[Comparison], path: str | os.PathLike,
+               titles: Sequence[str]) -> Path:
+    """Residuals of every data set at each stage of a diagnosis (the baseline, then after each
+    effect added), one column per stage and one row per data set with a shared vertical
+    scale; a data set a stage leaves unchanged is not drawn again.
+
+    >>> import tempfile, pathlib
+    >>> from spicethermal.analysis.compare import Comparison, ComparisonPoint
+    >>> c = [Comparison((ComparisonPoint("pwm", {"freq_hz": 1e3, "duty": 0.5}, 30.0, m),))
+    ...      for m in (31.0, 30.5, 30.1)]
+    >>> fig_stages(c, pathlib.Path(tempfile.mkdtemp()) / "s.png", "abc").exists()
+    True
+    """
+    names = list(dict.fromkeys(n for cmp in stages for n in cmp.datasets))
+    changed = [n for n in names if any(a.dataset(n) != b.dataset(n)
+                                       for a, b in zip(stages, stages[1:], strict=False))]
+    names = changed or names  # no row whose every stage is the same
+    cols = len(stages)
+    fig = new_figure(4.5 * cols, 2.3 * max(len(names), 1) + 0.4)
+    axes = fig.subplots(max(len(names), 1), cols, squeeze=False)
     for row, name in enumerate(names):
         lim = 0.0
-        for col, (cmp, title) in enumerate(zip((before, after), titles, strict=True)):
+        for col, (cmp, title) in enumerate(zip(stages, titles, strict=True)):
             ax = axes[row][col]
-            plot_dataset_residuals(cmp, name, ax)
             sub = cmp.dataset(name)
+            if col and sub == stages[col - 1].dataset(name):
+                ax.axis("off")
+                ax.text(0.5, 0.5, f"{name}: unchanged", ha="center", va="center",
+                        transform=ax.transAxes, fontsize=9, color="0.4")
+                continue
+            plot_dataset_residuals(cmp, name, ax)
             if sub.points:
                 lim = max(lim, sub.max_abs_k)
                 ax.set_title(f"{title}: {name}, RMS {sub.rms_k:.3g} K", fontsize=9, loc="left")
-        for col in (0, 1):
-            if lim > 0:
+        for col in range(cols):
+            if lim > 0 and axes[row][col].axison:
                 axes[row][col].set_ylim(-1.1 * lim, 1.1 * lim)
     return save_figure(fig, path)
 
@@ -201,28 +225,21 @@ def fig_staircase(result: Diagnosis, path: str | os.PathLike) -> Path:
 
 def diagnosis_figures(result: Diagnosis, out_dir: str | os.PathLike) -> list[Path]:
     """The diagnosis figures, written into ``out_dir``: the RMS staircase of the steps
-    (``diagnosis_steps.png``), the residuals before and after the effects found
-    (``diagnosis_before_after.png``; after = the best candidate when no effect was found),
-    before and after each step when there are several (``diagnosis_step_K.png``) and the
+    (``diagnosis_steps.png``), the residuals at the baseline and after each effect found
+    (``diagnosis_before_after.png``; with the best candidate when none was found) and the
     candidates (``diagnosis_candidates.png``).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [fig_staircase(result, out / "diagnosis_steps.png")]
-    best = result.best or (result.candidates[0] if result.candidates else None)
-    after = result.final if result.steps else (best.comparison if best is not None
-                                                 else result.baseline)
-    label = ("with " + ", ".join(result.effects) if result.steps else
-             f"with {best.effect.name}" if best is not None else "(no candidate)")
-    paths.append(fig_before_after(result.baseline, after, out / "diagnosis_before_after.png",
-                                  ("baseline", label)))
-    if len(result.steps) > 1:
-        prev, prev_label = result.baseline, "baseline"
-        for k, s in enumerate(result.steps, 1):
-            name = f"+ {s.chosen.effect.name}"
-            paths.append(fig_before_after(prev, s.comparison,
-                                          out / f"diagnosis_step_{k}.png", (prev_label, name)))
-            prev, prev_label = s.comparison, name
+    if result.steps:
+        stages = [result.baseline, *(s.comparison for s in result.steps)]
+        titles = ["baseline", *(f"+ {s.chosen.effect.name}" for s in result.steps)]
+    else:
+        best = result.candidates[0] if result.candidates else None
+        stages = [result.baseline] + ([best.comparison] if best is not None else [])
+        titles = ["baseline"] + ([f"with {best.effect.name}"] if best is not None else [])
+    paths.append(fig_stages(stages, out / "diagnosis_before_after.png", titles))
     if result.candidates:
         paths.append(fig_candidates(result, out / "diagnosis_candidates.png"))
     return paths

@@ -36,6 +36,7 @@ from .diagnosis import (
     diagnosis_figures,
     fig_before_after,
     fig_candidates,
+    fig_stages,
     fig_staircase,
     fig_table2_diagnosis,
     plot_candidates,
@@ -72,7 +73,7 @@ from .pwm import (
 )
 
 __all__ = ["FIG8_DUTIES", "axes", "diagnosis_figures", "eng", "fig7", "fig8",
-           "fig_before_after", "fig_calibration", "fig_candidates", "fig_drive",
+           "fig_before_after", "fig_calibration", "fig_stages", "fig_candidates", "fig_drive",
            "fig_spectrum", "fig_staircase", "fig_structure", "fig_table1", "fig_table2",
            "fig_table2_diagnosis", "new_figure", "plot_calibration", "plot_candidates",
            "plot_cumulative_structure", "plot_dataset_residuals",
