@@ -242,8 +242,8 @@ DIAGNOSIS_CAPTIONS = {
     "diagnosis_before_after": "Residuals, measured − model in K, of every data set the effects "
                               "change: the linear ladder (left), the model with the effects "
                               "found (right)",
-    "diagnosis_step": "Residuals, measured − model in K, before and after the effect the "
-                      "diagnosis added in its step {k}",
+    "diagnosis_step": "Residuals, measured − model in K, before and after the effect added "
+                      "in step {k}",
     "diagnosis_candidates": "RMS error (K) of the linear ladder and of each candidate effect "
                             "fitted to the bundle, the verdict highlighted",
     "diagnosis_table2": "Table 2 residuals Δ(f, D) in K with the explanations the diagnosis "
@@ -267,7 +267,7 @@ def diagnosis_caption(path: str | os.PathLike) -> str:
     Examples
     --------
     >>> diagnosis_caption("figures/diagnosis_step_2.png")
-    'Residuals, measured − model in K, before and after the effect the diagnosis added in its step 2'
+    'Residuals, measured − model in K, before and after the effect added in step 2'
     """
     stem = Path(path).stem
     head, _, k = stem.rpartition("_")
