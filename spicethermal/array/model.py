@@ -31,7 +31,7 @@ from ..core.errors import DataFormatError
 from ..core.ladder import Foster
 from ..core.network import Network
 from ..core.rc_network import nodal_foster
-from ..io.files import atomic_write_text, dumps_json, read_json
+from ..io.files import read_json, write_json
 from ..io.jsondoc import JsonDocument
 from ..model import ThermalModel
 from .modal import Modes
@@ -306,7 +306,7 @@ class ArrayModel(JsonDocument):
         -------
         Path
         """
-        return atomic_write_text(path, dumps_json(self.to_dict(), indent=2) + "\n")
+        return write_json(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | Path) -> ArrayModel:

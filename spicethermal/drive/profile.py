@@ -178,6 +178,9 @@ def smooth(steps: Steps, first: int, passes: int = 8) -> Steps:
 def compress(steps: Steps, duty_step: float) -> Steps:
     """Merge consecutive steps whose duties span at most ``duty_step`` (energy kept).
 
+    A step's duty may also be a tuple, one duty per heater of an array: steps merge when every
+    heater's duties span at most ``duty_step``, each heater keeping its energy.
+
     Parameters
     ----------
     steps : list of (int, int, float)
@@ -194,6 +197,8 @@ def compress(steps: Steps, duty_step: float) -> Steps:
     --------
     >>> compress([(0, 2, 1.0), (2, 1, 0.5), (3, 3, 0.502), (6, 1, 0.3)], 0.005)
     [(0, 2, 1.0), (2, 4, 0.5015), (6, 1, 0.3)]
+    >>> compress([(0, 1, (1.0, 0.2)), (1, 1, (1.0, 0.204)), (2, 1, (0.9, 0.2))], 0.005)
+    [(0, 2, (1.0, 0.202)), (2, 1, (0.9, 0.2))]
     """
     out: Steps = []
     group: Steps = []
@@ -201,17 +206,19 @@ def compress(steps: Steps, duty_step: float) -> Steps:
     def flush() -> None:
         if group:
             n = sum(g[1] for g in group)
-            d = sum(g[1] * g[2] for g in group) / n
-            out.append((group[0][0], n, round(d, 6)))
+            d = np.round(sum(g[1] * np.asarray(g[2], dtype=float) for g in group) / n, 6)
+            out.append((group[0][0], n, float(d) if d.ndim == 0 else tuple(map(float, d))))
             group.clear()
 
-    lo = hi = 0.0
+    lo = hi = np.zeros(0)
     for s in steps:
-        if group and (max(hi, s[2]) - min(lo, s[2]) > duty_step or (s[2] >= 1) != (lo >= 1)):
+        d = np.asarray(s[2], dtype=float)
+        if group and (np.max(np.maximum(hi, d) - np.minimum(lo, d)) > duty_step
+                      or np.any((d >= 1) != (lo >= 1))):
             flush()
         if not group:
-            lo = hi = s[2]
-        lo, hi = min(lo, s[2]), max(hi, s[2])
+            lo = hi = d
+        lo, hi = np.minimum(lo, d), np.maximum(hi, d)
         group.append(s)
     flush()
     return out

@@ -316,33 +316,8 @@ class DriveResult(JsonDocument):
         energy of every period is exactly ``P_max · duty / f_pwm``. ``start_s`` (a period
         start) gives the sources of the drive from that time on (:meth:`schedule_from`).
         """
-        period = self.period_s
-        edge = Pulse.of(self.f_pwm_hz, 0.5).edge_s
-        p = fmt(self.p_max_w)
-        lines = []
-        schedule = self.schedule_from(start_s)
-        for k, (t, d) in enumerate(schedule):
-            last = k + 1 == len(schedule)
-            if d <= 0:
-                continue
-            name = f"{prefix}{k + 1}"
-            if d >= 1:  # fully on: one trapezoid of the interval's length (the hold: DC)
-                if last:
-                    lines.append(f"{name} {ref} {pin} PWL({fmt(t)} 0 {fmt(t + edge)} {p})")
-                    continue
-                length = schedule[k + 1][0] - t
-                lines.append(f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
-                             f"{fmt(length - edge)} {fmt(length + 2 * edge)} 1)")
-                continue
-            width = max(d * period - edge, 0.0)
-            head = (f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
-                    f"{fmt(width)} {fmt(period)}")
-            if last:
-                lines.append(head + ")")
-            else:
-                n = round((schedule[k + 1][0] - t) / period)
-                lines.append(f"{head} {n:d})")
-        return lines
+        return pulse_sources(self.schedule_from(start_s), self.f_pwm_hz, self.p_max_w, pin, ref,
+                             prefix)
 
     def spice_bench(self, name: str = "HEATER", tstop_s: float | None = None,
                     tmax_s: float | None = None, reltol: float = 1e-4,
@@ -385,3 +360,60 @@ class DriveResult(JsonDocument):
             if self.trace.exact_t_s.size else self.time_to_target_s
         span = max(2.0 * t_peak, 1.2 * self.time_to_target_s, 20 * self.period_s)
         return min(span, max_periods * self.period_s)
+
+
+def pulse_sources(schedule: tuple[tuple[float, float], ...], f_pwm_hz: float, p_max_w: float,
+                  pin: str, ref: str = "0", prefix: str = "IDRV") -> list[str]:
+    """Current sources that inject the switched power of a duty schedule into ``pin``.
+
+    One ``PULSE`` per constant-duty interval with its number of pulses (ngspice ≥ 39 and
+    LTspice read the 8th PULSE parameter as the pulse count), and an endless ``PULSE`` for the
+    last duty. Edges last 1e-4 period and the width is shortened by one edge, so the energy of
+    every period is exactly ``p_max_w · duty / f_pwm_hz``; a duty of 1 is one trapezoid.
+
+    Parameters
+    ----------
+    schedule : tuple of (float, float)
+        ``(t_s, duty)`` pieces, at period starts; the last one lasts forever.
+    f_pwm_hz, p_max_w : float
+        PWM frequency and heater power when on.
+    pin, ref : str
+        The nodes the current flows into and out of.
+    prefix : str
+        Names of the sources (``PREFIX1``, ...).
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> pulse_sources(((0.0, 1.0), (0.002, 0.5)), 1000.0, 2.0, "TJ")[1][:36]
+    'IDRV2 0 TJ PULSE(0 2.0 0.002 1.00000'
+    """
+    period = 1.0 / f_pwm_hz
+    edge = Pulse.of(f_pwm_hz, 0.5).edge_s
+    p = fmt(p_max_w)
+    lines = []
+    for k, (t, d) in enumerate(schedule):
+        last = k + 1 == len(schedule)
+        if d <= 0:
+            continue
+        name = f"{prefix}{k + 1}"
+        if d >= 1:  # fully on: one trapezoid of the interval's length (the last: DC)
+            if last:
+                lines.append(f"{name} {ref} {pin} PWL({fmt(t)} 0 {fmt(t + edge)} {p})")
+                continue
+            length = schedule[k + 1][0] - t
+            lines.append(f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
+                         f"{fmt(length - edge)} {fmt(length + 2 * edge)} 1)")
+            continue
+        width = max(d * period - edge, 0.0)
+        head = (f"{name} {ref} {pin} PULSE(0 {p} {fmt(t)} {fmt(edge)} {fmt(edge)} "
+                f"{fmt(width)} {fmt(period)}")
+        if last:
+            lines.append(head + ")")
+        else:
+            n = round((schedule[k + 1][0] - t) / period)
+            lines.append(f"{head} {n:d})")
+    return lines
