@@ -1,19 +1,9 @@
 #include <string.h>
-#include "st_core.h"
+#include "st_core_int.h"
 #include "st_fixed.h"
 #include "st_hal.h"
 
 uint8_t st_fw_version[3] = {ST_FW_MAJOR, ST_FW_MINOR, ST_FW_PATCH};
-
-enum {
-    S_IDLE = 0,
-    S_SETTLE,     /* heating (or waiting for the fixture) until settle_ms */
-    S_POWER,      /* on-phase reading armed */
-    S_WINDOW,     /* cut armed, reading at the end of the window */
-    S_GAP,        /* between readings */
-    S_CURVE,      /* cooling: log-spaced readings after the cut */
-    S_CAL         /* calibration readings */
-};
 
 static int32_t elapsed(uint32_t now, uint32_t then)
 {
@@ -60,7 +50,7 @@ static void send_info(st_core_t *c)
     b[3] = st_fw_version[2];
     b[4] = bd->adc_bits;
     b[5] = (uint8_t)ST_RING_FRAMES;
-    st_put_u16(b + 6, bd->caps);
+    st_put_u16(b + 6, (uint16_t)(bd->caps | (bd->ports > 1 ? bd->ports << ST_CAP_PORTS_SHIFT : 0)));
     st_put_u32(b + 8, ST_SETTLE_MAX_MS);
     for (i = 0; i < sizeof bd->name && bd->name[i]; i++) {
         b[n++] = (uint8_t)bd->name[i];
@@ -98,7 +88,7 @@ static void drain_fifo(st_core_t *c)
     const st_board_t *bd = hal_board();
     while (c->f_count && ring_free(c) > ST_RESERVE) {
         st_raw_t *s = &c->fifo[c->f_head];
-        uint8_t b[ST_LEN_SAMPLE];
+        uint8_t b[ST_LEN_ARRAY_SAMPLE];
         uint8_t i;
         b[0] = c->p.proc;
         b[1] = s->kind;
@@ -108,13 +98,18 @@ static void drain_fifo(st_core_t *c)
             st_put_u32(b + 10 + 4 * i, (uint32_t)st_convert(&bd->ch[i], s->code[i]));
             st_put_u16(b + 30 + 2 * i, s->code[i]);
         }
-        push(c, ST_MSG_SAMPLE, b, ST_LEN_SAMPLE);
+        if (c->p.proc == ST_PROC_COUPLING) {
+            b[ST_LEN_SAMPLE] = s->port;
+            push(c, ST_MSG_ARRAY_SAMPLE, b, ST_LEN_ARRAY_SAMPLE);
+        } else {
+            push(c, ST_MSG_SAMPLE, b, ST_LEN_SAMPLE);
+        }
         c->f_head = (uint8_t)((c->f_head + 1u) % ST_FIFO_LEN);
         c->f_count--;
     }
 }
 
-static void record(st_core_t *c, uint8_t kind, uint32_t t_us)
+void st_record(st_core_t *c, uint8_t kind, uint32_t t_us)
 {
     st_raw_t *s;
     if (c->f_count >= ST_FIFO_LEN) {
@@ -123,6 +118,7 @@ static void record(st_core_t *c, uint8_t kind, uint32_t t_us)
     }
     s = &c->fifo[(uint8_t)((c->f_head + c->f_count) % ST_FIFO_LEN)];
     s->kind = kind;
+    s->port = c->p.proc == ST_PROC_COUPLING && kind == ST_KIND_POWER ? c->p.heater : c->p.port;
     s->t_us = t_us;
     memcpy(s->code, c->p.codes, sizeof s->code);
     if (c->p.n_samples == 0) {
@@ -162,13 +158,17 @@ static void flush_wire(st_core_t *c)
 }
 
 /* ------------------------------------------------------------------ heater and ADC */
-static void heater_off(void)
+void st_heater_off(void)
 {
     hal_heater_pwm(0, 0);
     hal_release();
+    if (hal_board()->ports > 1) { /* an array board: back to its first heater and diode */
+        hal_select_heater(0);
+        hal_select_tsp(0);
+    }
 }
 
-static void arm(st_core_t *c, uint8_t kind)
+void st_arm(st_core_t *c, uint8_t kind)
 {
     c->p.adc_armed = 1;
     c->p.adc_ready = 0;
@@ -187,10 +187,10 @@ static void regulate(st_core_t *c)
     hal_heater_dac(st_dac_for_current(i_ua, bd->i_full_ua, bd->dac_max));
 }
 
-static void finish(st_core_t *c, uint8_t status)
+void st_finish(st_core_t *c, uint8_t status)
 {
     if (c->p.proc != ST_PROC_CAL) {
-        heater_off();
+        st_heater_off();
     }
     c->p.status = status;
     if (c->f_dropped && status == ST_OK) {
@@ -222,7 +222,7 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
             uint32_t num = (uint32_t)(p->setpoint_mc - bd->fixture_min_mc);
             hal_fixture_dac(st_dac_for_current(num, (uint32_t)span, bd->dac_max));
         }
-        heater_off();
+        st_heater_off();
         break;
     case ST_CMD_RTH:
         if (len != 12) return ST_E_LENGTH;
@@ -277,6 +277,8 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
         if (p->on_ns == 0) return ST_E_PARAM;
         break;
     }
+    case ST_CMD_COUPLING:
+        return st_array_start(c, b, len);
     default:
         return ST_E_UNKNOWN;
     }
@@ -332,7 +334,7 @@ static void handle(st_core_t *c, const st_frame_t *f)
     switch (f->type) {
     case ST_CMD_HELLO:
         if (st_core_busy(c)) { /* a new session ends whatever the last one left running */
-            heater_off();
+            st_heater_off();
             c->p.state = S_IDLE;
             c->p.proc = ST_PROC_NONE;
         }
@@ -345,7 +347,7 @@ static void handle(st_core_t *c, const st_frame_t *f)
         return;
     case ST_CMD_ABORT:
         if (st_core_busy(c)) {
-            heater_off();
+            st_heater_off();
             c->p.state = S_IDLE;
             c->p.proc = ST_PROC_NONE;
         }
@@ -361,7 +363,7 @@ static void handle(st_core_t *c, const st_frame_t *f)
         if (st != ST_OK) {
             c->p.state = S_IDLE;
             c->p.proc = ST_PROC_NONE;
-            heater_off();
+            st_heater_off();
         }
         send_ack(c, f->seq, f->type, st);
         return;
@@ -369,30 +371,39 @@ static void handle(st_core_t *c, const st_frame_t *f)
 }
 
 /* ------------------------------------------------------------------ procedures */
+void st_curve_next(st_core_t *c, uint32_t after_us)
+{
+    st_proc_t *p = &c->p;
+    while (p->k < p->total && st_log_time_us(p->t_first_us, p->per_decade, p->k) < after_us) {
+        p->k++;
+    }
+    if (p->k >= p->total) {
+        st_finish(c, ST_OK);
+        return;
+    }
+    hal_adc_at(p->t_cut + st_log_time_us(p->t_first_us, p->per_decade, p->k));
+    st_arm(c, ST_KIND_CURVE);
+    p->state = S_CURVE;
+}
+
 static void next_reading(st_core_t *c, uint32_t now)
 {
     st_proc_t *p = &c->p;
     if (p->k >= p->n) {
-        if (p->proc == ST_PROC_COOLING) {
+        if (p->proc == ST_PROC_COOLING || p->proc == ST_PROC_COUPLING) {
             /* cut the power now and sample the cooling curve */
             hal_cut(0);
             hal_heater_pwm(0, 0);
             p->t_cut = now;
             p->k = 0;
-            p->state = S_CURVE;
-            if (p->total == 0) {
-                finish(c, ST_OK);
-                return;
-            }
-            hal_adc_at(p->t_cut + st_log_time_us(p->t_first_us, p->per_decade, 0));
-            arm(c, ST_KIND_CURVE);
+            st_curve_next(c, 0);
             return;
         }
-        finish(c, ST_OK);
+        st_finish(c, ST_OK);
         return;
     }
     hal_adc_on_phase();
-    arm(c, ST_KIND_POWER);
+    st_arm(c, ST_KIND_POWER);
     p->state = S_POWER;
 }
 
@@ -415,7 +426,8 @@ static void step(st_core_t *c)
         return;
     }
     advance(p, now);
-    if (p->state == S_SETTLE || p->state == S_GAP || p->state == S_CAL || p->state == S_CURVE) {
+    if (p->state == S_SETTLE || p->state == S_GAP || p->state == S_CAL || p->state == S_CURVE ||
+        p->state == S_SCAN) {
         if (due(now, p->t_status)) {
             send_status(c);
             p->t_status = now + ST_STATUS_MS * 1000U;
@@ -434,7 +446,7 @@ static void step(st_core_t *c)
                 p->k = 0;
                 hal_adc_at(now);
                 p->adc_t_us = now;
-                arm(c, ST_KIND_CAL);
+                st_arm(c, ST_KIND_CAL);
             } else {
                 p->k = 0;
                 next_reading(c, now);
@@ -443,7 +455,7 @@ static void step(st_core_t *c)
             p->t_next = now + ST_CONTROL_TICK_MS * 1000U;
             if (p->proc != ST_PROC_CAL) {
                 hal_adc_on_phase();
-                arm(c, ST_KIND_POWER);
+                st_arm(c, ST_KIND_POWER);
             }
         }
         break;
@@ -451,16 +463,20 @@ static void step(st_core_t *c)
         if (!p->adc_ready) break;
         p->adc_armed = 0;
         regulate(c);
-        record(c, ST_KIND_POWER, 0);
+        st_record(c, ST_KIND_POWER, 0);
         hal_cut(1);
         hal_adc_after_cut(p->window_us);
-        arm(c, ST_KIND_STEADY);
+        st_arm(c, ST_KIND_STEADY);
         p->state = S_WINDOW;
         break;
     case S_WINDOW:
         if (!p->adc_ready) break;
         p->adc_armed = 0;
-        record(c, ST_KIND_STEADY, p->window_us);
+        st_record(c, ST_KIND_STEADY, p->window_us);
+        if (p->proc == ST_PROC_COUPLING && p->ports > 1) { /* the other ports in the window */
+            st_array_scan(c, now, 1, ST_KIND_STEADY, p->window_us, SCAN_STEADY);
+            break;
+        }
         hal_release();
         p->k++;
         p->t_next = now + (uint32_t)(p->interval_ms ? p->interval_ms : 100u) * 1000U;
@@ -472,27 +488,30 @@ static void step(st_core_t *c)
     case S_CURVE:
         if (!p->adc_ready) break;
         p->adc_armed = 0;
-        record(c, ST_KIND_CURVE, st_log_time_us(p->t_first_us, p->per_decade, p->k));
-        p->k++;
-        if (p->k >= p->total) {
-            finish(c, ST_OK);
+        st_record(c, ST_KIND_CURVE, st_log_time_us(p->t_first_us, p->per_decade, p->k));
+        if (p->proc == ST_PROC_COUPLING && p->ports > 1) { /* the other ports of this time */
+            uint32_t t = st_log_time_us(p->t_first_us, p->per_decade, p->k);
+            st_array_scan(c, p->t_cut + t, 1, ST_KIND_CURVE, t, SCAN_CURVE);
             break;
         }
-        hal_adc_at(p->t_cut + st_log_time_us(p->t_first_us, p->per_decade, p->k));
-        arm(c, ST_KIND_CURVE);
+        p->k++;
+        st_curve_next(c, 0);
+        break;
+    case S_SCAN:
+        st_array_step(c, now);
         break;
     case S_CAL:
         if (!p->adc_ready) break;
         p->adc_armed = 0;
-        record(c, ST_KIND_CAL, (uint32_t)elapsed(p->adc_t_us, p->t_start));
+        st_record(c, ST_KIND_CAL, (uint32_t)elapsed(p->adc_t_us, p->t_start));
         p->k++;
         if (p->k >= p->n) {
-            finish(c, ST_OK);
+            st_finish(c, ST_OK);
             break;
         }
         p->adc_t_us = p->adc_t_us + (uint32_t)p->interval_ms * 1000U;
         hal_adc_at(p->adc_t_us);
-        arm(c, ST_KIND_CAL);
+        st_arm(c, ST_KIND_CAL);
         break;
     default:
         break;
@@ -550,7 +569,7 @@ void st_core_poll(st_core_t *c)
     if (c->p.state != S_IDLE) {
         uint32_t now = hal_now_us();
         uint32_t w = c->p.t_status;
-        if (c->p.state == S_POWER || c->p.state == S_WINDOW) {
+        if (c->p.state == S_POWER || c->p.state == S_WINDOW || c->p.state == S_SCAN) {
             /* waiting for the ADC interrupt, no heartbeat in these states: a stale t_status
              * would make the core busy-poll (and froze the simulator at a float tie) */
             w = now + ST_STATUS_MS * 1000U;

@@ -19,6 +19,7 @@
 
 typedef struct {
     uint8_t kind;
+    uint8_t port; /* the TSP diode read (array boards; 0 otherwise) */
     uint32_t t_us;
     uint16_t code[ST_NCH];
 } st_raw_t;
@@ -41,6 +42,9 @@ typedef struct {
     uint16_t n_samples;
     uint32_t first_index;
     uint8_t status;
+    /* coupling (array boards): the heated port, the ports read, the scan in progress */
+    uint8_t heater, ports, port, scan_kind, scan_then;
+    uint32_t scan_base, scan_rel;
 } st_proc_t;
 
 typedef struct {

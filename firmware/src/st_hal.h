@@ -30,6 +30,8 @@ typedef struct {
     uint16_t caps;         /* ST_CAP_* bits reported in INFO */
     uint8_t adc_bits;
     char name[16];
+    uint8_t ports;         /* heaters (and TSP diodes) of an array board; 0 or 1: one */
+    uint16_t scan_us;      /* array board: multiplexer settling + conversion per port */
 } st_board_t;
 
 const st_board_t *hal_board(void);
@@ -51,6 +53,11 @@ void hal_release(void);
 void hal_adc_at(uint32_t t_us);            /* at an absolute time */
 void hal_adc_after_cut(uint32_t delay_us); /* delay_us after the (pending) cut instant */
 void hal_adc_on_phase(void);               /* in the middle of the next on-phase */
+
+/* Array board (ports > 1): route the heater current source to heater `port`, and the TSP
+ * amplifier's input multiplexer to diode `port` (settled within scan_us). */
+void hal_select_heater(uint8_t port);
+void hal_select_tsp(uint8_t port);
 
 /* Calibration fixture (hot plate with its own controller): setpoint DAC. */
 void hal_fixture_dac(uint16_t code);

@@ -8,7 +8,7 @@
 
 #define ST_PROTO_VERSION 2u
 #define ST_FW_MAJOR 1u
-#define ST_FW_MINOR 1u
+#define ST_FW_MINOR 2u
 #define ST_FW_PATCH 0u
 
 #define ST_MAX_PAYLOAD 48u
@@ -27,6 +27,8 @@
                                   t_first_us u32, t_last_ms u32, per_decade u8 */
 #define ST_CMD_PWM 0x13u       /* power_uw u32, freq_mhz u32, duty_ppm u32, settle_ms u32,
                                   window_us u16, n u16, interval_ms u16 */
+#define ST_CMD_COUPLING 0x14u  /* heater u8, ports u8, power_uw u32, settle_ms u32, window_us u16,
+                                  n u16, t_first_us u32, t_last_ms u32, per_decade u8 */
 
 /* device -> host */
 #define ST_MSG_INFO 0x80u   /* proto u8, fw_major u8, fw_minor u8, fw_patch u8, adc_bits u8,
@@ -38,8 +40,11 @@
 #define ST_MSG_DONE 0x84u   /* proc u8, status u8, n_samples u16, first_index u32 */
 #define ST_MSG_SYNC 0x85u   /* unsequenced (seq = device next_seq): last_cmd_seq u16, busy u8 */
 #define ST_MSG_ERROR 0x86u  /* code u8, detail u16 */
+#define ST_MSG_ARRAY_SAMPLE 0x87u /* SAMPLE's payload, then port u8 (the coupling procedure) */
 
 #define ST_LEN_SAMPLE 40u
+#define ST_LEN_ARRAY_SAMPLE 41u
+#define ST_LEN_COUPLING 23u
 #define ST_LEN_INFO_FIXED 12u
 
 /* Limits the device enforces (a longer time is refused with ST_E_PARAM). Settling is timed in
@@ -67,15 +72,18 @@
 #define ST_PROC_RTH 2u
 #define ST_PROC_COOLING 3u
 #define ST_PROC_PWM 4u
+#define ST_PROC_COUPLING 5u
 
 /* sample kinds */
 #define ST_KIND_CURVE 0u   /* cooling-curve point; t_us from the cut */
 #define ST_KIND_STEADY 1u  /* steady reading at the end of a sample window; t_us = window */
 #define ST_KIND_CAL 2u     /* calibration reading (heater off); t_us from the reading start */
 #define ST_KIND_POWER 3u   /* on-phase reading (heater current and voltage); t_us = 0 */
+#define ST_KIND_COLD 4u    /* coupling: every heater off, before heating; t_us from the start */
 
 /* capability bits of INFO.caps */
 #define ST_CAP_IDEAL_HOLD 0x0001u /* the TSP is held at the window start (no window cooling) */
+#define ST_CAP_PORTS_SHIFT 8u     /* bits 8..15: heaters of an array board (0: one heater) */
 
 /* ADC channels: the sequencer converts all five at the same instant */
 #define ST_CH_TSP 0u  /* INA output: Voff + G (Vref_diode - Vd) */

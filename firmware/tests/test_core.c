@@ -199,7 +199,7 @@ static void board(hh_device_t *d)
 {
     st_board_t b = {{{-78125, 1600000, 800}, {78125, 0, 16}, {78125, 0, 160},
                      {78125, 0, 1600}, {78125, -8000000, 800}},
-                    250000U, 1023, 700000U, -10000, 90000, 0, 10, "test"};
+                    250000U, 1023, 700000U, -10000, 90000, 0, 10, "test", 0, 0};
     d->s.board = b;
 }
 
@@ -449,6 +449,87 @@ static void test_long_settle(void)
     hh_free(d);
 }
 
+/* The coupling procedure on an array board of 4 ports: heat port 2, read all. */
+static void test_coupling(void)
+{
+    hh_device_t *d = hh_new();
+    static frames_t fr;
+    uint8_t pl[32];
+    int i, cold = 0, power = 0, steady = 0, curve = 0, plain = 0, done = -1, total = 0;
+    int order_ok = 1, last_port = -1;
+    uint32_t last_t = 0;
+    board(d);
+    d->s.board.ports = 4;
+    d->s.board.scan_us = 20;
+    hh_init(d);
+    pl[0] = ST_PROTO_VERSION;
+    send(d, ST_CMD_HELLO, 1, pl, 1);
+    fr.n = 0;
+    collect(d, &fr);
+    CHECK(fr.n == 2 && st_get_u16(fr.f[1].payload + 6) >> ST_CAP_PORTS_SHIFT == 4,
+          "INFO reports 4 ports");
+    pl[0] = 2; /* heater */
+    pl[1] = 4; /* ports read */
+    st_put_u32(pl + 2, 250000);
+    st_put_u32(pl + 6, 1000);
+    st_put_u16(pl + 10, 100);
+    st_put_u16(pl + 12, 2);
+    st_put_u32(pl + 14, 100);
+    st_put_u32(pl + 18, 100);
+    pl[22] = 10;
+    send(d, ST_CMD_COUPLING, 2, pl, ST_LEN_COUPLING);
+    CHECK(hh_busy(d) && d->core.p.proc == ST_PROC_COUPLING && d->core.p.heater == 2,
+          "coupling started");
+    fr.n = 0;
+    run(d, &fr, 0, 100000);
+    for (i = 0; i < fr.n; i++) {
+        const st_frame_t *f = &fr.f[i];
+        if (f->type == ST_MSG_SAMPLE) plain++;
+        if (f->type == ST_MSG_ARRAY_SAMPLE) {
+            uint8_t kind = f->payload[1], port = f->payload[ST_LEN_SAMPLE];
+            uint32_t t = st_get_u32(f->payload + 6);
+            total++;
+            CHECK(f->len == ST_LEN_ARRAY_SAMPLE && port < 4, "array sample length and port");
+            if (kind == ST_KIND_COLD) cold++;
+            if (kind == ST_KIND_POWER) {
+                power++;
+                CHECK(port == 2, "power reading of the heated port (%u)", port);
+            }
+            if (kind == ST_KIND_STEADY) {
+                steady++;
+                CHECK(t == 100u + 20u * port, "steady reading of port %u at %u us", port, t);
+            }
+            if (kind == ST_KIND_CURVE) {
+                curve++;
+                if (port == 0 && last_port >= 0 && (last_port != 3 || t < last_t + 20u)) {
+                    order_ok = 0; /* a scan reads every port; the next starts after it */
+                }
+                if (port > 0 && (port != last_port + 1 || t != last_t + 20u)) order_ok = 0;
+                last_port = port;
+                last_t = t;
+            }
+        }
+        if (f->type == ST_MSG_DONE) {
+            done = f->payload[1];
+            CHECK(st_get_u16(f->payload + 2) == total, "done counts %u of %d",
+                  st_get_u16(f->payload + 2), total);
+        }
+    }
+    CHECK(done == 0 && plain == 0, "coupling done ok (%d), only array samples (%d)", done, plain);
+    CHECK(cold == 8 && power == 2 && steady == 8, "cold %d power %d steady %d", cold, power,
+          steady);
+    CHECK(curve > 0 && curve % 4 == 0 && order_ok, "curve scans complete and ordered (%d)",
+          curve);
+    /* a single-heater board refuses it */
+    d->s.board.ports = 0;
+    send(d, ST_CMD_COUPLING, 3, pl, ST_LEN_COUPLING);
+    fr.n = 0;
+    collect(d, &fr);
+    CHECK(fr.n == 1 && fr.f[0].type == ST_MSG_ACK && fr.f[0].payload[3] == ST_E_PARAM,
+          "no coupling without ports");
+    hh_free(d);
+}
+
 int main(int argc, char **argv)
 {
     test_vectors(argc > 1 ? argv[1] : "protocol_vectors.json");
@@ -456,6 +537,7 @@ int main(int argc, char **argv)
     test_ring();
     test_core();
     test_long_settle();
+    test_coupling();
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }

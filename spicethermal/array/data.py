@@ -19,12 +19,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError
+from ..identify.curves import ZthCurve
 from .model import Port
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-__all__ = ["CouplingData", "Element"]
+    from ..io.bundle import Bundle
+
+__all__ = ["CouplingData", "Element", "coupling_from_bundle"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,3 +186,42 @@ class CouplingData:
         """The earliest and the latest time of any element, s."""
         return (min(float(e.t_s[0]) for e in self.elements),
                 max(float(e.t_s[-1]) for e in self.elements))
+
+
+def coupling_from_bundle(bundle: Bundle) -> CouplingData:
+    """Every measured Z_ij(t) of a bundle's ``coupling`` section.
+
+    The heated port's curve goes through the early-time correction of a single cooling curve
+    (its junction at the cut extrapolated back by the √t law after the electrical transient,
+    :meth:`~spicethermal.identify.curves.ZthCurve.from_cooling`); every other port starts
+    from its steady reading before the cut (read through the sample window, in which it
+    barely moves). Port ``i`` of a scan was read ``i · scan_s`` after port 0.
+
+    Parameters
+    ----------
+    bundle : Bundle
+        A bundle with a ``coupling`` section.
+
+    Returns
+    -------
+    CouplingData
+    """
+    sec = bundle.coupling
+    where = bundle.source or "bundle"
+    if sec is None:
+        raise DataFormatError(f"{where}: no coupling section (measure it with 'spicethermal "
+                              f"bench coupling')")
+    elements = []
+    for table in sec.curves:
+        j = table.heated
+        for i in range(len(sec.ports)):
+            steady = None if i == j or table.tj_steady_c is None else table.tj_steady_c[i]
+            tref_steady = table.tref_steady_c if table.tref_steady_c is not None \
+                else bundle.ambient_c
+            z = ZthCurve.from_cooling(
+                sec.times(table, i), table.tj_c[:, i], table.power_w, tj_steady_c=steady,
+                tref_c=table.tref_c, tref_steady_c=tref_steady,
+                label=f"{table.file}, port {sec.ports[i].name}")
+            elements.append(Element(i, j, z.t_s, z.zth_k_per_w))
+    return CouplingData(tuple(sec.ports), tuple(elements), bundle.reference, where)
+

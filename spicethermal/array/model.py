@@ -31,6 +31,7 @@ from ..core.errors import DataFormatError
 from ..core.ladder import Foster
 from ..core.network import Network
 from ..core.rc_network import nodal_foster
+from ..io.coupling import Port
 from ..io.files import read_json, write_json
 from ..io.jsondoc import JsonDocument
 from ..model import ThermalModel
@@ -42,35 +43,6 @@ ARRAY_FORMAT = "spicethermal-array-model/1"
 #: The name of the reference node in the document (ambient or heat sink).
 REF = "REF"
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,31}")
-
-
-@dataclass(frozen=True)
-class Port:
-    """A port of the array: the heater (and temperature sensor) of one cell.
-
-    Attributes
-    ----------
-    name : str
-        Its name (letters, digits, ``_ . -``; e.g. ``D1`` for Braille dot 1).
-    x_mm, y_mm : float or None
-        Its position on the substrate, mm (None when not known).
-    """
-
-    name: str
-    x_mm: float | None = None
-    y_mm: float | None = None
-
-    def to_dict(self) -> dict:
-        """The document's ``ports[]`` entry.
-
-        Returns
-        -------
-        dict
-        """
-        out: dict[str, Any] = {"name": self.name}
-        if self.x_mm is not None and self.y_mm is not None:
-            out.update(x_mm=self.x_mm, y_mm=self.y_mm)
-        return out
 
 
 def _finite(value: object, what: str, *, positive: bool = False) -> float:
@@ -266,7 +238,7 @@ class ArrayModel(JsonDocument):
             got = data.get("format") if isinstance(data, Mapping) else None
             raise DataFormatError(f"{source}: format {got!r} is not {ARRAY_FORMAT}")
         try:
-            ports = tuple(_port(p, f"{source}, ports[{i}]")
+            ports = tuple(Port.from_dict(p, f"{source}, ports[{i}]")
                           for i, p in enumerate(_list(data, "ports", source)))
             entries = _list(data, "nodes", source)
             nodes = tuple(_text(e, "name", f"{source}, nodes[{i}]") for i, e in enumerate(entries))
@@ -358,14 +330,3 @@ def _text(entry: object, key: str, at: str) -> str:
     if not isinstance(value, str):
         raise DataFormatError(f"{at}.{key}: {value!r} is not a name")
     return value
-
-
-def _port(entry: object, at: str) -> Port:
-    name = _text(entry, "name", at)
-    assert isinstance(entry, Mapping)
-    x, y = entry.get("x_mm"), entry.get("y_mm")
-    if (x is None) != (y is None):
-        raise DataFormatError(f"{at}: give both x_mm and y_mm, or neither")
-    if x is None:
-        return Port(name)
-    return Port(name, _finite(x, f"{at}.x_mm"), _finite(y, f"{at}.y_mm"))

@@ -17,7 +17,7 @@ Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 >>> # a simulated bench, quickly: just the handshake
 >>> with BenchClient("sim://actuator?seed=1") as bench:
 ...     bench.info.name, bench.info.firmware
-('actuator', '1.1.0')
+('actuator', '1.2.0')
 """
 
 from __future__ import annotations
@@ -37,6 +37,8 @@ from .link import Link
 
 SUPPORTED_FIRMWARE_MAJOR = 1
 ACTIONS = ("calibrate", "rth", "cooling", "pwm")
+#: Procedures of array boards only, never part of a whole run.
+ARRAY_ACTIONS = ("coupling",)
 
 
 # --------------------------------------------------------------------------- raw log
@@ -292,6 +294,22 @@ class BenchClient:
         return self._collect(p.Cooling(_uw(power_w), self._settle_ms(settle_s), _us16(window_s),
                                        _u16(n, "n"), round(t_first_s * 1e6), _ms(t_last_s),
                                        int(per_decade)), p.PROC_COOLING)
+
+    def coupling(self, heater: int, power_w: float, settle_s: float, window_s: float, n: int,
+                 t_first_s: float, t_last_s: float, per_decade: int) -> Run:
+        """Heat ``heater`` and read every port of an array board (INFO caps: its ports)."""
+        ports = self.info.ports
+        if ports < 2:
+            raise InstrumentError(f"{self.url}: board {self.info.name!r} (firmware "
+                                  f"{self.info.firmware}) is not an array board: it reports no "
+                                  f"heaters to couple")
+        if not 0 <= heater < ports:
+            raise DataFormatError(f"coupling: heater {heater} outside the board's ports "
+                                  f"0..{ports - 1}")
+        self.check_limits(t_last_s=t_last_s)
+        return self._collect(p.Coupling(heater, ports, _uw(power_w), self._settle_ms(settle_s),
+                                        _us16(window_s), _u16(n, "n"), round(t_first_s * 1e6),
+                                        _ms(t_last_s), int(per_decade)), p.PROC_COUPLING)
 
     def pwm(self, power_w: float, freq_hz: float, duty: float, settle_s: float,
             window_s: float, n: int, interval_s: float) -> Run:

@@ -1,6 +1,7 @@
 """Presets of the simulated bench: the device (its ladder, heater, TSP diode) and the board.
 
-Two presets, chosen by the ``sim://NAME`` URL:
+Three presets, chosen by the ``sim://NAME`` URL (``array``: cells of the actuator on a common
+substrate, :mod:`.array_devices`):
 
 * ``actuator`` — the paper's thermopneumatic actuator (§2, §7): a signal diode heating a
   methanol-filled brass cavity, junction to ambient. Foster ladder ``r = (6, 20, 50, 70)`` K/W
@@ -22,7 +23,7 @@ Two presets, chosen by the ``sim://NAME`` URL:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 from ..core.errors import InstrumentError
@@ -148,11 +149,18 @@ def _mur880e() -> Preset:
     )
 
 
-PRESETS = {"actuator": _actuator, "mur880e": _mur880e}
+def _array() -> Preset:
+    """The actuator on an array board (its network: :mod:`.array_devices`)."""
+    return replace(_actuator(), name="array", board=Board(name="array"),
+                   description="array of thermopneumatic actuators on a common substrate, diode "
+                               "heaters, junction to ambient")
+
+
+PRESETS = {"actuator": _actuator, "mur880e": _mur880e, "array": _array}
 
 
 def preset(name: str) -> Preset:
-    """The preset called ``name`` (``actuator`` or ``mur880e``)."""
+    """The preset called ``name`` (``actuator``, ``mur880e`` or ``array``)."""
     try:
         return PRESETS[name]()
     except KeyError:

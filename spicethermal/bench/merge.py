@@ -29,7 +29,7 @@ def fresh_name(stem: str, taken: set[str]) -> str:
     """
     k = 1
     while True:
-        name = f"{stem}_{k}.csv" if k > 1 or stem == "cooling" else f"{stem}.csv"
+        name = f"{stem}_{k}.csv" if k > 1 or stem in ("cooling", "coupling") else f"{stem}.csv"
         if name not in taken:
             taken.add(name)
             return name
@@ -44,7 +44,7 @@ def add_datasets(bundle: Bundle, new: dict, taken: set[str],
     ----------
     bundle : the bundle as it is on disk.
     new : section -> new data: ``calibration`` and ``pwm`` a table, ``cooling`` a list of
-        tables, ``rth`` a summary dict (any may be missing).
+        tables, ``coupling`` a section, ``rth`` a summary dict (any may be missing).
     taken : every name in the bundle's directory (new names avoid them; updated).
     replace_names : listed files whose data sets the new ones of the same section replace
         (same name, same place); without them a new data set gets a new name and a single
@@ -85,6 +85,12 @@ def add_datasets(bundle: Bundle, new: dict, taken: set[str],
                 replace_left.remove(cooling[slot].file)
                 cooling[slot] = replace(table, file=bundle.cooling[slot].file)
         changes["cooling"] = tuple(cooling)
+    if new.get("coupling") is not None:  # a new array measurement: the old one is superseded
+        if bundle.coupling is not None:
+            superseded.append({"section": "coupling", **doc["coupling"]})
+        sec = new["coupling"]
+        changes["coupling"] = replace(sec, curves=tuple(
+            replace(c, file=fresh_name("coupling", taken)) for c in sec.curves))
     extra = dict(bundle.extra)
     if new.get("rth") is not None:
         if "rth" in extra:

@@ -39,11 +39,18 @@ class Plan:
     pwm_settle_s: float = 90.0
     pwm_n: int = 8
     pwm_interval_s: float = 0.1
+    #: array boards ("heat one, read all", each heater at this power); the grid and pitch of
+    #: the cells (rows 0: from the board's heaters, a Braille cell for 6 or 8)
+    coupling_power_w: float = 0.25
+    array_rows: int = 0
+    array_cols: int = 0
+    array_pitch_mm: float = 2.5
 
     def __post_init__(self) -> None:
         for name in ("calibration_settle_s", "calibration_interval_s", "window_s",
                      "rth_power_w", "settle_s", "cooling_t_first_s", "cooling_t_last_s",
-                     "pwm_power_w", "pwm_settle_s", "pwm_interval_s"):
+                     "pwm_power_w", "pwm_settle_s", "pwm_interval_s", "coupling_power_w",
+                     "array_pitch_mm"):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and np.isfinite(v) and v > 0):
                 raise DataFormatError(f"bench plan: {name} = {v!r} must be a positive number")
@@ -62,6 +69,8 @@ class Plan:
 
 PLANS: dict[str, Plan] = {
     "actuator": Plan(description="thermopneumatic actuator, diode heater (paper, sections 2, 7)"),
+    "array": Plan(description="array of thermopneumatic actuators on a common substrate "
+                  "(issue #47)", settle_s=300.0, cooling_t_last_s=300.0, n_readings=4),
     "mur880e": Plan(description="MUR880E power diode on a heat sink, junction to case "
                     "(paper, section 5)", reference="case",
                     calibration_c=(25.0, 35.0, 45.0, 55.0, 65.0, 75.0), rth_power_w=10.0,

@@ -70,6 +70,10 @@ class Plant:
         self.device_effects = tuple(
             Effect(name, preset.effect_params.get(name, {}))
             for name in DEVICE_EFFECTS if name in names)
+        self._reset()
+
+    def _reset(self) -> None:
+        """The state at the start: everything at the reference, the hot plate off."""
         self._rate_k_per_s = math.inf   # fastest node change of the last step (effects only)
         self._cache: dict = {}
         self.theta = np.zeros(self.n)
@@ -92,6 +96,11 @@ class Plant:
     @property
     def tj_c(self) -> float:
         return self.base_c + float(self.theta[0])
+
+    @property
+    def sensed_c(self) -> float:
+        """What the TSP diode reads: the junction (an array plant reads the selected port)."""
+        return self.tj_c
 
     @property
     def tref_c(self) -> float:

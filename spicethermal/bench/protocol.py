@@ -32,10 +32,11 @@ MAX_PAYLOAD = 48
 CRC_INIT = 0xFFFF
 
 # procedures and sample kinds (st_proto.h)
-PROC_CAL, PROC_RTH, PROC_COOLING, PROC_PWM = 1, 2, 3, 4
-PROC_NAMES = {PROC_CAL: "calibrate", PROC_RTH: "rth", PROC_COOLING: "cooling", PROC_PWM: "pwm"}
-KIND_CURVE, KIND_STEADY, KIND_CAL, KIND_POWER = 0, 1, 2, 3
+PROC_CAL, PROC_RTH, PROC_COOLING, PROC_PWM, PROC_COUPLING = 1, 2, 3, 4, 5
+PROC_NAMES = dict(enumerate(("calibrate", "rth", "cooling", "pwm", "coupling"), start=1))
+KIND_CURVE, KIND_STEADY, KIND_CAL, KIND_POWER, KIND_COLD = 0, 1, 2, 3, 4
 CAP_IDEAL_HOLD = 0x0001
+CAP_PORTS_SHIFT = 8  # INFO caps bits 8..15: the heaters of an array board (0: one heater)
 ACK_STATUS = {0: "ok", 1: "busy", 2: "bad length", 3: "bad parameter", 4: "unknown command"}
 DONE_STATUS = {0: "ok", 2: "sample buffer overflow (the host read too slowly)"}
 ERROR_CODES = {1: "frame lost for good (no longer in the device's ring buffer)",
@@ -303,6 +304,22 @@ class Pwm(Message):
     interval_ms: int = 100
 
 
+@dataclass(frozen=True)
+class Coupling(Message):
+    """Array boards: heat ``heater``, read ports ``0 .. ports-1`` (PROTOCOL.md, firmware 1.2)."""
+    TYPE: ClassVar[int] = 0x14
+    FORMAT: ClassVar[str] = "<BBIIHHIIB"
+    heater: int = 0
+    ports: int = 2
+    power_uw: int = 250000
+    settle_ms: int = 300000
+    window_us: int = 100
+    n: int = 4
+    t_first_us: int = 100
+    t_last_ms: int = 300000
+    per_decade: int = 10
+
+
 # device -> host ------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Info(Message):
@@ -321,6 +338,10 @@ class Info(Message):
     @property
     def firmware(self) -> str:
         return f"{self.fw_major}.{self.fw_minor}.{self.fw_patch}"
+
+    @property
+    def ports(self) -> int:  # heaters of an array board (0: a single-heater board)
+        return self.caps >> CAP_PORTS_SHIFT
 
     def payload(self) -> bytes:
         return struct.pack(self.FORMAT, self.proto, self.fw_major, self.fw_minor, self.fw_patch,
@@ -389,6 +410,14 @@ class Sample(Message):
 
 
 @dataclass(frozen=True)
+class ArraySample(Sample):
+    """A sample of the coupling procedure: the port read (the diode; a power reading's heater)."""
+    TYPE: ClassVar[int] = 0x87
+    FORMAT: ClassVar[str] = "<BBII5i5HB"
+    port: int = 0
+
+
+@dataclass(frozen=True)
 class Status(Message):
     TYPE: ClassVar[int] = 0x83
     FORMAT: ClassVar[str] = "<BBHHI"
@@ -449,8 +478,8 @@ class DeviceError(Message):
 
 
 MESSAGES: dict[int, type[Message]] = {cls.TYPE: cls for cls in (
-    Hello, Ack, Nak, Abort, Calibrate, Rth, Cooling, Pwm,
-    Info, CommandAck, Sample, Status, Done, Sync, DeviceError)}
+    Hello, Ack, Nak, Abort, Calibrate, Rth, Cooling, Pwm, Coupling, Info, CommandAck, Sample,
+    ArraySample, Status, Done, Sync, DeviceError)}
 UNSEQUENCED = frozenset({Sync.TYPE, DeviceError.TYPE})
 
 

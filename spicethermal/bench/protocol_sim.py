@@ -4,7 +4,7 @@ With ``spicethermal.bench`` in ``serial.protocol_handler_packages`` (the client 
 ``serial.serial_for_url("sim://actuator?seed=3")`` returns this module's :class:`Serial`, and
 the client talks to the firmware core on a simulated plant exactly as to the real bench.
 
-URL: ``sim://DEVICE[?key=value&...]`` with DEVICE ``actuator`` or ``mur880e`` and
+URL: ``sim://DEVICE[?key=value&...]`` with DEVICE ``actuator``, ``mur880e`` or ``array`` and
 
 * ``seed`` (int, 0): seeds the plant noise and the link faults;
 * ``noise`` (K, 0.03): TSP reading noise;
@@ -20,7 +20,9 @@ URL: ``sim://DEVICE[?key=value&...]`` with DEVICE ``actuator`` or ``mur880e`` an
 * ``stall`` (reads, 0): with probability ``faults`` per read, the link holds the device's
   output back for this many reads (a stalled USB adapter), then delivers it;
 * ``mute`` (0/1): a silent device (nothing ever comes back);
-* ``firmware`` (X.Y.Z): the version the device reports (to test version checks).
+* ``firmware`` (X.Y.Z): the version the device reports (to test version checks);
+* ``rows``, ``cols`` (4, 2), ``pitch`` (mm, 2.5), ``coupling`` (1): the ``array`` device's grid
+  and the scale of its coupling (:mod:`.array_devices`).
 
 A read never waits in wall-clock time: when the simulated device has nothing to say it returns
 what it has (possibly nothing) at once, which the client counts as one timeout period.
@@ -34,9 +36,10 @@ import numpy as np
 from serial import SerialBase, SerialException
 
 from ..core.errors import InstrumentError
+from .array_devices import ARRAY_KEYS, ArrayGeometry
 from .simulator import SimulatedDevice, parse_effects
 
-KEYS = ("seed", "noise", "effects", "faults", "stall", "mute", "firmware")
+KEYS = ("seed", "noise", "effects", "faults", "stall", "mute", "firmware", *ARRAY_KEYS)
 
 
 class LinkFaults:
@@ -88,8 +91,16 @@ def _parse(url: str) -> dict:
             version = tuple(int(x) for x in opts["firmware"].split("."))
             if len(version) != 3 or not all(0 <= x < 256 for x in version):
                 raise ValueError(opts["firmware"])
+        device = parts.netloc or parts.path.lstrip("/")
+        array = None
+        if any(k in opts for k in ARRAY_KEYS) or device == "array":
+            try:
+                array = ArrayGeometry.from_options(opts)
+            except InstrumentError as exc:
+                raise SerialException(str(exc)) from None
         return {
-            "device": parts.netloc or parts.path.lstrip("/"),
+            "device": device,
+            "array": array,
             "seed": int(opts.get("seed", 0)),
             "noise_k": float(opts.get("noise", 0.03)),
             "effects": parse_effects(opts.get("effects")),
@@ -114,7 +125,8 @@ class Serial(SerialBase):
         try:
             self.device = SimulatedDevice(
                 opts["device"], seed=opts["seed"], noise_k=opts["noise_k"],
-                effects=opts["effects"], firmware_version=opts["firmware_version"])
+                effects=opts["effects"], firmware_version=opts["firmware_version"],
+                array=opts["array"])
         except InstrumentError as exc:
             raise SerialException(str(exc)) from None
         rng = np.random.default_rng([opts["seed"], 0xB0B])

@@ -34,7 +34,8 @@ from ..core.errors import DataFormatError, InstrumentError, SpiceThermalError
 from ..io.bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, PwmTable
 from ..io.files import clean_leftovers, locked
 from . import protocol as p
-from .client import ACTIONS, BenchClient, Run
+from .client import ACTIONS, ARRAY_ACTIONS, BenchClient, Run
+from .coupling import measure_coupling
 from .merge import SECTIONS, add_datasets
 from .plan import PLANS, Plan
 
@@ -118,8 +119,9 @@ class Session:
 
     def run(self, actions: Sequence[str]) -> Path:
         for a in actions:
-            if a not in ACTIONS:
-                raise DataFormatError(f"bench: unknown action {a!r}; expected {', '.join(ACTIONS)}")
+            if a not in ACTIONS + ARRAY_ACTIONS:
+                raise DataFormatError(f"bench: unknown action {a!r}; expected "
+                                      f"{', '.join(ACTIONS + ARRAY_ACTIONS)}")
         out = self.out_dir
         with locked(out, wait=self.wait):
             clean_leftovers(out)
@@ -133,7 +135,7 @@ class Session:
             self._adopt_old_raw_logs()
             self._check_replace(previous, actions)
             if previous.calibration is None and "calibrate" not in actions:
-                needs = [a for a in actions if a in ("cooling", "pwm")]
+                needs = [a for a in actions if a in ("cooling", "pwm", "coupling")]
                 if needs:  # said now, not after the measurement
                     raise DataFormatError(f"bench {needs[0]}: needs a calibration (run 'bench "
                                           f"calibrate' into the same bundle first, or 'bench "
@@ -174,6 +176,9 @@ class Session:
                     new[key] = replace(new[key], extra={**new[key].extra, "raw": session})
             new["cooling"] = [replace(c, extra={**c.extra, "raw": session})
                               for c in new.get("cooling", [])]
+            if new.get("coupling") is not None:
+                new["coupling"] = replace(new["coupling"],
+                                          extra={**new["coupling"].extra, "raw": session})
             taken = set(os.listdir(out))
             bundle = add_datasets(new["base"], new, taken, self.replace_names)
             bundle = bundle.with_(extra={**bundle.extra,
@@ -197,7 +202,8 @@ class Session:
         steps = {"calibrate": plan.calibration_settle_s * len(plan.calibration_c),
                  "rth": plan.settle_s,
                  "cooling": (plan.settle_s + plan.cooling_t_last_s) * len(plan.cooling_powers_w),
-                 "pwm": plan.pwm_settle_s * len(plan.pwm_freqs_hz) * len(plan.pwm_duties)}
+                 "pwm": plan.pwm_settle_s * len(plan.pwm_freqs_hz) * len(plan.pwm_duties),
+                 "coupling": (plan.settle_s + plan.cooling_t_last_s) * bench.info.ports}
         prog = bench.progress
         prog.total = sum(steps[a] for a in actions)
         prog.show("connected")
@@ -238,6 +244,8 @@ class Session:
             new["cooling"] = tables
         if "pwm" in actions:
             new["pwm"] = self._pwm(bench, plan, conv, step, ambient)
+        if "coupling" in actions:
+            new["coupling"] = measure_coupling(bench, plan, conv, step)
         if ambient:
             base = base.with_(ambient_c=round(float(np.mean(ambient)), 4))
         new["base"] = base

@@ -30,6 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InstrumentError
+from .array_devices import ArrayGeometry
+from .array_plant import ArrayPlant
 from .devices import preset as get_preset
 from .plant import DEFAULT_EFFECTS, DEVICE_EFFECTS, MEASUREMENT_EFFECTS, Frontend, Plant
 
@@ -39,6 +41,9 @@ KNOWN_EFFECTS = DEVICE_EFFECTS + MEASUREMENT_EFFECTS
 
 OP_DAC, OP_PWM, OP_CUT, OP_RELEASE, OP_ADC_AT, OP_ADC_AFTER_CUT, OP_ADC_ON_PHASE, OP_FIXTURE = (
     range(1, 9))
+OP_HEATER, OP_TSP = 9, 10  # array boards: the heater and the TSP diode selected
+#: Array board: multiplexer settling plus one conversion, per port of a scan (us).
+SCAN_US = 20
 CAP_IDEAL_HOLD = 0x0001
 _WRAP = 1 << 32
 
@@ -51,7 +56,8 @@ class _Board(ctypes.Structure):
     _fields_ = [("ch", _Conv * 5), ("i_full_ua", ctypes.c_uint32), ("dac_max", ctypes.c_uint16),
                 ("vd_nominal_uv", ctypes.c_uint32), ("fixture_min_mc", ctypes.c_int32),
                 ("fixture_max_mc", ctypes.c_int32), ("caps", ctypes.c_uint16),
-                ("adc_bits", ctypes.c_uint8), ("name", ctypes.c_char * 16)]
+                ("adc_bits", ctypes.c_uint8), ("name", ctypes.c_char * 16),
+                ("ports", ctypes.c_uint8), ("scan_us", ctypes.c_uint16)]
 
 
 class _Op(ctypes.Structure):
@@ -125,15 +131,23 @@ class SimulatedDevice:
     noise_k : TSP noise, kelvin (standard deviation).
     effects : enabled effect names (default: the bench artefacts, see ``plant.DEFAULT_EFFECTS``).
     firmware_version : report this version in INFO instead of the real one (tests).
+    array : the array of the ``array`` device (default :class:`ArrayGeometry`, a 2 x 4 cell).
     """
 
     def __init__(self, device: str = "actuator", *, seed: int = 0, noise_k: float = 0.03,
                  effects: Iterable[str] | None = None,
-                 firmware_version: tuple[int, int, int] | None = None) -> None:
+                 firmware_version: tuple[int, int, int] | None = None,
+                 array: ArrayGeometry | None = None) -> None:
         self.preset = get_preset(device)
         self.effects = tuple(DEFAULT_EFFECTS if effects is None else effects)
         self.rng = np.random.default_rng(seed)
-        self.plant = Plant(self.preset, self.effects)
+        if device == "array":
+            self.plant: Plant = ArrayPlant(self.preset, array or ArrayGeometry())
+        elif array is not None:
+            raise InstrumentError(f"sim://{device}: rows, cols, pitch and coupling are options "
+                                  f"of sim://array")
+        else:
+            self.plant = Plant(self.preset, self.effects)
         self.frontend = Frontend(self.preset, self.effects, noise_k, self.rng)
         self.ideal_hold = "sample-window" not in self.effects
         self._lib = firmware_library()
@@ -167,6 +181,9 @@ class SimulatedDevice:
         bd.caps = CAP_IDEAL_HOLD if self.ideal_hold else 0
         bd.adc_bits = 10
         bd.name = b.name.encode("ascii")[:15]
+        if isinstance(self.plant, ArrayPlant):
+            bd.ports = self.plant.n_ports
+            bd.scan_us = SCAN_US
 
     def close(self) -> None:
         if self._dev:
@@ -259,6 +276,13 @@ class SimulatedDevice:
                 self.adc_at, self.adc_kind = base + o.a * 1e-6, OP_ADC_AFTER_CUT
             elif o.op == OP_ADC_ON_PHASE:
                 self.adc_at, self.adc_kind = self._on_phase_middle(), OP_ADC_ON_PHASE
+            elif o.op in (OP_HEATER, OP_TSP) and isinstance(self.plant, ArrayPlant):
+                self.advance_to(self.t)
+                if o.op == OP_HEATER:
+                    self.plant.heater = min(o.a, self.plant.n_ports - 1)
+                    self.plant.drive_changed()
+                else:
+                    self.plant.tsp_port = min(o.a, self.plant.n_ports - 1)
             elif o.op == OP_FIXTURE:
                 self.advance_to(self.t)
                 if o.a == 0:
@@ -353,14 +377,15 @@ class SimulatedDevice:
         held = None
         if kind == OP_ADC_AFTER_CUT and self.ideal_hold and self.cut_at is not None:
             self.advance_to(max(self.cut_at, self.t))
-            held = self.plant.tj_c
+            held = self.plant.sensed_c
         self.advance_to(t_adc)
         plant = self.plant
         on = self._heater_on(self.t)
         since = None if self.last_cut is None else self.t - self.last_cut
         tj = plant.tj_c
         codes = self.frontend.codes(
-            tj_c=tj, tj_tsp_c=tj if held is None else held, ambient_c=plant.ambient_c(),
+            tj_c=tj, tj_tsp_c=plant.sensed_c if held is None else held,
+            ambient_c=plant.ambient_c(),
             tref_c=plant.tref_c,
             taux_c=tj if plant.fixture_c is not None else plant.ambient_c(),
             heater_on=on, current_a=self.current_a,

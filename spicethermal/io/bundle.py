@@ -47,6 +47,7 @@ from .columns import (
     scalar,
     set_fields,
 )
+from .coupling import CouplingSection
 from .datasets import CalibrationTable, CoolingTable, PwmTable, ZthTable
 from .files import (
     clean_leftovers,
@@ -95,6 +96,8 @@ class Bundle:
         The PWM grid of junction temperatures.
     zth : tuple of ZthTable
         Zth(t) curves given as such (datasheet or measured).
+    coupling : CouplingSection or None
+        "Heat one, read all" on an array of devices (format version 3).
     extra : Mapping
         Unknown keys of ``bundle.json``, kept and written back.
     source : str or None
@@ -114,6 +117,7 @@ class Bundle:
     zth: tuple[ZthTable, ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
     source: str | None = field(default=None, compare=False)
+    coupling: CouplingSection | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.device, str):
@@ -179,6 +183,8 @@ class Bundle:
             out.append((self.pwm.file or "pwm.csv", self.pwm))
         for i, z in enumerate(self.zth, start=1):
             out.append((z.file or f"zth_{i}.csv", z))
+        for i, c in enumerate(self.coupling.curves if self.coupling else (), start=1):
+            out.append((c.file or f"coupling_{i}.csv", c))
         return out
 
     # -- reading -------------------------------------------------------------------------
@@ -197,14 +203,16 @@ class Bundle:
         cooling = reader.cooling(calibration)
         pwm, zth = reader.pwm(), reader.zth()
         return cls(calibration=calibration, cooling=cooling, pwm=pwm, zth=zth,
-                   source=str(reader.path), **reader.top_level())
+                   source=str(reader.path), coupling=CouplingSection.read(reader),
+                   **reader.top_level())
 
     # -- writing -------------------------------------------------------------------------
     def manifest(self) -> dict[str, Any]:
         """The ``bundle.json`` document (file names as :meth:`write` uses them)."""
         v1 = isinstance(self.calibration, CalibrationTable | None) and (
             self.calibration is None or self.calibration.kind == "table")
-        doc: dict[str, Any] = {"format": FORMATS[0] if v1 else FORMAT, "device": self.device,
+        fmt = FORMATS[2] if self.coupling is not None else FORMATS[0] if v1 else FORMAT
+        doc: dict[str, Any] = {"format": fmt, "device": self.device,
                                "reference": self.reference}
         if self.ambient_c is not None:
             doc["ambient_c"] = self.ambient_c
@@ -221,6 +229,9 @@ class Bundle:
             doc["pwm"] = {"file": named[id(self.pwm)], **self.pwm.manifest(), **self.pwm.extra}
         if self.zth:
             doc["zth"] = [{"file": named[id(z)], **z.manifest(), **z.extra} for z in self.zth]
+        if self.coupling is not None:
+            doc["coupling"] = self.coupling.manifest([named[id(c)]
+                                                      for c in self.coupling.curves])
         for k, v in self.extra.items():
             doc.setdefault(k, v)
         return doc

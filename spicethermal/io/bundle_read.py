@@ -23,8 +23,9 @@ from .datasets import CalibrationTable, CoolingTable, PwmTable, ZthTable
 
 FORMAT = "spicethermal-bundle/2"
 #: Versions read; a bundle is written with the lowest one that holds it (a /1 reader still
-#: reads every bundle whose calibration is a table). /2 adds calibration kinds.
-FORMATS = ("spicethermal-bundle/1", FORMAT)
+#: reads every bundle whose calibration is a table). /2 adds calibration kinds, /3 the
+#: ``coupling`` section of an array (:mod:`spicethermal.io.coupling`).
+FORMATS = ("spicethermal-bundle/1", FORMAT, "spicethermal-bundle/3")
 #: Calibration kinds of ``bundle.json`` (``docs/bundle-format.md``).
 CALIBRATION_KINDS = ("table", "k-factor", "polynomial")
 MANIFEST = "bundle.json"
@@ -46,8 +47,10 @@ def manifest_files(path: str | os.PathLike) -> set[str]:
         return set()
     names: set[str] = set()
     if isinstance(doc, dict):
-        for key in ("calibration", "cooling", "pwm", "zth"):
-            entries = doc.get(key)
+        coupling = doc.get("coupling")
+        extra = coupling.get("curves") if isinstance(coupling, dict) else None
+        for key in ("calibration", "cooling", "pwm", "zth", "curves"):
+            entries = extra if key == "curves" else doc.get(key)
             for entry in entries if isinstance(entries, list) else [entries]:
                 if isinstance(entry, dict) and isinstance(entry.get("file"), str):
                     names.add(entry["file"])
@@ -285,6 +288,6 @@ class ManifestReader:
         ambient = self.num(doc, "", "ambient_c", temperature=True) if "ambient_c" in doc else None
         extra = {k: v for k, v in doc.items() if k not in (
             "format", "device", "reference", "ambient_c", "calibration", "cooling", "pwm",
-            "zth")}
+            "zth", "coupling")}
         return {"device": doc.get("device", ""), "reference": doc.get("reference", "ambient"),
                 "ambient_c": ambient, "extra": extra}

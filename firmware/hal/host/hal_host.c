@@ -29,6 +29,8 @@ void hal_adc_at(uint32_t t_us) { op(HH_OP_ADC_AT, t_us, 0); }
 void hal_adc_after_cut(uint32_t delay_us) { op(HH_OP_ADC_AFTER_CUT, delay_us, 0); }
 void hal_adc_on_phase(void) { op(HH_OP_ADC_ON_PHASE, 0, 0); }
 void hal_fixture_dac(uint16_t code) { op(HH_OP_FIXTURE, code, 0); }
+void hal_select_heater(uint8_t port) { op(HH_OP_HEATER, port, 0); }
+void hal_select_tsp(uint8_t port) { op(HH_OP_TSP, port, 0); }
 uint16_t hal_uart_space(void)
 {
     uint32_t free = HH_TX_LEN - cur->s.tx_len;

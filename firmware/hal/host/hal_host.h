@@ -20,7 +20,9 @@ enum {
     HH_OP_ADC_AT = 5,        /* a = t_us */
     HH_OP_ADC_AFTER_CUT = 6, /* a = delay_us */
     HH_OP_ADC_ON_PHASE = 7,
-    HH_OP_FIXTURE = 8        /* a = code */
+    HH_OP_FIXTURE = 8,       /* a = code */
+    HH_OP_HEATER = 9,        /* a = heater of an array board */
+    HH_OP_TSP = 10           /* a = TSP diode of an array board */
 };
 
 typedef struct {

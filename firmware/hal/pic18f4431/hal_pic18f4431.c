@@ -8,6 +8,9 @@
  * - High-speed ADC in multi-channel sequential mode, 4 sample-and-holds + AN4, triggered by
  *   the Timer5 special event (scheduled instants and sample windows).
  * - EUSART at 115200 baud, interrupt-driven 64-byte transmit queue.
+ * - Array board: RD0..RD2 address the heater demultiplexer (the current source to one of 8
+ *   heaters), RD4..RD6 the TSP multiplexer (one of 8 diodes to the INA112); this board has
+ *   one heater, so it reports 0 ports and the selects only set the (unconnected) pins.
  *
  * The same core (src/) runs on the host with hal/host; `make test` syntax-checks this file
  * against pic18f4431_regs.h (-DHOST_CHECK_PIC) since no PIC compiler is available in CI. */
@@ -42,7 +45,7 @@ static const st_board_t board = {
      {78125L, 0L, 160L},          /* Id: uA */
      {78125L, 0L, 1600L},         /* Tamb: m degC */
      {78125L, -8000000L, 800L}},  /* Taux: m degC */
-    250000UL, 1023u, 700000UL, -10000L, 90000L, 0u, 10u, "pic18f4431"};
+    250000UL, 1023u, 700000UL, -10000L, 90000L, 0u, 10u, "pic18f4431", 0u, 0u};
 
 const st_board_t *hal_board(void) { return &board; }
 
@@ -110,6 +113,9 @@ void hal_heater_dac(uint16_t code)
     PDC1L = (uint8_t)duty;
     PDC1H = (uint8_t)(duty >> 8);
 }
+
+void hal_select_heater(uint8_t port) { LATD = (uint8_t)((LATD & 0xF8u) | (port & 0x07u)); }
+void hal_select_tsp(uint8_t port) { LATD = (uint8_t)((LATD & 0x8Fu) | ((port & 0x07u) << 4)); }
 
 void hal_fixture_dac(uint16_t code)
 {
@@ -268,6 +274,7 @@ static void hw_init(void)
     TRISA = 0x1F;
     TRISB = 0x00;  /* PWM outputs */
     TRISC = 0x80;  /* RX in, TX out */
+    TRISD = 0x00;  /* multiplexer addresses (array board) */
     T1CON = 0xB1;  /* 16-bit, 1:8, on */
     ADCON0 = 0x1D; /* continuous off, multi-channel sequential (SEQM2), on */
     ADCON1 = 0x10; /* AVdd/AVss reference, FIFO enabled */

@@ -14,7 +14,7 @@
 #define di() ((void)0)
 
 extern volatile uint8_t OSCCON, INTCON, INTCON2, PIE1, PIR1, PIE3, PIR3, IPR1, RCON;
-extern volatile uint8_t TRISA, TRISB, TRISC, TRISD, TRISE, ANSEL0, ANSEL1;
+extern volatile uint8_t TRISA, TRISB, TRISC, TRISD, TRISE, ANSEL0, ANSEL1, LATD;
 /* Timer1: 1 us tick (Fosc 32 MHz, Fcy 8 MHz, prescale 1:8) */
 extern volatile uint8_t T1CON, TMR1H, TMR1L;
 /* Timer5: window / scheduled-conversion compare (special event trigger to the ADC) */
