@@ -24,6 +24,7 @@ from ..engines.network import NetworkBatch
 from .forward import predict_model
 from .joint import (
     MAX_ORDER,
+    ORDER_PATIENCE,
     Layout,
     ModelFit,
     Start,
@@ -166,11 +167,13 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     forms : sequence of str, optional
         The forms to fit (default: all).
     grow : callable, optional
-        When ``grow(fit)`` is true of the best form's fit (it leaves a data set beyond its
-        noise), that form is also refitted on a ladder one stage longer (started from the
-        linear ladder of that order): the model's order was chosen without the effect, whose
-        misfit may have taken or hidden a stage. The longer ladder replaces the form's fit
-        when its criterion (two parameters more) is lower.
+        While ``grow(fit)`` is true of the best form's fit (it leaves a data set beyond its
+        noise), that form is also refitted on a ladder one stage longer, then another
+        (started from the linear ladder of that order), until
+        :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing: the
+        model's order was chosen without the effect, whose misfit may have taken or hidden
+        stages. A longer ladder replaces the form's fit when its criterion (two parameters
+        a stage) is lower.
 
     Returns
     -------
@@ -185,6 +188,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     out: list[ModelFit] = []
     lead: ModelFit | None = None  # the best joint refit so far
     others = tuple(dict(e.params) for e in model.effects)
+    seeds: list[list[dict[str, float]]] = []  # each form's screened values that were refitted
 
     def screen(base: ModelFit, form: str, pairs: list) -> tuple[list[ModelFit | None], int]:
         starts = [Start(base.ladder, (*others, _clip(plugin, {**defaults, **v, **s})))
@@ -238,6 +242,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                 heads = [there[0]]
         if not heads:
             continue
+        seeds.append([dict(m.effect(plugin.name).params) for m in heads])  # type: ignore
         fits = [_refine(data, noise, m, refine_rounds, 0) for m in heads]
         fit = min(fits, key=lambda m: bic(m, n_points))
         fit = ModelFit(fit.ladder, fit.effects, fit.predictions, fit.chi2, fit.n_params,
@@ -247,9 +252,16 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         out.append(fit)
     if grow and out:
         k = min(range(len(out)), key=lambda i: bic(out[i], n_points))
-        longer = _longer(data, noise, out[k], refine_rounds) if grow(out[k]) else None
-        if longer is not None and bic(longer, n_points) < bic(out[k], n_points):
-            out[k] = longer
+        current, misses = out[k], 0
+        while grow(out[k]) and misses < ORDER_PATIENCE:
+            longer = _longer(data, noise, current, refine_rounds, seeds[k])
+            if longer is None:
+                break
+            current = longer
+            if bic(longer, n_points) < bic(out[k], n_points):
+                out[k], misses = longer, 0
+            else:
+                misses += 1
     return out
 
 
@@ -289,9 +301,10 @@ def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds:
 
 
 def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
-            rounds: int) -> ModelFit | None:
-    """``fit`` refitted on a ladder one stage longer (the linear ladder of that order as the
-    start, the effects' values as they are)."""
+            rounds: int, seeds: Sequence[Mapping[str, float]]) -> ModelFit | None:
+    """``fit`` refitted on a ladder one stage longer: the linear ladder of that order as the
+    start, the last effect's values as they are and as each of ``seeds`` (its screened
+    values: a short ladder may have pulled the effect far from them); the best."""
     n = fit.ladder.order + 1
     if n > MAX_ORDER:
         return None
@@ -299,7 +312,11 @@ def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
     if ladder is None:
         return None
     values = tuple(dict(e.params) for e in fit.effects)
-    got = fit_starts(data, noise, Layout(_slots(fit), n), [Start(ladder, values)], rounds)[0]
-    return None if got is None else ModelFit(got.ladder, got.effects, got.predictions,
-                                             got.chi2, got.n_params, fit.work + got.work,
-                                             got.converged)
+    starts = [Start(ladder, values)] + [Start(ladder, (*values[:-1], dict(s))) for s in seeds]
+    got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds)
+           if m is not None]
+    if not got:
+        return None
+    best = min(got, key=lambda m: m.chi2_total)
+    return ModelFit(best.ladder, best.effects, best.predictions, best.chi2, best.n_params,
+                    fit.work + sum(m.work for m in got), best.converged)
