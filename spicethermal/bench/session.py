@@ -3,7 +3,7 @@
 A session holds the bundle's lock (:func:`spicethermal.io.files.locked`) from start to end, so a
 second writer stops with a one-line error (or waits, ``wait=True``). Raw bytes go to
 ``BUNDLE/raw/<session>/`` inside the live bundle, appended and fsynced before they are
-processed (:class:`~spicethermal.bench.client.RawLog`); a new bundle starts empty on disk
+processed (:class:`~spicethermal.bench.link.RawLog`); a new bundle starts empty on disk
 for that. The data sets measured are *added*: a rerun gets a new file name (``cooling_3.csv``,
 ``calibration_2.csv``); a single section's previous entry (calibration, pwm, the Rth summary)
 moves to the manifest's ``superseded`` list and its file stays; only ``replace=[NAME]`` puts
