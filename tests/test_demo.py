@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from spicethermal.analysis.demo import run_demo
+from spicethermal.demo import run_demo
 from spicethermal.model import ThermalModel
 from spicethermal.report.html import SECTION_IDS, figure_is_nontrivial
 

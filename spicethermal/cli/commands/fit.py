@@ -22,13 +22,13 @@ from ...analysis.diagnose import fit_with_effects
 from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
 from ...effects import plugin
-from ...fit.bootstrap import fig_fit_band, fit_bootstrap
+from ...fit.bootstrap import fit_bootstrap
 from ...fit.ladder import check_rth, fit_model
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
 from ...io.sources import early_time_json
 from ...viz.early_figure import fig_early_time
-from ...viz.plots import fig7
+from ...viz.plots import fig7, fig_fit_band
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 

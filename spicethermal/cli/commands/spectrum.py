@@ -26,12 +26,12 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from ... import __version__
-from ...fit.bootstrap import fig_spectrum_band, spectrum_bootstrap
+from ...fit.bootstrap import spectrum_bootstrap
 from ...identify.spectrum import time_constant_spectrum
 from ...io.files import dumps_json
 from ...io.sources import early_time_json
 from ...model import ThermalModel
-from ...viz.plots import fig_spectrum
+from ...viz.plots import fig_spectrum, fig_spectrum_band
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import add_option, old_figure_output
 from ._types import count as _count
