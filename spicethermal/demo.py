@@ -25,8 +25,10 @@ from .core.errors import SpiceThermalError
 from .core.progress import enabled
 from .fit.ladder import fit_model
 from .identify.curves import ZthCurve
+from .identify.datasheet import table1
+from .identify.readings import calibration_fit
 from .io.bundle import Bundle
-from .io.datasheet import mur880e, table1
+from .io.datasheet import mur880e
 from .io.files import write_json
 from .report import html as report
 from .spice.lib import DIALECTS, TOPOLOGIES, export
@@ -143,7 +145,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
 
     # 2. calibration and Zth --------------------------------------------------------------
     def calibrate_and_extract():
-        cal = bundle.calibration_fit()
+        cal = calibration_fit(bundle)
         curves = ZthCurve.from_bundle(bundle)
         plots.fig_calibration(cal, figs / "fig2_calibration.png")
         return cal, curves
