@@ -344,11 +344,6 @@ def test_io_reads_files_and_identify_interprets_them_not_both_ways() -> None:
     assert not io_to_identify, sorted(io_to_identify)
 
 
-#: The simulated bench still names the effects it simulates: shrink, never grow.
-NAMING_EFFECTS = {"spicethermal.bench.devices", "spicethermal.bench.plant",
-                  "spicethermal.bench.simulator"}
-
-
 def test_no_effect_is_named_outside_the_effects_package() -> None:
     """Effects are plugins: nothing outside ``spicethermal/effects/`` spells one's name (the
     independent validation generator, which holds each case's truth as a label, excepted)."""
@@ -357,8 +352,7 @@ def test_no_effect_is_named_outside_the_effects_package() -> None:
     names = set(CATALOGUE)
     found = []
     for name, path in MODULES.items():
-        if name.startswith(("spicethermal.effects", "spicethermal.validation")) \
-                or name in NAMING_EFFECTS:
+        if name.startswith(("spicethermal.effects", "spicethermal.validation")):
             continue
         tree = ast.parse(path.read_text())
         docs = {id(n.body[0].value) for n in ast.walk(tree)  # docstrings document, not code
