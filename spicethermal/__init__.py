@@ -43,8 +43,8 @@ _API: dict[str, str] = {
     "read_source": "identify.sources",
     "import_model": "io.vendor",
     "read_library": "io.vendor",
-    "PowerProfile": "analysis.predict",
-    "predict": "analysis.predict",
+    "PowerProfile": "predict",
+    "predict": "predict",
     # fitting, comparison, diagnosis
     "fit_foster": "fit.ladder",
     "fit_model": "fit.ladder",

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from ... import __version__
 from ...analysis.diagnose import fit_with_effects
-from ...analysis.tables import foster_table_csv
+from ...report.tables import foster_table_csv
 from ...core.errors import DataFormatError
 from ...effects import plugin
 from ...fit.bootstrap import fit_bootstrap
