@@ -312,6 +312,9 @@ def fit_array(data: CouplingData, order: int | str = "auto",
             if len(orders) == 1:
                 raise FitError(f"{data.source}: the order-{lv} network did not fit ({exc})"
                                ) from None
+            worse += 1  # an order that does not fit counts as one that does not improve
+            if worse >= 2 and best is not None:
+                break
             continue
         trials.append(trial)
         if best is None or trial.bic < best[1].bic:

@@ -69,8 +69,8 @@ class Plan:
 
 PLANS: dict[str, Plan] = {
     "actuator": Plan(description="thermopneumatic actuator, diode heater (paper, sections 2, 7)"),
-    "array": Plan(description="array of thermopneumatic actuators on a common substrate "
-                  "(issue #47)", settle_s=300.0, cooling_t_last_s=300.0, n_readings=4),
+    "array": Plan(description="actuator array", settle_s=300.0, cooling_t_last_s=300.0,
+                  n_readings=4),
     "mur880e": Plan(description="MUR880E power diode on a heat sink, junction to case "
                     "(paper, section 5)", reference="case",
                     calibration_c=(25.0, 35.0, 45.0, 55.0, 65.0, 75.0), rth_power_w=10.0,

@@ -1,7 +1,8 @@
 """``spicethermal bench ACTION --port URL -o BUNDLE``: measure on the bench (or its simulator).
 
 ACTION is ``run`` (calibration, Rth, two cooling curves, the PWM grid) or one procedure:
-``calibrate``, ``rth``, ``cooling``, ``pwm``. The data sets measured are added to an existing
+``calibrate``, ``rth``, ``cooling``, ``pwm``; ``coupling`` on an array board (``sim://array``):
+heat one, read all, for every heater. The data sets measured are added to an existing
 bundle (a rerun gets new file names; ``--replace NAME`` replaces one); a second process
 writing the same bundle stops with a one-line error, or waits with ``--wait``.
 URL is any pyserial URL (``/dev/ttyUSB0``, ``socket://host:port``) or the simulated bench,
@@ -14,8 +15,15 @@ from __future__ import annotations
 import argparse
 
 from ...bench.session import ACTIONS, run_bench
-from ._types import add_option, frequency, listed, number, positive_duration, positive_power
-from ._types import positive as _positive
+from ._types import (
+    add_option,
+    frequency,
+    listed,
+    number,
+    positive,
+    positive_duration,
+    positive_power,
+)
 
 NAME = "bench"
 HELP = "measure on the bench or the simulated bench (sim://actuator, sim://mur880e) into a bundle"
@@ -26,6 +34,7 @@ ACTION_HELP = {
     "rth": "thermal resistance at 99.9 %% duty with sample windows",
     "cooling": "cooling curves at log-spaced times after power cut-off, one per power",
     "pwm": "PWM readings at a grid of frequencies and duty cycles",
+    "coupling": "array boards: heat each heater in turn, read every port (heat one, read all)",
 }
 
 
@@ -54,11 +63,19 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
     if action in ("run", "rth"):
         p.add_argument("--rth-power", type=positive_power, dest="rth_power_w", metavar="W",
                        help="power of the Rth measurement, W (default from the board's plan)")
+    if action == "coupling":
+        p.add_argument("--coupling-power", type=positive_power, dest="coupling_power_w",
+                       metavar="W", help="power of each heater, W (default from the board's plan)")
+        p.add_argument("--grid", type=_grid, dest="grid", metavar="ROWSxCOLS",
+                       help="the cells' grid (default: a Braille cell for 6 or 8 heaters)")
+        p.add_argument("--pitch", type=positive, dest="array_pitch_mm", metavar="MM",
+                       help="distance between neighbouring cells, mm (default 2.5)")
     if action in ("run", "cooling"):
         add_option(p, "--cooling-power", old=("--powers",), type=listed(positive_power),
                    dest="cooling_powers_w", metavar="W,...",
                    help="powers of the cooling curves, one curve each, W (default from the "
                         "board's plan)")
+    if action in ("run", "cooling", "coupling"):
         p.add_argument("--t-last", type=positive_duration, dest="cooling_t_last_s", metavar="S",
                        help="last cooling sample, s after the cut (default from the board's "
                             "plan)")
@@ -67,7 +84,7 @@ def _common(p: argparse.ArgumentParser, action: str) -> None:
                        help="pulse power of the PWM runs, W (default from the board's plan)")
         add_option(p, "--freq", old=("--freqs",), type=listed(frequency), dest="pwm_freqs_hz",
                    metavar="HZ,...", help="PWM frequencies, Hz (default from the board's plan)")
-        add_option(p, "--duty", old=("--duties",), type=listed(_positive), dest="pwm_duties",
+        add_option(p, "--duty", old=("--duties",), type=listed(positive), dest="pwm_duties",
                    metavar="D,...", help="PWM duty cycles in (0, 1] (default from the board's "
                                          "plan)")
 
@@ -80,11 +97,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 PLAN_KEYS = ("settle_s", "window_s", "calibration_c", "rth_power_w", "cooling_powers_w",
-             "cooling_t_last_s", "pwm_power_w", "pwm_freqs_hz", "pwm_duties")
+             "cooling_t_last_s", "pwm_power_w", "pwm_freqs_hz", "pwm_duties",
+             "coupling_power_w", "array_pitch_mm")
+
+
+def _grid(text: str) -> tuple[int, int]:
+    parts = text.lower().split("x")
+    if len(parts) != 2 or not all(x.strip().isdigit() and int(x) > 0 for x in parts):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected ROWSxCOLS, e.g. 4x2")
+    return int(parts[0]), int(parts[1])
 
 
 def run(args: argparse.Namespace) -> int:
     overrides = {k: getattr(args, k) for k in PLAN_KEYS if getattr(args, k, None) is not None}
+    if getattr(args, "grid", None) is not None:
+        overrides["array_rows"], overrides["array_cols"] = args.grid
     actions = ACTIONS if args.action == "run" else (args.action,)
     path = run_bench(args.port, args.out, progress=not args.quiet, actions=actions,
                      replace_names=args.replace, wait=args.wait, **overrides)

@@ -25,6 +25,7 @@ from ...engines.interface import NAMES
 from ...io.files import atomic_write_text, dumps_json
 from ...model import ThermalModel
 from ...viz.plots import fig_drive
+from ._array import add_drive_arguments, is_array_document, run_drive
 from ._types import add_engine_options, add_option, frequency, positive_power, quantity
 from ._types import index as _node
 from ._types import number as _number
@@ -42,7 +43,8 @@ def _duty(text: str) -> float:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json",
-                        help="model file (spicethermal-model/3, /2 or /1)")
+                        help="model file (spicethermal-model/3, /2 or /1), or an array model "
+                             "(spicethermal-array-model/1: the options below for arrays)")
     parser.add_argument("--t-max", type=_number, required=True, metavar="C",
                         help="junction limit in °C; applies to the PWM peak")
     parser.add_argument("--target", type=_number, required=True, metavar="C",
@@ -77,12 +79,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run the deck in ngspice and compare the junction peak")
     add_engine_options(parser, NAMES, "engine of --verify: ngspice (ngspice -b, pieces in "
                        "parallel; auto) or pyspice; the drive itself is computed in closed form")
+    add_drive_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.engine == "analytic":  # before anything is computed or written
         raise DataFormatError("--engine analytic: the drive is already computed in closed form; "
                               "--verify runs it in ngspice or pyspice")
+    if is_array_document(args.model):  # an array: its dots, their patterns, the baselines
+        return run_drive(args)
     spice = "ngspice" if args.engine == "auto" else args.engine
     model = ThermalModel.load(args.model)
     if args.node >= model.ladder.order:

@@ -15,6 +15,7 @@ from ...spice.lib import (
     export,
     written_topology,
 )
+from ._array import is_array_document, run_export
 
 NAME = "export"
 HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and temperature "
@@ -22,7 +23,9 @@ HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and t
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="spicethermal-model/3 (/2, /1) file")
+    parser.add_argument("model", metavar="MODEL.json",
+                        help="spicethermal-model/3 (/2, /1) file, or an array model "
+                             "(spicethermal-array-model/1: .SUBCKT NAME TJ1 ... TJN TREF)")
     parser.add_argument("--dialect", choices=DIALECTS, default="ngspice",
                         help="the simulator's syntax: ngspice (default), pspice or ltspice")
     parser.add_argument("--topology", choices=TOPOLOGIES, default=None,
@@ -44,6 +47,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if is_array_document(args.model):  # an N-port array model: TJ1 ... TJN TREF
+        return run_export(args)
     pins = Pins.parse(args.pins)  # before reading anything: bad options write nothing
     if args.name is not None:
         check_name(args.name)

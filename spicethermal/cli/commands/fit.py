@@ -7,7 +7,10 @@ first ``zth`` table; ``--curve`` picks another), a Zth or datasheet points CSV (
 (with ``--calibration`` or ``--k-factor`` where the file has none). ΣR = Rth is held whenever
 Rth is known: measured by a cooling curve (eq. 1), given in the bundle or by ``--rth``. The
 fit's report (order, criterion, R ± u, τ ± u) goes into the model's provenance and its table to
-stdout.
+stdout. A bundle whose only curves are an array's ``coupling`` section (heat one, read all)
+gets the array's N-port network instead (``docs/array-model-format.md``): ``--order`` and
+``--max-order`` count the nodes of each cell's chain, and the error of every element is
+printed.
 """
 
 from __future__ import annotations
@@ -19,7 +22,6 @@ from pathlib import Path
 
 from ... import __version__
 from ...analysis.diagnose import fit_with_effects
-from ...report.tables import foster_table_csv
 from ...core.errors import DataFormatError
 from ...effects import plugin
 from ...fit.bootstrap import fit_bootstrap
@@ -28,8 +30,10 @@ from ...identify.readings import cooling_tj_c
 from ...identify.sources import early_time_json
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
+from ...report.tables import foster_table_csv
 from ...viz.early_figure import fig_early_time
 from ...viz.plots import fig7, fig_fit_band
+from ._array import is_array_bundle, run_fit
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 
@@ -114,6 +118,8 @@ def _early_plot(src, args: argparse.Namespace, curve) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
+    if is_array_bundle(args.source):  # heat one, read all: the array's N-port model
+        return run_fit(args)
     source = Path(args.source)
     if args.effect:
         return _run_with_effects(args, source)
