@@ -5,7 +5,8 @@ simulated 2 x 4 actuator array (``sim://array``, an eight-dot Braille cell at 2.
 measures heat one, read all through the firmware, fits the N-port model (order by BIC),
 checks the N-port ``.lib`` in ngspice in the three dialects, and refreshes a 40-character
 line of text with the crosstalk-aware drive, the naive lone drives and the constant hold,
-every distinct cell checked in ngspice. It prints the figures ``bench/README.md`` records.
+every distinct cell checked in ngspice (seed 47 of the simulated bench). It prints the
+figures ``bench/README.md`` records.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spicethermal.array.check import verify_line
 from spicethermal.array.data import coupling_from_bundle
 from spicethermal.array.drive import Limits
 from spicethermal.array.fit import fit_array
@@ -55,6 +57,8 @@ def main(cells: int = 40) -> None:
         fit = fit_array(data)
         print(f"fit ({time.perf_counter() - t0:.1f} s): {fit}")
         print(fit.table())
+        print(f"(a) worst |Z_ij fit - measured| {100 * fit.max_error:.2f} % of Z_ii final "
+              f"(target <= 2 %)")
         truth = ArrayGeometry().model()
         t = np.geomspace(1e-4, 300, 200)
         dev = np.max(np.abs(fit.model.zth(t) - truth.zth(t)), axis=0) / np.diag(
@@ -64,7 +68,7 @@ def main(cells: int = 40) -> None:
         for dialect in ("ngspice", "pspice", "ltspice"):
             t0 = time.perf_counter()
             check = check_array_lib(fit.model, dialect)
-            print(f".lib in ngspice ({dialect}, {check['runs']} runs, "
+            print(f"(b) .lib in ngspice ({dialect}, {check['runs']} runs, "
                   f"{time.perf_counter() - t0:.1f} s): worst pin {100 * check['max_error']:.3f} "
                   f"% of Z_ii from the fitted model")
         text = LINE[:cells]
@@ -73,15 +77,20 @@ def main(cells: int = 40) -> None:
         t_plan = time.perf_counter() - t0
         checks = None
         if shutil.which("ngspice"):
-            from spicethermal.cli.commands._array import _check_all  # the command's summing
-
             t0 = time.perf_counter()
-            checks = _check_all(list(line.drives.values()), "ngspice")
+            checks = verify_line(line, "ngspice")
             t_spice = time.perf_counter() - t0
         doc = line_document(line, checks)
         print(f"line of {cells} cells planned in {t_plan:.1f} s"
               + (f", checked in ngspice in {t_spice:.1f} s" if checks else ""))
         print(summary(doc))
+        ours, naive = doc["refresh_s"]["ours"][0], doc["raised_s"]["naive"][0]
+        if ours is not None and naive is not None:
+            print(f"(c) refresh {1e3 * ours:.1f} ms ({1 / ours:.1f} lines/s); the naive drive "
+                  f"has every dot up after {1e3 * naive:.1f} ms but "
+                  f"{'never settles' if doc['refresh_s']['naive'][0] is None else 'settles'}, "
+                  f"with {doc['violations']['naive']['t_max']} t_max and "
+                  f"{doc['violations']['naive']['actuation']} actuation violations")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

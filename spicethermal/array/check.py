@@ -37,9 +37,9 @@ from .modal import ArraySchedule
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from .refresh import CellDrive
+    from .refresh import CellDrive, LineDrive
 
-__all__ = ["drive_deck", "verify_drive"]
+__all__ = ["drive_deck", "verify_drive", "verify_line"]
 
 #: Periods of a switched run: at least, at most.
 WINDOW_PERIODS = (30, 2000)
@@ -230,6 +230,41 @@ def verify_drive(cd: CellDrive, which: str = "ours", engine: str = "ngspice") ->
             "actuation": sum(1 for kind, _, _ in seen if kind == "actuation"),
             "mean_error_k": mean_error, "peak_error_k": peak_error,
             "windows_s": [list(w) for w in windows]}
+
+
+def verify_line(ld: LineDrive, engine: str = "ngspice") -> dict[str, dict]:
+    """:func:`verify_drive` of every distinct column of a line, for ``ours`` and ``naive``.
+
+    Violations are counted per cell of the line (a column shown by several cells counts once
+    for each of them, as :meth:`.refresh.LineDrive.count` does).
+
+    Parameters
+    ----------
+    ld : LineDrive
+        The planned line (or one array as a line of one cell).
+    engine : str
+        ``ngspice`` or ``pyspice``.
+
+    Returns
+    -------
+    dict
+        By drive (``ours``, ``naive``): ``engine``, ``runs``, ``t_max`` and ``actuation``
+        (violations seen in ngspice), ``peak_c`` (per distinct column, its hottest junction),
+        ``peak_error_k`` and ``mean_error_k`` (the largest over the columns).
+    """
+    shown = {c: ld.columns.count(c) for c in ld.drives}
+    out: dict[str, dict] = {}
+    for which in ("ours", "naive"):
+        checks = {c: verify_drive(cd, which, engine) for c, cd in ld.drives.items()}
+        first = next(iter(checks.values()))
+        out[which] = {"engine": first["engine"],
+                      "runs": sum(c["runs"] for c in checks.values()),
+                      "t_max": sum(shown[c] * v["t_max"] for c, v in checks.items()),
+                      "actuation": sum(shown[c] * v["actuation"] for c, v in checks.items()),
+                      "peak_c": [max(v["peak_c"]) for v in checks.values()],
+                      "peak_error_k": max(v["peak_error_k"] for v in checks.values()),
+                      "mean_error_k": max(v["mean_error_k"] for v in checks.values())}
+    return out
 
 
 def _window_peaks(dyn: ArrayDynamics, schedule: DutySchedule, a: float, b: float) -> NDArray:

@@ -8,6 +8,8 @@ network against a sequence of patterns:
 * the *refresh time* of a pattern is from its start until every raised dot is in the band
   ``target ± tol`` and every lowered dot below ``actuation − margin``, both for good (until the
   next pattern), on the period averages; ``inf`` if that never happens;
+* the *raise time* of a pattern is from its start until every raised dot has reached its
+  actuation temperature (the dots are up, whatever happens after); ``inf`` if one never does;
 * a *violation* is a cell whose junction peak exceeds ``t_max`` during a pattern (exact
   switched peaks), or a dot that must be down reaching its actuation temperature although it
   was below it (its neighbours lifted it).
@@ -82,6 +84,8 @@ class Evaluation:
         The time grid of the trajectories, s.
     mean_c : NDArray
         ``(len(t_s), N)`` period-average heater temperatures, °C.
+    raised_s : tuple of float
+        Per pattern, its raise time, s (``inf``: a raised dot never reaches actuation).
     """
 
     refresh_s: tuple[float, ...]
@@ -89,6 +93,7 @@ class Evaluation:
     peak_c: NDArray
     t_s: NDArray
     mean_c: NDArray
+    raised_s: tuple[float, ...] = ()
 
     def count(self, kind: str | None = None) -> int:
         """Number of violations (of one kind).
@@ -180,7 +185,8 @@ def evaluate(dyn: ArrayDynamics, schedule: DutySchedule, starts: list[float],
     mean_k = dyn.ports(dyn.modes.response(power, t))
     steps, after = steps_of(schedule, period, t_end)
     pk_t, pk = exact_peaks(dyn, np.zeros(dyn.modes.lam.size), steps, np.asarray(after), 1)
-    refresh, violations = [], []
+    refresh, raised, violations = [], [], []
+    act = lim.actuation_c - lim.ambient_c
     ends = [*starts[1:], t_end]
     for k, (a, b, up) in enumerate(zip(starts, ends, ups, strict=True)):
         up_a = np.asarray(up, dtype=bool)
@@ -198,6 +204,9 @@ def evaluate(dyn: ArrayDynamics, schedule: DutySchedule, starts: list[float],
             elif np.any(last >= 0):
                 done = max(done, float(tw[int(last.max()) + 1]))
         refresh.append(done)
+        reached = yw[:, up_a] >= act
+        raised.append(0.0 if not up_a.any() else math.inf if not reached.any(axis=0).all()
+                      else float(tw[int(np.argmax(reached, axis=0).max())]))
         psel = (pk_t >= a - 0.5 * period) & (pk_t < b - 0.5 * period)
         for i in range(n):
             if psel.any() and pk[psel, i].max() > lim.lim_k + 1e-6:
@@ -206,7 +215,6 @@ def evaluate(dyn: ArrayDynamics, schedule: DutySchedule, starts: list[float],
                                             lim.ambient_c + float(pk[psel, i][j])))
             if up_a[i]:
                 continue
-            act = lim.actuation_c - lim.ambient_c
             below = np.flatnonzero(yw[:, i] < act)
             if below.size:  # reached again after having been below it
                 later = yw[below[0]:, i]
@@ -215,4 +223,5 @@ def evaluate(dyn: ArrayDynamics, schedule: DutySchedule, starts: list[float],
                     violations.append(Violation("actuation", k, i, float(a + tw[j]),
                                                 lim.ambient_c + float(yw[j, i])))
     peak_c = lim.ambient_c + (pk.max(axis=0) if pk.size else np.zeros(n))
-    return Evaluation(tuple(refresh), tuple(violations), peak_c, t, lim.ambient_c + mean_k)
+    return Evaluation(tuple(refresh), tuple(violations), peak_c, t, lim.ambient_c + mean_k,
+                      tuple(raised))

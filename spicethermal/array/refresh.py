@@ -344,6 +344,22 @@ class LineDrive:
         return tuple(max(getattr(self.drives[c], attr).refresh_s[k] for c in self.columns)
                      for k in range(len(self.lines)))
 
+    def raised(self, which: str) -> tuple[float, ...]:
+        """Each line's raise time (every raised dot of every cell up at least once), s.
+
+        Parameters
+        ----------
+        which : str
+            ``ours``, ``naive`` or ``constant``.
+
+        Returns
+        -------
+        tuple of float
+        """
+        attr = {"ours": "ours", "naive": "naive_eval", "constant": "constant_eval"}[which]
+        return tuple(max(getattr(self.drives[c], attr).raised_s[k] for c in self.columns)
+                     for k in range(len(self.lines)))
+
 
 def drive_text(model: ArrayModel, lines: Sequence[str], lim: Limits, cells: int = 40,
                dwell_s: float = 0.0, progress: Callable[[int, int], None] | None = None

@@ -65,6 +65,7 @@ def cell_document(cd: CellDrive, checks: dict[str, dict] | None = None) -> dict[
     evs = _evaluations(cd)
     patterns = [{"t_s": t, "up": [n for n, u in zip(names, up, strict=True) if u],
                  "refresh_s": {k: _seconds(ev.refresh_s[i]) for k, ev in evs.items()},
+                 "raised_s": {k: _seconds(ev.raised_s[i]) for k, ev in evs.items()},
                  "hold_duty": list(cd.transitions[i].hold)}
                 for i, (t, up) in enumerate(zip(cd.starts, cd.ups, strict=True))]
     return {"format": DRIVE_FORMAT, "kind": "patterns", "ports": names, "limits": _limits(cd),
@@ -92,11 +93,13 @@ def line_document(ld: LineDrive, checks: dict[str, dict] | None = None) -> dict[
     """
     first = ld.drives[ld.columns[0]]
     refresh = {k: [_seconds(x) for x in ld.refresh(k)] for k in DRIVES}
+    raised = {k: [_seconds(x) for x in ld.raised(k)] for k in DRIVES}
     ours = ld.refresh("ours")
     rate = [1.0 / x if x > 0 and math.isfinite(x) else None for x in ours]
     return {"format": DRIVE_FORMAT, "kind": "text", "lines": list(ld.lines), "cells": ld.cells,
             "ports": [p.name for p in first.model.ports], "limits": _limits(first),
-            "starts_s": list(ld.starts), "refresh_s": refresh, "refresh_rate_hz": rate,
+            "starts_s": list(ld.starts), "refresh_s": refresh, "raised_s": raised,
+            "refresh_rate_hz": rate,
             "distinct_columns": len(ld.drives),
             "violations": {k: {"t_max": ld.count(k, "t_max"),
                                "actuation": ld.count(k, "actuation")} for k in DRIVES},
@@ -131,19 +134,22 @@ def summary(doc: dict[str, Any]) -> str:
                      f"({doc['distinct_columns']} distinct columns planned)")
         for k, text in enumerate(doc["lines"]):
             r = {d: doc["refresh_s"][d][k] for d in DRIVES}
+            u = {d: doc["raised_s"][d][k] for d in DRIVES}
             lines.append(f"  line {k + 1} {text!r} at {doc['starts_s'][k]:.4g} s: refresh "
                          f"{_time(r['ours'])} (naive {_time(r['naive'])}, constant hold "
-                         f"{_time(r['constant'])})")
+                         f"{_time(r['constant'])}); every dot up after {_time(u['ours'])} "
+                         f"(naive {_time(u['naive'])}, constant {_time(u['constant'])})")
         rate = doc["refresh_rate_hz"][0]
         if rate is not None:
             lines.append(f"refresh rate of a line from blank: {rate:.1f} lines/s "
                          f"({_time(doc['refresh_s']['ours'][0])})")
     else:
         for k, pat in enumerate(doc["patterns"]):
-            r = pat["refresh_s"]
+            r, u = pat["refresh_s"], pat["raised_s"]
             lines.append(f"  pattern {k + 1} at {pat['t_s']:.4g} s, up {' '.join(pat['up']) or '-'}"
                          f": refresh {_time(r['ours'])} (naive {_time(r['naive'])}, constant "
-                         f"hold {_time(r['constant'])})")
+                         f"hold {_time(r['constant'])}); dots up after {_time(u['ours'])} "
+                         f"(naive {_time(u['naive'])})")
     for d in DRIVES:
         v = doc["violations"][d]
         peak = doc["peak_c"][d]

@@ -205,7 +205,7 @@ def ramp_response(model: ArrayModel, t_s: NDArray, rise_s: float) -> NDArray:
 
 def check_array_lib(model: ArrayModel, dialect: str = "ngspice", *,
                     heated: list[int] | None = None, engine: str = "ngspice",
-                    lib_text: str | None = None) -> dict:
+                    lib_text: str | None = None, name: str = "ARRAY_CHECK") -> dict:
     """Step each heated port in ngspice and compare every pin with the model.
 
     Parameters
@@ -220,6 +220,8 @@ def check_array_lib(model: ArrayModel, dialect: str = "ngspice", *,
         ``ngspice`` (``ngspice -b``, decks in parallel) or ``pyspice``.
     lib_text : str, optional
         The ``.lib`` to check (default: :func:`render_array_lib` of the model).
+    name : str
+        The subcircuit's name in ``lib_text``.
 
     Returns
     -------
@@ -232,7 +234,6 @@ def check_array_lib(model: ArrayModel, dialect: str = "ngspice", *,
     taus = model.modes.tau
     tstop = 5 * float(taus.max())
     rise = 1e-3 * float(taus.min())
-    name = "ARRAY_CHECK"
     text = lib_text if lib_text is not None else render_array_lib(model, dialect, name)
     backend = simulator(engine)
     dc = np.diag(model.modes.dc())

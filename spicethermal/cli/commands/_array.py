@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ... import __version__
-from ...array.check import verify_drive
+from ...array.check import verify_line
 from ...array.data import coupling_from_bundle
 from ...array.drive import Limits
 from ...array.fit import fit_array
@@ -23,7 +23,7 @@ from ...array.result import cell_document, line_document, summary
 from ...core.errors import DataFormatError
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text, dumps_json, read_json, write_json
-from ...spice.array_lib import export_array, pins
+from ...spice.array_lib import check_array_lib, export_array, pins
 from ...spice.lib import check_name, default_name
 from ...spice.templates import environment
 from ...viz.array import fig_line_heatmap
@@ -104,9 +104,10 @@ def run_export(args: argparse.Namespace) -> int:
     -------
     int
     """
-    if args.topology is not None or args.pins != "TJ,TREF":
-        raise DataFormatError("--topology and --pins are not for an array: its .lib is the "
-                              "fitted network itself, pins TJ1 ... TJN TREF")
+    if args.topology is not None or args.pins != "TJ,TREF" or args.temperature != "absolute":
+        raise DataFormatError("--topology, --pins and --temperature are not for an array: its "
+                              ".lib is the fitted network itself, pins TJ1 ... TJN TREF (drive "
+                              "TREF with the ambient, or 0 V for rises)")
     if args.name is not None:
         check_name(args.name)
     model = ArrayModel.load(args.model)
@@ -114,6 +115,12 @@ def run_export(args: argparse.Namespace) -> int:
     path = export_array(model, args.output, args.dialect, name)
     print(f"wrote {path}: .SUBCKT {name} {' '.join(pins(model))}, {len(model.nodes)} nodes, "
           f"{len(model.resistors)} resistors, {args.dialect} dialect")
+    if args.verify:
+        check = check_array_lib(model, args.dialect, lib_text=path.read_text(), name=name)
+        worst = ", ".join(f"{k} {100 * v:.3f} %" for k, v in check["per_port"].items())
+        print(f"ngspice ({args.dialect} dialect, {check['runs']} step runs, "
+              f"{check['t_s'][0]:.3g}-{check['t_s'][1]:.3g} s): largest difference from the "
+              f"model {100 * check['max_error']:.3f} % of Z_ii (per heated pin: {worst})")
     return 0
 
 
@@ -178,19 +185,6 @@ def _patterns(path: str, model: ArrayModel) -> tuple[list[tuple[bool, ...]], lis
     return ups, [float(t) for t in times]
 
 
-def _check_all(drives: list[CellDrive], engine: str) -> dict[str, dict]:
-    out: dict[str, dict] = {}
-    for which in ("ours", "naive"):
-        checks = [verify_drive(cd, which, engine) for cd in drives]
-        out[which] = {"engine": checks[0]["engine"], "runs": sum(c["runs"] for c in checks),
-                      "t_max": sum(c["t_max"] for c in checks),
-                      "actuation": sum(c["actuation"] for c in checks),
-                      "peak_c": [max(c["peak_c"]) for c in checks],
-                      "peak_error_k": max(c["peak_error_k"] for c in checks),
-                      "mean_error_k": max(c["mean_error_k"] for c in checks)}
-    return out
-
-
 def _as_line(cd: CellDrive) -> LineDrive:
     names = tuple(f"pattern {k + 1}" for k in range(len(cd.starts)))
     return LineDrive(names, 1, cd.starts, cd.ours.refresh_s, {"cell": cd}, ("cell",))
@@ -234,14 +228,13 @@ def run_drive(args: argparse.Namespace) -> int:
 
     if args.text is not None:
         line = drive_text(model, args.text, lim, args.cells, args.dwell or 0.0, progress)
-        drives = list(line.drives.values())
-        checks = _check_all(drives, spice) if args.verify else None
+        checks = verify_line(line, spice) if args.verify else None
         doc = line_document(line, checks)
     else:
         ups, starts = _patterns(args.patterns, model)
         cd = drive_patterns(model, ups, lim, starts)
         line = _as_line(cd)
-        checks = _check_all([cd], spice) if args.verify else None
+        checks = verify_line(line, spice) if args.verify else None
         doc = cell_document(cd, checks)
     written = []
     if args.plot:

@@ -88,6 +88,12 @@ def run(args: argparse.Namespace) -> int:
                               "--verify runs it in ngspice or pyspice")
     if is_array_document(args.model):  # an array: its dots, their patterns, the baselines
         return run_drive(args)
+    for flag, given in (("--actuation", args.actuation), ("--margin", args.margin),
+                        ("--text", args.text), ("--patterns", args.patterns),
+                        ("--dwell", args.dwell), ("--report", args.report)):
+        if given is not None:
+            raise DataFormatError(f"{flag}: for an array model (spicethermal-array-model/1); "
+                                  f"{args.model} is a single device")
     spice = "ngspice" if args.engine == "auto" else args.engine
     model = ThermalModel.load(args.model)
     if args.node >= model.ladder.order:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...core.errors import DataFormatError
 from ...model import ThermalModel
 from ...spice.lib import (
     DIALECTS,
@@ -44,11 +45,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "drive the reference pin; rise: rises in K over node 0 = ambient")
     parser.add_argument("-o", "--output", required=True, metavar="FILE.lib",
                         help="the .lib file to write")
+    parser.add_argument("--verify", action="store_true",
+                        help="an array model: step every pin of the written .lib in ngspice "
+                             "and print its largest difference from the model (%% of Z_ii)")
 
 
 def run(args: argparse.Namespace) -> int:
     if is_array_document(args.model):  # an N-port array model: TJ1 ... TJN TREF
         return run_export(args)
+    if args.verify:
+        raise DataFormatError("--verify: for an array model (a single model's .lib is checked "
+                              "by the tests and by compare)")
     pins = Pins.parse(args.pins)  # before reading anything: bad options write nothing
     if args.name is not None:
         check_name(args.name)
