@@ -26,7 +26,8 @@ from ._types import (
 )
 
 NAME = "bench"
-HELP = "measure on the bench or the simulated bench (sim://actuator, sim://mur880e) into a bundle"
+HELP = ("measure on the bench or the simulated bench (sim://actuator, sim://mur880e, sim://array) "
+        "into a bundle")
 
 ACTION_HELP = {
     "run": "the whole run: calibrate, rth, cooling (two powers), pwm (the 18-point grid)",
@@ -40,7 +41,8 @@ ACTION_HELP = {
 
 def _common(p: argparse.ArgumentParser, action: str) -> None:
     p.add_argument("--port", required=True, metavar="URL",
-                   help="pyserial URL of the bench, or sim://actuator, sim://mur880e")
+                   help="pyserial URL of the bench, or sim://actuator, sim://mur880e, "
+                        "sim://array (?rows=R&cols=C&pitch=MM&coupling=X&seed=N)")
     add_option(p, "-o", "--output", old=("--out",), dest="out", required=True, metavar="BUNDLE",
                    help="bundle directory to write (an existing bundle is updated)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
