@@ -189,7 +189,7 @@ def test_bad_pwm_csv(tmp_path: Path, text, row, column, words) -> None:
 
 
 BAD_MANIFEST = [
-    ({"format": "spicethermal-bundle/3"}, "key format"),
+    ({"format": "spicethermal-bundle/4"}, "key format"),
     ({"device": "no format"}, "key format"),
     ({"format": "spicethermal-bundle/1", "cooling": [{"file": "cooling_1.csv", "power_w": 0}]},
      "key cooling[0].power_w: 0.0 must be > 0"),

@@ -1,12 +1,12 @@
-"""Measurement bundles (``spicethermal-bundle/2``, ``docs/bundle-format.md``), read and written.
+"""Measurement bundles (``spicethermal-bundle/3``, ``docs/bundle-format.md``), read and written.
 
 A bundle is a directory with ``bundle.json`` and CSV files (a header row, SI units in the
 column names, ``#`` comments allowed). :class:`Bundle` is its immutable in-memory form; each
 section is one table: :class:`CalibrationTable`, :class:`CoolingTable`, :class:`PwmTable`,
-:class:`ZthTable`. Every problem found on reading (or on building one in memory) raises
-:class:`~spicethermal.core.errors.DataFormatError` naming the file, the row (the line number in the
-file, the header being line 1 of a file without comments) and the column, or the key of
-``bundle.json``.
+:class:`ZthTable`, :class:`ForwardTable`. Every problem found on reading (or on building one in
+memory) raises :class:`~spicethermal.core.errors.DataFormatError` naming the file, the row (the
+line number in the file, the header being line 1 of a file without comments) and the column,
+or the key of ``bundle.json``.
 
 >>> import tempfile, pathlib
 >>> b = Bundle(device="diode", reference="case", ambient_c=25.0,
@@ -31,6 +31,7 @@ from ..identify.calibration import KFactor
 from .bundle_read import (
     CALIBRATION_KINDS,
     FORMAT,
+    FORMAT_FORWARD,
     FORMATS,
     MANIFEST,
     ManifestReader,
@@ -47,7 +48,7 @@ from .columns import (
     scalar,
     set_fields,
 )
-from .datasets import CalibrationTable, CoolingTable, PwmTable, ZthTable
+from .datasets import CalibrationTable, CoolingTable, ForwardTable, PwmTable, ZthTable
 from .files import (
     clean_leftovers,
     dumps_json,
@@ -64,7 +65,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Names of the bundle's pieces, importable from here as before the split.
 __all__ = ["CALIBRATION_KINDS", "COLUMNS", "FORMAT", "FORMATS", "MANIFEST", "Bundle",
-           "CalibrationTable", "Columns", "CoolingTable", "PwmTable", "ZthTable", "format_columns",
+           "CalibrationTable", "Columns", "CoolingTable", "ForwardTable", "PwmTable", "ZthTable",
+           "format_columns",
            "manifest_files", "parse_columns", "parse_number", "read_columns"]
 
 
@@ -73,7 +75,7 @@ __all__ = ["CALIBRATION_KINDS", "COLUMNS", "FORMAT", "FORMATS", "MANIFEST", "Bun
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Bundle:
-    """A measurement bundle (``spicethermal-bundle/2``, or /1); every section is optional.
+    """A measurement bundle (``spicethermal-bundle/3``, /2 or /1); every section is optional.
 
     Build it from tables (as the bench does), read it with :meth:`read`, write it with
     :meth:`write`. Unknown keys of ``bundle.json`` are kept in ``extra`` (and in each
@@ -95,6 +97,8 @@ class Bundle:
         The PWM grid of junction temperatures.
     zth : tuple of ZthTable
         Zth(t) curves given as such (datasheet or measured).
+    forward : ForwardTable or None
+        The heater's forward voltage at a few currents and temperatures (its Vf(I, T)).
     extra : Mapping
         Unknown keys of ``bundle.json``, kept and written back.
     source : str or None
@@ -112,6 +116,7 @@ class Bundle:
     cooling: tuple[CoolingTable, ...] = ()
     pwm: PwmTable | None = None
     zth: tuple[ZthTable, ...] = ()
+    forward: ForwardTable | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
     source: str | None = field(default=None, compare=False)
 
@@ -133,6 +138,8 @@ class Bundle:
         for i, z in enumerate(zth):
             if not isinstance(z, ZthTable):
                 raise DataFormatError(f"{MANIFEST}, key zth[{i}]: not a ZthTable")
+        if self.forward is not None and not isinstance(self.forward, ForwardTable):
+            raise DataFormatError(f"{MANIFEST}, key forward: not a ForwardTable")
         set_fields(self, ambient_c=ambient, cooling=cooling, zth=zth, extra=dict(self.extra))
         names = [n for n, _ in self._named_tables()]
         dups = {n for n in names if names.count(n) > 1}
@@ -179,6 +186,8 @@ class Bundle:
             out.append((self.pwm.file or "pwm.csv", self.pwm))
         for i, z in enumerate(self.zth, start=1):
             out.append((z.file or f"zth_{i}.csv", z))
+        if self.forward is not None:
+            out.append((self.forward.file or "forward.csv", self.forward))
         return out
 
     # -- reading -------------------------------------------------------------------------
@@ -195,8 +204,8 @@ class Bundle:
         if calibration is None:
             calibration = reader.calibration()
         cooling = reader.cooling(calibration)
-        pwm, zth = reader.pwm(), reader.zth()
-        return cls(calibration=calibration, cooling=cooling, pwm=pwm, zth=zth,
+        pwm, zth, forward = reader.pwm(), reader.zth(), reader.forward()
+        return cls(calibration=calibration, cooling=cooling, pwm=pwm, zth=zth, forward=forward,
                    source=str(reader.path), **reader.top_level())
 
     # -- writing -------------------------------------------------------------------------
@@ -204,7 +213,8 @@ class Bundle:
         """The ``bundle.json`` document (file names as :meth:`write` uses them)."""
         v1 = isinstance(self.calibration, CalibrationTable | None) and (
             self.calibration is None or self.calibration.kind == "table")
-        doc: dict[str, Any] = {"format": FORMATS[0] if v1 else FORMAT, "device": self.device,
+        version = FORMAT_FORWARD if self.forward is not None else FORMATS[0] if v1 else FORMAT
+        doc: dict[str, Any] = {"format": version, "device": self.device,
                                "reference": self.reference}
         if self.ambient_c is not None:
             doc["ambient_c"] = self.ambient_c
@@ -221,6 +231,9 @@ class Bundle:
             doc["pwm"] = {"file": named[id(self.pwm)], **self.pwm.manifest(), **self.pwm.extra}
         if self.zth:
             doc["zth"] = [{"file": named[id(z)], **z.manifest(), **z.extra} for z in self.zth]
+        if self.forward is not None:
+            doc["forward"] = {"file": named[id(self.forward)], **self.forward.manifest(),
+                              **self.forward.extra}
         for k, v in self.extra.items():
             doc.setdefault(k, v)
         return doc
