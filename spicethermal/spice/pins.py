@@ -22,9 +22,9 @@ if TYPE_CHECKING:  # pragma: no cover
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
 PIN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 #: Node names used inside the exported subcircuits: ladder nodes, the latent-heat helpers and
-#: the electrothermal part's diode nodes (DA after the current sense, DJ the junction, DI the
-#: current's value).
-INTERNAL = re.compile(r"(N|PCQ|PCS)[0-9]+|D[AJI]", re.I)
+#: the electrothermal part's diode nodes (DJ the junction behind the series resistance, DT its
+#: temperature in kelvin, DX the exponent, DI the current's value; DA spare).
+INTERNAL = re.compile(r"(N|PCQ|PCS)[0-9]+|D[AJITX]", re.I)
 RESERVED = {"end", "ends", "subckt", "control", "endc", "include", "lib", "param", "model",
             "tran", "ac", "dc", "op", "options", "option", "global", "func", "ic", "nodeset",
             "gnd", "0"}
