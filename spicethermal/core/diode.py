@@ -210,6 +210,48 @@ class DiodeLaw:
         v = np.asarray(v_a, dtype=float)
         return self.temperature(v, self.sense_current_a) - self.sense_heating_k(v, rth_k_per_w)
 
+    def bench_voltage(self, t_c: ArrayLike, rth_k_per_w: float) -> NDArray:
+        """The sense-current voltage the calibration gives temperature ``t_c``: the diode's
+        at its junction, warmed by its own sense current (the inverse of
+        :meth:`bench_temperature`).
+
+        >>> law = DiodeLaw(n=1.75, is_a=2.5e-9, sense_current_a=1e-3)
+        >>> round(float(law.bench_temperature(law.bench_voltage(40.0, 146.0), 146.0)), 9)
+        40.0
+        """
+        if self.sense_current_a is None:
+            raise DataFormatError("diode law: no sense current, so no TSP reading")
+        t = np.asarray(t_c, dtype=float)
+        v = self.voltage(self.sense_current_a, t)
+        for _ in range(30):  # v = V(I, T + I·v·Rth): a contraction (I·Rth·|dV/dT| << 1)
+            v = self.voltage(self.sense_current_a, t + self.sense_heating_k(v, rth_k_per_w))
+        return v
+
+    def heating_current(self, power_w: float, t_c: float) -> float:
+        """The switched current that adds ``power_w`` to the sense current's dissipation at
+        junction temperature ``t_c``: ``(I + Is)·V(I + Is) − Is·V(Is) = P`` (the bench's power
+        loop, which sets the heating current from an on-phase reading; the sense current, whose
+        heating the calibration absorbs, is not heating power).
+
+        >>> law = DiodeLaw(n=1.75, is_a=2.5e-9, rs_ohm=0.57)
+        >>> i = law.heating_current(0.094, 25.0)
+        >>> round(i * float(law.voltage(i, 25.0)), 12)
+        0.094
+        """
+        i_s = self.sense_current_a or 0.0
+        base = i_s * float(self.voltage(i_s, t_c)) if i_s else 0.0
+
+        def added(i: float) -> float:
+            return (i + i_s) * float(self.voltage(i + i_s, t_c)) - base
+
+        lo, hi = 0.0, 1.0
+        while added(hi) < power_w:
+            hi *= 2.0
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if added(mid) < power_w else (lo, mid)
+        return 0.5 * (lo + hi)
+
     # -- SPICE ---------------------------------------------------------------------------------
     @property
     def knee_current_a(self) -> float:
@@ -218,31 +260,33 @@ class DiodeLaw:
         return KNEE_FACTOR * max(top, self.is_a * 1e6)
 
     def spice_exponent(self, vj: str, tk: str) -> str:
-        """The exponent ``x`` of the junction current ``IS·exp(x)`` as a dialect-neutral
-        behavioural expression of the junction voltage ``vj`` and the temperature ``tk`` in
-        kelvin (e.g. ``V(DJ,K)`` and ``V(DT)``).
+        """``y = ln(IS) + x``, the logarithm of the junction current's exponential term
+        ``IS·exp(x)``, as a dialect-neutral behavioural expression of the junction voltage
+        ``vj`` and the temperature ``tk`` in kelvin (e.g. ``V(DJ,K)`` and ``V(DT)``). Written
+        so, the exponential's argument stays small (``ln`` of a current in A): PSPICE, and
+        ngspice in its ``ps`` mode, continue ``EXP`` linearly above 14.
 
         >>> DiodeLaw(n=1.0, is_a=1e-14, xti=0.0, eg_ev=1.2).spice_exponent("V(DJ,K)", "V(DT)")
-        '((V(DJ,K))+1.2*(V(DT)/298.15-1))/(1.0*8.617333262e-05*V(DT))'
+        '-32.23619130191664+((V(DJ,K))+1.2*(V(DT)/298.15-1))/(1.0*8.617333262e-05*V(DT))'
         """
         t0k = repr(self.t0_c + ZERO_C_K)
         shift = f"{self.eg_ev!r}*({tk}/{t0k}-1)"
         if self.xti:
             shift += f"+{self.xti!r}*{K_OVER_Q!r}*{tk}*LOG({tk}/{t0k})"
-        return f"(({vj})+{shift})/({self.n!r}*{K_OVER_Q!r}*{tk})"
+        return f"{math.log(self.is_a)!r}+(({vj})+{shift})/({self.n!r}*{K_OVER_Q!r}*{tk})"
 
-    def spice_current(self, x: str, tk: str) -> str:
-        """The junction current as a behavioural expression of its exponent ``x``
-        (:meth:`spice_exponent`, e.g. held on a node ``V(DX)``) and the temperature ``tk`` in
-        kelvin: ``IS·(exp(x) − exp(x0))``, the exponential continued linearly above
-        :attr:`knee_current_a` (``EXP(MIN(x,xk))·(1+MAX(x−xk,0))``; no ``limit()``).
+    def spice_current(self, y: str, tk: str) -> str:
+        """The junction current as a behavioural expression of ``y`` (:meth:`spice_exponent`,
+        e.g. held on a node ``V(DX)``) and the temperature ``tk`` in kelvin:
+        ``exp(y) − Is(T)``, the exponential continued linearly above :attr:`knee_current_a`
+        (``EXP(MIN(y,yk))·(1+MAX(y−yk,0))``; no ``limit()``).
 
-        >>> DiodeLaw(n=1.0, is_a=1e-14, xti=0.0, eg_ev=1.2).spice_current("V(DX)", "V(DT)")[:50]
-        '1e-14*(EXP(MIN(V(DX),36.841361487904734))*(1+MAX(V'
+        >>> DiodeLaw(n=1.0, is_a=1e-14, xti=0.0, eg_ev=1.2).spice_current("V(DX)", "V(DT)")[:40]
+        'EXP(MIN(V(DX),4.605170185988092))*(1+MAX'
         """
-        x0 = self.spice_exponent("0", tk)
-        xk = repr(math.log(self.knee_current_a / self.is_a))
-        return f"{self.is_a!r}*(EXP(MIN({x},{xk}))*(1+MAX({x}-{xk},0))-EXP(MIN({x0},{xk})))"
+        y0 = self.spice_exponent("0", tk)
+        yk = repr(math.log(self.knee_current_a))
+        return f"EXP(MIN({y},{yk}))*(1+MAX({y}-{yk},0))-EXP(MIN({y0},{yk}))"
 
     @staticmethod
     def spice_kelvin(t_c: str) -> str:

@@ -317,7 +317,7 @@ def lib_context(model: ThermalModel, dialect: str = "ngspice", topology: str | N
         "provenance": _provenance_lines(model.provenance), "facts": _facts(model),
         "notes": notes, "case_c": model.case_c_j_per_k if ladder.topology == "cauer" else 0.0,
         "effects": [e for e in model.device_effects],
-        "stages": stages, "heats": heats,
+        "stages": stages, "heats": heats, "electrothermal": False,
     }
     return ctx
 

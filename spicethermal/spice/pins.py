@@ -138,8 +138,11 @@ class Pins:
             if missing:
                 names.update(anode="A", cathode="K")
                 order = [*ELECTRICAL_ROLES, *order]
-        return cls(names["junction"], names["reference"], names.get("ambient"), tuple(order),
-                   names.get("anode"), names.get("cathode"))
+        try:
+            return cls(names["junction"], names["reference"], names.get("ambient"),
+                       tuple(order), names.get("anode"), names.get("cathode"))
+        except DataFormatError as exc:
+            raise DataFormatError(f"--pins {text!r}: {exc}") from None
 
     def __post_init__(self) -> None:
         seen = set()
