@@ -284,9 +284,9 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
         n for s in named for n in (s.chosen.name, *(t.name for t in s.tied))))
     separate = _separate(named)
     if rivals:
-        return Verdict(NONE, (), f"{', '.join(effects)} would explain part of it, and so "
-                       f"would {_rival_reason(rivals, live)}; not named", alternatives,
-                       separate, left)
+        return Verdict(NONE, (), f"{', '.join(effects)} would explain part of it, but "
+                       f"{_rival_reason(rivals, live)}; not named: the cause is perhaps not in "
+                       "the catalogue", alternatives, separate, left)
     ambiguous = any(s.status == AMBIGUOUS for s in named)
     if not any(beyond.values()):
         return Verdict(AMBIGUOUS if ambiguous else NAMED, effects,

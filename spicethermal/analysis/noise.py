@@ -2,9 +2,9 @@
 
 * a **cooling curve**: the scatter of the model's residuals about their own local quadratic in
   ``log t`` (7 readings at a time, each residual divided by ``√(1 − h)`` with ``h`` its
-  leverage, robust: 1.4826 × the median absolute deviation): a smooth misfit, which is what a
-  missing effect leaves, is absorbed by the local quadratic; a kink or a transient over a
-  few readings is ignored by the median;
+  leverage; robust: the largest tenth left out, :func:`trimmed_scale`): a smooth misfit, which
+  is what a missing effect leaves, is absorbed by the local quadratic; a kink or a transient
+  over a few readings is left out;
 * the **steady readings**: the sensor's noise, the median of the curves';
 * the **PWM grid**: the scatter of the residuals about a quadratic in ``log f`` for each duty
   (four frequencies or more per duty), at most the sensor's; else the sensor's;
@@ -16,8 +16,8 @@ each at least :data:`~.rules.NOISE_FLOOR_K` and the readings' resolution over �
 quantised in steps of ``q`` scatters by at least ``q/√12``).
 
 >>> rng = np.random.default_rng(1)
->>> t = np.geomspace(1e-4, 100, 80)
->>> r = 0.05 * rng.standard_normal(80) + 0.3 * np.log10(t) ** 2  # a smooth misfit
+>>> t = np.geomspace(1e-4, 100, 400)
+>>> r = 0.05 * rng.standard_normal(400) + 0.3 * np.log10(t) ** 2  # a smooth misfit
 >>> round(curve_noise(t, r, r), 2)
 0.05
 """
@@ -32,12 +32,12 @@ import numpy as np
 
 from ..effects.base import CALIBRATION, PWM, STEADY
 from ..fit.measurement import BundleData
-from .rules import LOCAL_WINDOW, NOISE_FLOOR_K, POLY_MAX_DEGREE, POLY_P
+from .rules import LOCAL_WINDOW, NOISE_FLOOR_K, NOISE_KEPT, POLY_MAX_DEGREE, POLY_P
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-__all__ = ["calibration_degree", "curve_noise", "noise_estimates", "resolution"]
+__all__ = ["calibration_degree", "curve_noise", "noise_estimates", "resolution", "trimmed_scale"]
 
 #: Residuals used at most per curve (evenly thinned): the estimate needs no more.
 MAX_POINTS = 2000
@@ -114,7 +114,38 @@ def curve_noise(t_s: NDArray, residual_k: NDArray, readings: NDArray) -> float:
     if t.size < LOCAL_WINDOW:
         return max(float(np.std(r)) if r.size > 1 else floor, floor)
     e = _local_quadratic_residuals(np.log(t), r, LOCAL_WINDOW)
-    return max(1.4826 * float(np.median(np.abs(e - np.median(e)))), floor)
+    return max(trimmed_scale(e), floor)
+
+
+def trimmed_scale(e: NDArray) -> float:
+    """Standard deviation of white Gaussian noise from the values ``e``, robust to a few
+    outliers: the root mean square of the smallest :data:`~.rules.NOISE_KEPT` of them in
+    size, corrected for the trimming (``σ² = mean(kept²) / c`` with
+    ``c = 1 − 2 q φ(q) / p`` for the kept fraction ``p``, ``q = Φ⁻¹((1 + p) / 2)``). Far more
+    efficient than the median absolute deviation (about 80 % against 37 %), which matters on
+    a few tens of readings.
+
+    Parameters
+    ----------
+    e : ndarray
+
+    Returns
+    -------
+    float
+
+    >>> round(trimmed_scale(np.random.default_rng(0).normal(0, 2.0, 20000)), 1)
+    2.0
+    """
+    from scipy.stats import norm
+
+    a = np.sort(np.abs(np.asarray(e, dtype=float)))
+    keep = max(2, int(round(NOISE_KEPT * a.size)))
+    frac = keep / a.size
+    c = 1.0
+    if frac < 1:
+        q = float(norm.ppf(0.5 * (1 + frac)))
+        c = 1 - 2 * q * float(norm.pdf(q)) / frac
+    return math.sqrt(float(np.mean(a[:keep] ** 2)) / c)
 
 
 def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:

@@ -18,7 +18,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
 __all__ = ["AT_NOISE_Z", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS", "MIN_APPROXIMATE",
-           "MIN_EXPLAINED", "NOISE_FLOOR_K", "POLY_MAX_DEGREE", "POLY_P", "REFINE_ROUNDS",
+           "MIN_EXPLAINED", "NOISE_EFFICIENCY", "NOISE_FLOOR_K", "NOISE_KEPT", "POLY_MAX_DEGREE",
+           "POLY_P", "REFINE_ROUNDS",
            "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "decisive",
            "excess", "explained", "runs_z"]
 
@@ -29,6 +30,9 @@ NOISE_FLOOR_K = 0.005
 #: this many readings: wide enough for a stable scatter, narrow enough that a smooth misfit
 #: (what a missing effect leaves) is a quadratic over it.
 LOCAL_WINDOW = 7
+#: A curve's noise is the scatter of this fraction of those local residuals, the smallest:
+#: the largest tenth (a transient's or a kink's few readings) are no noise.
+NOISE_KEPT = 0.9
 #: The calibration's law is a polynomial whose degree is raised while the next degree lowers
 #: the residual at this significance (F-test; one chance in a hundred of taking noise for a
 #: bow) ...
@@ -50,8 +54,13 @@ MIN_EXPLAINED = 0.4
 #: effect is then still the user's best next step; below it the physics is elsewhere.
 MIN_APPROXIMATE = 0.9
 #: A data set is at its noise when its χ² is within this many standard deviations of its
-#: number of points (χ² of n points of white noise: n ± √(2n)) ...
+#: number of points: χ² of n points of white noise is n ± √(2n) with the noise known, and
+#: the noise is itself estimated from about as many residuals (an estimate of efficiency
+#: :data:`NOISE_EFFICIENCY`), which widens the band to ±√(2n (1 + 1/efficiency)) ...
 AT_NOISE_Z = 3.0
+#: The efficiency of :func:`~.noise.trimmed_scale` keeping :data:`NOISE_KEPT` against the
+#: plain standard deviation (Gaussian noise).
+NOISE_EFFICIENCY = 0.8
 #: ... and its residual has no runs structure: a runs test on the signs below this z (three
 #: standard deviations too few runs) ...
 RUNS_Z = -3.0
@@ -97,8 +106,8 @@ def runs_z(residuals: NDArray) -> float:
 
 
 def beyond_noise(chi2: float, n: int, residuals: NDArray) -> bool:
-    """Whether one data set's residual is beyond its noise: χ² above ``n + 3√(2n)`` or a
-    runs structure (:data:`RUNS_Z`).
+    """Whether one data set's residual is beyond its noise: χ² above the band of
+    :data:`AT_NOISE_Z` or a runs structure (:data:`RUNS_Z`).
 
     Parameters
     ----------
@@ -110,7 +119,8 @@ def beyond_noise(chi2: float, n: int, residuals: NDArray) -> bool:
     -------
     bool
     """
-    return chi2 > n + AT_NOISE_Z * math.sqrt(2 * n) or runs_z(residuals) < RUNS_Z
+    spread = math.sqrt(2 * n * (1 + 1 / NOISE_EFFICIENCY))
+    return chi2 > n + AT_NOISE_Z * spread or runs_z(residuals) < RUNS_Z
 
 
 def at_noise(chi2: Mapping[str, float], residuals: Mapping[str, NDArray]) -> bool:
