@@ -30,6 +30,7 @@ typedef struct {
     uint16_t caps;         /* ST_CAP_* bits reported in INFO */
     uint8_t adc_bits;
     char name[16];
+    uint32_t i_sense_ua;   /* the sense (calibration) current of block B, reported in INFO */
 } st_board_t;
 
 const st_board_t *hal_board(void);

@@ -51,7 +51,8 @@ class _Board(ctypes.Structure):
     _fields_ = [("ch", _Conv * 5), ("i_full_ua", ctypes.c_uint32), ("dac_max", ctypes.c_uint16),
                 ("vd_nominal_uv", ctypes.c_uint32), ("fixture_min_mc", ctypes.c_int32),
                 ("fixture_max_mc", ctypes.c_int32), ("caps", ctypes.c_uint16),
-                ("adc_bits", ctypes.c_uint8), ("name", ctypes.c_char * 16)]
+                ("adc_bits", ctypes.c_uint8), ("name", ctypes.c_char * 16),
+                ("i_sense_ua", ctypes.c_uint32)]
 
 
 class _Op(ctypes.Structure):
@@ -167,6 +168,7 @@ class SimulatedDevice:
         bd.caps = CAP_IDEAL_HOLD if self.ideal_hold else 0
         bd.adc_bits = 10
         bd.name = b.name.encode("ascii")[:15]
+        bd.i_sense_ua = round(self.preset.diode.i_bias_a * 1e6)
 
     def close(self) -> None:
         if self._dev:
