@@ -341,6 +341,7 @@ DIRECT_WRITES = {
     ("batch/device.py", "local.write_bytes(next(iter(source.files.values())))"):
         "worker's private temporary copy",
     ("engines/interface.py", "lib.write_text("): "private temporary directory",
+    ("engines/circuit.py", "lib.write_text("): "private temporary directory",
 }
 WRITE_CALL = re.compile(r"\.write_(text|bytes)\(|\bopen\([^)]*['\"][wax]b?['\"]|\.savefig\(|"
                         r"shutil\.copy|np\.save|\.to_csv\(|json\.dumps?\(")

@@ -18,7 +18,7 @@ Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 >>> # a simulated bench, quickly: just the handshake
 >>> with BenchClient("sim://actuator?seed=1") as bench:
 ...     bench.info.name, bench.info.firmware
-('actuator', '1.1.0')
+('actuator', '1.2.0')
 """
 
 from __future__ import annotations

@@ -301,7 +301,7 @@ class SimulatedDevice:
         return t - start < on
 
     def _power(self) -> float:
-        return self.current_a * self.frontend.v_hot(self.plant.tj_c)
+        return self.current_a * self.frontend.v_diode(self.current_a, self.plant.tj_c)
 
     # -- plant -------------------------------------------------------------------------
     def advance_to(self, t_end: float) -> None:
