@@ -82,3 +82,63 @@ def test_the_golden_bench_deck_runs_as_written(tmp_path):
 def test_without_a_diode_law_the_circuit_says_what_is_missing():
     with pytest.raises(DataFormatError, match="no diode law"):
         CircuitPwm(ThermalModel(heater_model().ladder))
+
+
+@pytest.fixture(scope="module")
+def fast_drive():
+    """A drive of a fast actuator (the heater's law on a ladder of 0.1 ms to 0.4 s): its
+    cavity node (Cauer node 2) to 40 °C with the junction's peak at most 60 °C."""
+    from spicethermal.core.ladder import Foster
+    from spicethermal.drive.optimize import optimize_drive
+
+    model = ThermalModel(Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.05, 0.4]),
+                         electrical=heater_model().electrical)
+    return optimize_drive(model, 60.0, 40.0, 25.0, p_max_w=0.5, f_pwm_hz=1000.0, node=2)
+
+
+@pytest.mark.ngspice
+@pytest.mark.parametrize("dialect", DIALECTS)
+def test_the_drives_schedule_through_the_circuit_respects_t_max(fast_drive, dialect):
+    """Issue #46, check 4: the optimizer's schedule switching the heating current through the
+    circuit, from cold: the junction (the sense current's heating included) stays under
+    t_max; the current source's power falls as the diode warms, so it stays under the drive's
+    own prediction too, and not far from it."""
+    from spicethermal.drive.circuit import verify_circuit
+
+    check = verify_circuit(fast_drive, dialect=dialect)
+    predicted = float(np.max(fast_drive.trace.exact_peak_c))
+    assert predicted > 55.0  # the boost drives the junction close to its limit
+    assert check["circuit_peak_junction_c"] <= fast_drive.t_max_c
+    assert predicted - 2.0 < check["circuit_peak_junction_c"] < predicted + 0.1
+    assert check["window_s"] == pytest.approx(fast_drive.verification_window_s())
+
+
+@pytest.mark.ngspice
+def test_the_pwm_command_runs_table2_through_the_circuit(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    heater_model().save(tmp_path / "h.json")
+    cli = [sys.executable, "-m", "spicethermal.cli.main", "pwm", str(tmp_path / "h.json"),
+           "--power", "94m", "--window", "100u"]
+    grid = subprocess.run([*cli, "--freq", "500,25k", "--duty", "0.2,0.8", "--engine",
+                           "ngspice", "--circuit", "--dialect", "pspice", "--json"],
+                          capture_output=True, text=True)
+    assert grid.returncode == 0, grid.stderr
+    points = json.loads(grid.stdout)["points"]
+    assert [(p["freq_hz"], p["duty"]) for p in points] == [(500, 0.2), (25e3, 0.2),
+                                                           (500, 0.8), (25e3, 0.8)]
+    table = subprocess.run([*cli, "--freq", "500,25k", "--duty", "0.2,0.8", "--engine",
+                            "ngspice", "--circuit"], capture_output=True, text=True)
+    assert "D=20%" in table.stdout and "bench circuit (ngspice)" in table.stdout
+    plot = subprocess.run([*cli, "--freq", "1k", "--duty", "0.5", "--engine", "ngspice",
+                           "--circuit", "--plot", str(tmp_path / "c.png")],
+                          capture_output=True, text=True)
+    assert plot.returncode == 0 and (tmp_path / "c.png").stat().st_size > 10000
+    for args, words in ((["--circuit"], "--engine ngspice or pyspice"),
+                        (["--plot", str(tmp_path / "x.png")], "--plot")):
+        bad = subprocess.run([*cli, "--freq", "1k", "--duty", "0.5", *args],
+                             capture_output=True, text=True)
+        assert bad.returncode == 2 and words in bad.stderr and "Traceback" not in bad.stderr
+    assert not (tmp_path / "x.png").exists()

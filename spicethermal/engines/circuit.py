@@ -40,12 +40,13 @@ from ..spice.lib import DIALECTS, initial_conditions
 from ..spice.ngspice import sanitize_comment, simulator
 from ..spice.templates import environment
 from .pwm import PwmState, check_drive
-from .pwmsim import EDGE_TAU, SpicePwm, periodic_state, pwm_waveform
+from .pwmsim import EDGE_TAU, SpicePwm, periodic_state, pwm_waveform, resolve_engine
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
     from ..core.diode import DiodeLaw
+    from ..model import ThermalModel
 
 #: The subcircuit name in the decks.
 PART = "HEATER"
@@ -58,7 +59,8 @@ def render_circuit(lib_path: str | Path, *, ambient_c: float, i_sense_a: float,
                    gate: Sequence[tuple[float, float]] = (), gate_lines: Sequence[str] = (),
                    gate_ohm: float = 1.0, ic: Sequence[tuple[str, float]] = (),
                    reltol: float = 1e-4, trtol: float = 0.5,
-                   title: str = "spicethermal bench circuit", description: str = "") -> str:
+                   title: str = "spicethermal bench circuit", description: str = "",
+                   lib_text: str = "") -> str:
     """The Fig. 3 deck around the electrothermal part ``HEATER`` in ``lib_path``.
 
     Parameters
@@ -82,6 +84,8 @@ def render_circuit(lib_path: str | Path, *, ambient_c: float, i_sense_a: float,
         ngspice's tolerances.
     title, description : str
         The deck's first lines.
+    lib_text : str
+        The ``.lib`` itself, written into the deck instead of included (a deck on its own).
 
     Returns
     -------
@@ -95,6 +99,7 @@ def render_circuit(lib_path: str | Path, *, ambient_c: float, i_sense_a: float,
         version=__version__, lib_path=str(lib_path), name=PART, ambient_c=ambient_c,
         i_sense_a=i_sense_a, i_heat_a=i_heat_a, gate=list(gate), gate_lines=list(gate_lines),
         gate_ohm=gate_ohm, ic=list(ic), dialect=dialect, reltol=reltol, trtol=trtol,
+        lib_text=lib_text,
         tstep_s=tmax_s, tstop_s=tstop_s, tmax_s=tmax_s)
 
 
@@ -116,6 +121,8 @@ class CircuitRun:
         How far the last period strayed from the first.
     dialect : str
         The dialect run.
+    ambient_c : float
+        The ambient, °C.
     """
 
     state: PwmState
@@ -126,6 +133,7 @@ class CircuitRun:
     i_heat_a: float
     drift_k: float
     dialect: str
+    ambient_c: float
 
 
 @dataclass(frozen=True)
@@ -233,4 +241,58 @@ class CircuitPwm(SpicePwm):
                 self.tref_c
             state = replace(state, reading_k=reading)
         return CircuitRun(state, t, vf, i_d, self.tref_c + rise + sense_k, i_heat, drift,
-                          self.dialect)
+                          self.dialect, self.tref_c)
+
+
+def pwm_points(model: ThermalModel, power_w: float, freq_hz: Sequence[float],
+               duty: Sequence[float], window_s: float = 0.0, *, engine: str = "analytic",
+               tref_c: float = 25.0, dialect: str = "ngspice",
+               circuit: bool = False) -> list[PwmState]:
+    """The periodic steady state at every ``(freq_hz[i], duty[i])``: by the named engine
+    (:func:`~spicethermal.engines.pwmsim.pwm_state`'s), or through the bench circuit
+    (``circuit``: ngspice or pyspice, the reading as the bench takes it).
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model (with a diode law for ``circuit``).
+    power_w : float
+        Heating power during an on-phase, W.
+    freq_hz, duty : sequence of float
+        The operating points, equally many.
+    window_s : float
+        The sample window, s.
+    engine : str
+        ``analytic``, ``ngspice``, ``pyspice`` or ``auto``.
+    tref_c : float
+        Reference (ambient) temperature, °C.
+    dialect : str
+        The ``.lib`` dialect of a SPICE engine.
+    circuit : bool
+        Through the bench circuit around the electrothermal part.
+
+    Returns
+    -------
+    list of PwmState
+        One per point, in order.
+
+    Examples
+    --------
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> m = ThermalModel(Foster.from_tau([10.0], [1e-3]))
+    >>> [round(s.mean_k, 9) for s in pwm_points(m, 0.1, [1e3, 1e3], [0.5, 0.2])]
+    [0.5, 0.2]
+    """
+    if circuit:
+        if engine not in ("ngspice", "pyspice"):
+            raise DataFormatError("--circuit runs the bench circuit in ngspice: use --engine "
+                                  "ngspice or pyspice")
+        return CircuitPwm(model, engine, dialect, tref_c=tref_c).grid(power_w, freq_hz, duty,
+                                                                      window_s)
+    engine = resolve_engine(engine, model)
+    if engine == "analytic":
+        return [model.pwm(power_w, f, d, window_s, tref_c)
+                for f, d in zip(freq_hz, duty, strict=True)]
+    return SpicePwm(model, engine, dialect, tref_c=tref_c).grid(power_w, freq_hz, duty,
+                                                                window_s)

@@ -55,8 +55,8 @@ def missing_law(model: ThermalModel, source: str = "the model") -> str:
         return ""
     return (f"{source} has no diode law Vf(I, T) (the electrical key of spicethermal-model/4): "
             "fit a bundle with forward-voltage points (spicethermal-bundle/3, measured by 'bench "
-            "calibrate' with firmware 1.2) to get one; without --electrothermal the thermal "
-            "model exports as before")
+            "calibrate' with firmware 1.2) to get one; the thermal model works as before without "
+            "--electrothermal or --circuit")
 
 
 def render_electrothermal(model: ThermalModel, dialect: str = "ngspice",

@@ -7,7 +7,11 @@ or ``r`` with ``--rth``), a cooling CSV, a PyRth ``.txt`` or a T3Ster ``.raw`` (
 ``--calibration`` or ``--k-factor`` where the file has none).
 ΣR = Rth is held whenever Rth is known: measured by a cooling curve (eq. 1), given in the
 bundle or by ``--rth``. The fit's report (order, criterion, R ± u, τ ± u) goes into the model's
-provenance and its table to stdout.
+provenance and its table to stdout. A bundle with forward-voltage points
+(``spicethermal-bundle/3``) also gets its heater's diode law Vf(I, T), fitted to them and the
+TSP calibration with the ladder's self-heating (:func:`spicethermal.fit.diode.fit_electrical`):
+its parameters ± u and residuals are printed, and the model (``spicethermal-model/4``) keeps it
+for ``export --electrothermal``.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
 from ...effects import plugin
 from ...fit.bootstrap import fig_fit_band, fit_bootstrap
+from ...fit.diode import fit_electrical
 from ...fit.ladder import check_rth, fit_model
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
@@ -52,7 +57,8 @@ def _order(text: str) -> int | str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("-o", "--output", metavar="MODEL.json", required=True,
-                        help="model file to write (spicethermal-model/3)")
+                        help="model file to write (spicethermal-model/3; /4 with the heater's "
+                             "diode law when the bundle has forward-voltage points)")
     parser.add_argument("--order", type=_order, default="auto", metavar="N|auto",
                         help="number of RC stages, or auto (default: chosen by BIC)")
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
@@ -89,17 +95,27 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     if not source.is_dir():
         raise DataFormatError(f"{source}: --effect needs a bundle directory (the effects are "
                               f"fitted to its cooling curves, PWM grid and calibration)")
-    model = fit_with_effects(Bundle.read(source), args.effect,
+    bundle = Bundle.read(source)
+    model = fit_with_effects(bundle, args.effect,
                              provenance={"tool": f"spicethermal {__version__} fit",
                                          "source": str(source)})
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
+    model, electrical = _with_electrical(model, bundle)
     out = model.save(args.output)
     if not args.quiet:
         print(f"{model.ladder.order}-stage ladder, Rth = {model.rth:.5g} K/W; effects: "
               + "; ".join(f"{e.name} ({e.form}): {e.describe()}" for e in model.effects))
+        if electrical is not None:
+            print(electrical)
         print(f"wrote {out}")
     return 0
+
+
+def _with_electrical(model, bundle: Bundle):
+    """``model`` with the diode law of the bundle's forward points (and the fit), or as it is."""
+    fit = fit_electrical(bundle, model)
+    return (model, None) if fit is None else (replace(model, electrical=fit.law), fit)
 
 
 def _early_plot(src, args: argparse.Namespace, curve) -> Path:
@@ -139,6 +155,7 @@ def run(args: argparse.Namespace) -> int:
     t = [float(x) for x in curve.t_s if x > 0]
     if t:  # the data's time range, where the ladder holds: the .lib header states it
         model = replace(model, provenance={**model.provenance, "valid_t_s": [min(t), max(t)]})
+    model, electrical = _with_electrical(model, src.bundle)
     out = model.save(args.output)
     written = [str(out)]
     if args.plot and fb is not None:
@@ -158,6 +175,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"early time: {curve.early}")
         print(result)
         print(f"weighting: {result.weighting}")
+        if electrical is not None:
+            print(electrical)
         if fb is not None:
             print(f"bootstrap ({fb.n} resamples): u(R) = "
                   + ", ".join(f"{u:.3g}" for u in fb.u_r_k_per_w) + " K/W; u(tau) = "
