@@ -172,3 +172,22 @@ def test_export_electrothermal_and_what_an_older_model_lacks(tmp_path):
                            "--electrothermal", "-o", str(tmp_path / "p.lib")],
                           capture_output=True, text=True)
     assert pins.returncode == 2 and "--pins" in pins.stderr
+
+
+def test_an_older_bundle_still_fits_and_exports_and_says_what_is_missing(tmp_path):
+    """The shipped sample bundle (spicethermal-bundle/1, firmware 1.0: no forward points):
+    `fit` writes the thermal model as before (format /3), `export` writes its .lib, and
+    `export --electrothermal` says in one line what is missing, writing nothing."""
+    from conftest import DATA
+
+    def cli(*args):
+        return subprocess.run([*CLI, *map(str, args)], capture_output=True, text=True)
+
+    fit = cli("fit", DATA / "sample_bundle", "-o", tmp_path / "m.json")
+    assert fit.returncode == 0 and "diode law" not in fit.stdout
+    assert json.loads((tmp_path / "m.json").read_text())["format"] == "spicethermal-model/3"
+    assert cli("export", tmp_path / "m.json", "-o", tmp_path / "m.lib").returncode == 0
+    bad = cli("export", tmp_path / "m.json", "--electrothermal", "-o", tmp_path / "e.lib")
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
+    assert "no diode law Vf(I, T)" in bad.stderr and "forward-voltage points" in bad.stderr
+    assert not (tmp_path / "e.lib").exists()

@@ -144,6 +144,25 @@ class CircuitPwm(SpicePwm):
     ambient); ``model`` needs a diode law (``model.electrical``) that names its sense current.
     :meth:`state` and :meth:`grid` are :class:`SpicePwm`'s, over :meth:`run`.
 
+    Attributes
+    ----------
+    model : ThermalModel
+        The model, with its diode law.
+    engine : str
+        ``ngspice`` (``ngspice -b``) or ``pyspice`` (libngspice in process).
+    dialect : str
+        The ``.lib`` dialect exported and run.
+    topology : str or None
+        The ladder's topology in the part (default the model's; Cauer with device effects).
+    tref_c : float
+        The ambient, °C.
+    periods : int
+        Whole periods simulated from the periodic start (the first checked against the last).
+    tol_k, rel_tol : float
+        The periodicity tolerance: K, and relative to the ripple.
+    points_per_period : int
+        The largest time step, as a fraction of the period.
+
     Examples
     --------
     >>> from spicethermal.core.diode import DiodeLaw
