@@ -32,7 +32,8 @@ except ImportError:  # pragma: no cover
     pytest = None
 
 from spicethermal.data import path
-from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
+from spicethermal.identify.records import read_pyrth
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION
 
 PYRTH_RTH = {"dry": 13.667, "tim": 5.977}
 PYRTH_WINDOW = "4.6e-4,1.35e-3"

@@ -139,7 +139,7 @@ def differential(n_seeds: int = 5) -> float:
 
 
 def real_data() -> dict[str, float]:
-    from spicethermal.io.sources import read_source
+    from spicethermal.identify.sources import read_source
 
     if not DATA.is_dir():  # pragma: no cover
         print("real data: not found")

@@ -11,7 +11,7 @@ import pytest
 from spicethermal.bench import client as bc
 from spicethermal.bench import protocol as p
 from spicethermal.bench import session
-from spicethermal.bench.devices import preset
+from spicethermal.bench.devices import CURVED_TSP, preset
 from spicethermal.bench.plant import Frontend
 from spicethermal.bench.session import run_bench
 from spicethermal.core.errors import DataFormatError, InstrumentError
@@ -41,7 +41,7 @@ def test_the_calibration_run_adds_forward_points(measured):
         assert np.allclose(fwd.i_a[k::len(currents)], i, rtol=0.1, atol=5e-4)
     assert set(fwd.t_pulse_s) == {0.0, 2e-5}
     # the plant's diode, read through 10-bit ADCs
-    plant = Frontend(preset("actuator"), ["tsp-nonlinearity"], 0.0, np.random.default_rng(0))
+    plant = Frontend(preset("actuator"), [CURVED_TSP], 0.0, np.random.default_rng(0))
     truth = [plant.v_diode(i, t) for i, t in zip(fwd.i_a, fwd.temp_c, strict=True)]
     assert np.max(np.abs(fwd.vf_v - truth)) < 5e-3
 
@@ -52,7 +52,7 @@ def test_the_law_fitted_to_them_is_the_plants_diode(measured):
     fit = fit_electrical(bundle, model)
     assert fit.law.n == pytest.approx(preset("actuator").diode.n, abs=4 * fit.u["n"] + 0.01)
     assert fit.law.rs_ohm == pytest.approx(preset("actuator").diode.rs_ohm, rel=0.05)
-    plant = Frontend(preset("actuator"), ["tsp-nonlinearity"], 0.0, np.random.default_rng(0))
+    plant = Frontend(preset("actuator"), [CURVED_TSP], 0.0, np.random.default_rng(0))
     # at the heating current (94 mW, about 0.11 A) within a fraction of a millivolt, and at
     # the sense current within the calibration's noise, the sense current's heating apart
     sense_k = 1e-3 * 0.6 * model.rth

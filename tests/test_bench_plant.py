@@ -3,15 +3,25 @@ effects against ThermalModel.simulate, determinism."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from spicethermal.bench import protocol as p
-from spicethermal.bench.devices import preset
+from spicethermal.bench.devices import (
+    ARTEFACTS,
+    CURVED_TSP,
+    SAMPLE_WINDOW,
+    artefacts,
+    bench_data,
+    preset,
+    shown_as,
+)
 from spicethermal.bench.plant import Frontend, Plant
 from spicethermal.bench.simulator import SimulatedDevice, parse_effects
 from spicethermal.core.errors import InstrumentError
-from spicethermal.effects import Effect
+from spicethermal.effects import DEVICE, MEASUREMENT, Effect, known_names, plugin
 from spicethermal.engines.pwm import steady_state
 from spicethermal.model import Schedule, ThermalModel
 
@@ -100,12 +110,48 @@ def test_frontend_tsp_nonlinearity_and_quantization():
     dev = preset("actuator")
     rng = np.random.default_rng(0)
     lin = Frontend(dev, [], 0.0, rng)
-    quad = Frontend(dev, ["tsp-nonlinearity"], 0.0, rng)
+    quad = Frontend(dev, [CURVED_TSP], 0.0, rng)
     assert lin.v_forward(75.0) - lin.v_forward(25.0) == pytest.approx(-0.1)
     assert quad.v_forward(75.0) - lin.v_forward(75.0) == pytest.approx(
         dev.diode.quad_v_per_k2 * 2500)
     assert Frontend.code(-1.0) == 0 and Frontend.code(9.0) == 1023
     assert Frontend.code(2.5) == 512
+
+
+def test_the_bench_names_no_effect_it_finds_them_through_the_registry():
+    """The presets' device effects are data (spicethermal/data/sim_bench.json), checked against
+    the registry; each artefact of the front end shows as a catalogued measurement effect, and
+    the URL's names reach the hardware through that map."""
+    data = bench_data()
+    for entry in data["devices"].values():
+        assert all(plugin(e["name"]).kind == DEVICE for e in entry["effects"])
+    assert list(shown_as()) == list(ARTEFACTS)
+    assert all(n in known_names() and plugin(n).kind == MEASUREMENT for n in shown_as().values())
+    assert artefacts(["sample-window", "phase-change"]) == {SAMPLE_WINDOW}
+    dev = SimulatedDevice("actuator", effects=["phase-change"])
+    assert dev.ideal_hold and not dev.frontend.curved_tsp and not dev.frontend.cut_transient
+    assert [e.name for e in dev.plant.device_effects] == ["phase-change"]
+    assert dev.plant.device_effects[0].params["latent_j"] == 1.0  # the preset's, not a default
+    dev.close()
+
+
+def test_any_device_effect_of_the_registry_is_simulated_with_its_own_physics(register_plugin):
+    """A device effect the presets hold no data for (offered as a third-party package would
+    offer it) is simulated by the plant through its plugin, at its defaults."""
+    from spicethermal.effects.temperature_coefficient import TemperatureCoefficient
+
+    class Warmer(TemperatureCoefficient):
+        name = "warmer"
+        params = {**TemperatureCoefficient.params,
+                  "alpha_per_k": replace(TemperatureCoefficient.params["alpha_per_k"],
+                                         default=0.01)}
+
+    register_plugin(Warmer)
+    assert parse_effects("warmer") == ("warmer",)
+    hot, cold = Plant(preset("actuator"), ["warmer"]), Plant(preset("actuator"))
+    hot.heat(60.0, 0.3)
+    cold.heat(60.0, 0.3)
+    assert hot.theta[0] > cold.theta[0] + 1.0  # R rises with T at α = +0.01/K
 
 
 def test_effect_names_are_checked():

@@ -10,11 +10,13 @@ import numpy as np
 import pytest
 
 from spicethermal.core.errors import DataFormatError
+from spicethermal.identify.readings import calibration_fit, cooling_tj_c
 from spicethermal.io import bundle as bmod
 from spicethermal.io.bundle import (
     Bundle,
     CalibrationTable,
     CoolingTable,
+    KFactorLaw,
     PwmTable,
     ZthTable,
     read_columns,
@@ -79,7 +81,7 @@ def test_arrays_are_immutable() -> None:
 
 def test_cooling_tj_from_calibration() -> None:
     b = full_bundle()
-    tj = b.cooling_tj_c(1)
+    tj = cooling_tj_c(b, 1)
     # V = 0.66 - 0.002 T exactly on the calibration line
     np.testing.assert_allclose(tj, (0.66 - b.cooling[1].v_tsp_v) / 2e-3, rtol=1e-12)
     assert b.cooling_reference_c(1) == (None, 24.5)  # falls back to ambient_c
@@ -280,13 +282,11 @@ def _kind_bundle(tmp_path: Path, calibration: dict, fmt: str = V2) -> Path:
 
 
 def test_k_factor_bundle_converts_and_round_trips(tmp_path: Path) -> None:
-    from spicethermal.identify.calibration import KFactor
-
     d = _kind_bundle(tmp_path, {"kind": "k-factor", "k_mv_per_k": -2.0, "v_ref_v": 0.6,
                                 "t_ref_c": 25.0})
     b = Bundle.read(d)
-    assert isinstance(b.calibration, KFactor)
-    assert np.allclose(b.cooling_tj_c(0), 25.0 + (np.array([0.55, 0.56, 0.58]) - 0.6) / -2e-3)
+    assert isinstance(b.calibration, KFactorLaw) and b.calibration.kind == "k-factor"
+    assert np.allclose(cooling_tj_c(b, 0), 25.0 + (np.array([0.55, 0.56, 0.58]) - 0.6) / -2e-3)
     again = Bundle.read(b.write(tmp_path / "copy"))
     assert again.calibration == b.calibration and not (tmp_path / "copy" /
                                                       "calibration.csv").exists()
@@ -297,12 +297,12 @@ def test_polynomial_bundle_keeps_coefficients_and_residuals(tmp_path: Path) -> N
     d = _kind_bundle(tmp_path, {"kind": "polynomial", "file": "calibration.csv",
                                 "coefficients_v": [2.6505, -1.5098e-3]})
     b = Bundle.read(d)
-    cal = b.calibration_fit()
+    cal = calibration_fit(b)
     assert cal.coefficients == (2.6505, -1.5098e-3) and cal.kind == "polynomial"
     expect = (np.array([2.6127, 2.5899, 2.5670]) - (2.6505 - 1.5098e-3 * np.array([25, 40, 55])))
     assert np.allclose(cal.residuals_mv, expect * 1e3, atol=1e-9)
     again = Bundle.read(b.write(tmp_path / "copy"))
-    assert again.calibration_fit().coefficients == cal.coefficients
+    assert calibration_fit(again).coefficients == cal.coefficients
 
 
 def test_table_bundles_are_still_written_as_version_1(tmp_path: Path) -> None:

@@ -124,6 +124,28 @@ def test_bad_k_factor_names_the_parameter(kwargs, words) -> None:
         KFactor(**kwargs)
 
 
+def test_a_bundle_holds_what_was_read_and_identify_converts_it(tmp_path) -> None:
+    """io holds the calibration as read (points, the K-factor's numbers); identify builds the
+    converter of any kind, and a converter in a bundle is written and read back as its law."""
+    from spicethermal.identify.calibration import KFactor
+    from spicethermal.identify.readings import converter
+    from spicethermal.io.bundle import Bundle, CalibrationTable, KFactorLaw
+
+    law = KFactorLaw(-2e-3, 0.6, 25.0, "x")
+    k = converter(law)
+    assert isinstance(k, KFactor) and k == law and hash(k) == hash(law) and str(k) == str(law)
+    assert converter(k) is k and not hasattr(law, "temperature")
+    back = Bundle.read(Bundle(calibration=k).write(tmp_path / "b")).calibration
+    assert type(back) is KFactorLaw and back == k
+    table = CalibrationTable([25.0, 50.0, 75.0], [0.6, 0.55, 0.5], coefficients=(0.65, -2e-3, 0))
+    assert table.coefficients == (0.65, -2e-3)  # a zero quadratic term is dropped on reading
+    poly = converter(table, degree=2)  # given: the degree asked for does not refit it
+    assert poly.kind == "polynomial" and poly.coefficients == (0.65, -2e-3)
+    assert converter(CalibrationTable([25.0, 75.0], [0.6, 0.5]), 1).kind == "table"
+    with pytest.raises(DataFormatError, match="coefficients_v: the polynomial is not monotonic"):
+        CalibrationTable([0.0, 100.0], [0.6, 0.5], coefficients=(0.6, -2e-3, 2e-5))
+
+
 def test_given_polynomial_keeps_its_residuals() -> None:
     """A line fitted elsewhere (a T3Ster .tco header) against the points: residuals are the
     points minus that line, not a refit."""

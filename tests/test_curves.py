@@ -12,8 +12,10 @@ from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Foster
 from spicethermal.core.synthetic import mur880e_foster, synthetic_cooling
 from spicethermal.identify.curves import ZthCurve, detect_transient, log_grid
+from spicethermal.identify.readings import calibration_fit
+from spicethermal.identify.records import read_pyrth, read_t3ster
 from spicethermal.io.bundle import Bundle, CalibrationTable, CoolingTable, ZthTable
-from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth, read_t3ster
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION
 
 PYRTH = DATA / "pyrth_mosfet"
 
@@ -197,7 +199,7 @@ def test_bad_times_name_the_row() -> None:
 def test_pyrth_mosfet_transients() -> None:
     dry = read_pyrth(PYRTH / "MOSFET_dry.txt", PYRTH_MOSFET_CALIBRATION)
     tim = read_pyrth(PYRTH / "MOSFET_tim.txt", PYRTH_MOSFET_CALIBRATION)
-    assert dry.calibration_fit().k_factor_mv_per_k == pytest.approx(-2.32, abs=0.01)
+    assert calibration_fit(dry).k_factor_mv_per_k == pytest.approx(-2.32, abs=0.01)
     assert dry.cooling[0].power_w == 1.0  # nominal: Zth in K per watt of it
     zd, zt = ZthCurve.from_bundle(dry)[0], ZthCurve.from_bundle(tim)[0]
     for z in (zd, zt):
@@ -215,7 +217,7 @@ def test_pyrth_mosfet_transients() -> None:
 def test_t3ster_record(tmp_path: Path) -> None:
     b = read_t3ster(PYRTH / "t3ster" / "T25_I-m5m-I-h600m_100s.raw")
     assert b.cooling[0].power_w == pytest.approx(1.754057)
-    assert b.calibration_fit().k_factor_mv_per_k == pytest.approx(-1.51, abs=0.01)
+    assert calibration_fit(b).k_factor_mv_per_k == pytest.approx(-1.51, abs=0.01)
     z = ZthCurve.from_bundle(b)[0]
     r = z.resample_log(5)
     rising = r.t_s < 1.0  # later it is flat within the noise (0.1 % of Rth)
@@ -224,7 +226,7 @@ def test_t3ster_record(tmp_path: Path) -> None:
     again = Bundle.read(b.write(tmp_path / "t3"))
     np.testing.assert_array_equal(again.cooling[0].v_tsp_v, b.cooling[0].v_tsp_v)
     # the .tco header's line, kept with its points: residuals are points minus that line
-    cal = again.calibration_fit()
+    cal = calibration_fit(again)
     assert cal.kind == "polynomial" and cal.coefficients == (2.6505, -1.5098e-3)
     expect = np.array(cal.v_tsp_v) - (2.6505 - 1.5098e-3 * np.array(cal.temp_c))
     np.testing.assert_allclose(cal.residuals_mv, expect * 1e3, atol=1e-9)

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from spicethermal.analysis.demo import run_demo
+from spicethermal.demo import run_demo
+from spicethermal.identify.readings import calibration_fit
 from spicethermal.model import ThermalModel
 from spicethermal.report.html import SECTION_IDS, figure_is_nontrivial
 
@@ -275,7 +276,7 @@ def test_report_numbers_agree_with_the_files_and_the_command_line(demo, tmp_path
     assert html.index("fitted parameters in the candidates table below") < \
         html.index("Candidates, best first")
     # the calibration: the law the text names is the bundle's, and the figure draws it
-    cal = Bundle.read(demo.out / "actuator").calibration_fit()
+    cal = calibration_fit(Bundle.read(demo.out / "actuator"))
     assert ("with a quadratic" if cal.degree == 2 else "fitted linearly") in text
     assert f"K-factor {cal.k_factor_mv_per_k:.3f} mV/K" in text
     # Rth of section 2 is what `fit` gives for the same bundle

@@ -10,7 +10,8 @@ import pytest
 from conftest import DATA
 
 from spicethermal.cli.main import main
-from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
+from spicethermal.identify.records import read_pyrth
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION
 
 SAMPLE = DATA / "sample_bundle"
 

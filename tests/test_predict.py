@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spicethermal.analysis.predict import PowerProfile, predict, pwl_response
+from spicethermal.predict import PowerProfile, predict, pwl_response
 from spicethermal.cli.main import main
 from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Foster

@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 from conftest import DATA
 
-from spicethermal.analysis.demo import Steps
 from spicethermal.cli import main as cli
 from spicethermal.core.ladder import Foster
 from spicethermal.core.progress import bar, enabled, task
+from spicethermal.demo import Steps
 from spicethermal.effects import Effect
 from spicethermal.model import ThermalModel
 

@@ -11,9 +11,10 @@ import pytest
 from conftest import DATA
 
 from spicethermal.cli.main import main
-from spicethermal.identify.calibration import KFactor
-from spicethermal.io.bundle import Bundle, format_columns
-from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION, read_pyrth
+from spicethermal.identify.readings import cooling_tj_c
+from spicethermal.identify.records import read_pyrth
+from spicethermal.io.bundle import Bundle, KFactorLaw, format_columns
+from spicethermal.io.importers import PYRTH_MOSFET_CALIBRATION
 
 MOSFET = DATA / "pyrth_mosfet"
 #: PyRth's totals for these files (K per watt of the 1 W nominal step) and the ΣR where its
@@ -38,10 +39,10 @@ def test_the_bundles_hold_a_k_factor_and_read_back(bundles) -> None:
     assert doc["format"] == "spicethermal-bundle/2"
     assert doc["calibration"]["kind"] == "k-factor"
     b = Bundle.read(bundles["dry"])
-    assert isinstance(b.calibration, KFactor)
+    assert isinstance(b.calibration, KFactorLaw)
     slope = np.polyfit(*np.array(PYRTH_MOSFET_CALIBRATION).T, 1)[0]
     assert b.calibration.k_v_per_k == pytest.approx(slope, rel=1e-9)
-    tj = b.cooling_tj_c(0)
+    tj = cooling_tj_c(b, 0)
     # anchored: the record ends at the reference, and the die is hotter than it before
     assert np.mean(tj[-5:]) == pytest.approx(25.0, abs=1e-9)
     assert np.all(tj[100:] > 24.9)

@@ -334,9 +334,9 @@ DIRECT_WRITES = {
     ("spice/ngspice.py", '(work / "deck.cir").write_text('): "private temporary directory",
     ("engines/pwmsim.py", "lib.write_text("): "private temporary directory",
     ("io/bundle.py", 'with open(tmp / name, "w"'): "inside Bundle.write's temporary directory",
-    ("bench/client.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
-    ("bench/client.py", 'open(directory / "frames.jsonl", "a"'): "append-only raw log",
-    ("bench/client.py", "json.dumps(rec)"): "raw log records: times and hex strings only",
+    ("bench/link.py", 'open(directory / "raw_frames.bin", "ab")'): "append-only raw log",
+    ("bench/link.py", 'open(directory / "frames.jsonl", "a"'): "append-only raw log",
+    ("bench/link.py", "json.dumps(rec)"): "raw log records: times and hex strings only",
     ("batch/device.py", "(local / file).write_bytes(data)"): "worker's private temporary copy",
     ("batch/device.py", "local.write_bytes(next(iter(source.files.values())))"):
         "worker's private temporary copy",

@@ -10,8 +10,8 @@ import pytest
 from spicethermal.analysis.compare import compare
 from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Foster
+from spicethermal.identify.sources import read_source, thin
 from spicethermal.io.bundle import CoolingTable, format_columns
-from spicethermal.io.sources import read_source, thin
 from spicethermal.model import ThermalModel
 
 LADDER = Foster.from_tau([0.3, 1.2], [1e-3, 0.5])

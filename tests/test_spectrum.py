@@ -108,7 +108,7 @@ def test_spectrum_is_immutable_and_validated():
 # ------------------------------------------------------------------- real MOSFET data
 @pytest.fixture(scope="module")
 def mosfet():
-    from spicethermal.io.sources import read_source
+    from spicethermal.identify.sources import read_source
 
     cal = MOSFET / "calibration.csv"
     curves = {name: read_source(MOSFET / f"MOSFET_{name}.txt", calibration=cal,
@@ -177,7 +177,7 @@ def test_cli_spectrum_bad_input_exits_2_with_one_line(tmp_path, capsys):
 def test_pyrth_text_source_with_calibration_csv_and_power(tmp_path):
     """A PyRth-format file made from a known ladder: Zth comes back through the given
     calibration (V = 0.6 V − 2 mV/K · (T − 20 °C)) and power (2 W)."""
-    from spicethermal.io.sources import read_source
+    from spicethermal.identify.sources import read_source
 
     ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
     t = np.geomspace(1e-6, 20.0, 700)
@@ -202,8 +202,8 @@ def test_bundle_source(tmp_path, capsys):
     junction temperature: Tj at the cut is extrapolated by √t) is read through the
     early-time correction; the spectrum holds the curve's Rth."""
     from spicethermal.cli.main import main
+    from spicethermal.identify.sources import read_source
     from spicethermal.io.bundle import Bundle, CoolingTable
-    from spicethermal.io.sources import read_source
 
     ladder = Foster.from_tau([1.0, 3.0], [1e-3, 1e-1])
     t, tj = synthetic_cooling(ladder, 2.0, np.geomspace(1e-6, 20.0, 600), transient_s=3e-5)

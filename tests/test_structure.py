@@ -131,7 +131,7 @@ def test_separation_of_two_synthetic_mountings():
 # ------------------------------------------------------------------- real MOSFET data
 @pytest.fixture(scope="module")
 def mosfet():
-    from spicethermal.io.sources import read_source
+    from spicethermal.identify.sources import read_source
 
     out = {}
     for name in ("dry", "tim"):

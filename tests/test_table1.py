@@ -15,8 +15,9 @@ from spicethermal.cli import main as cli
 from spicethermal.core.errors import DataFormatError
 from spicethermal.core.synthetic import mur880e_foster, synthetic_cooling
 from spicethermal.identify.curves import ZthCurve
+from spicethermal.identify.datasheet import read_zth_points, table1
 from spicethermal.io.bundle import Bundle, CoolingTable, format_columns, parse_columns
-from spicethermal.io.datasheet import mur880e, read_foster_table, read_zth_points, table1
+from spicethermal.io.datasheet import mur880e, read_foster_table
 
 DENSE_T = np.unique(np.concatenate([np.arange(1, 1000) * 1e-6, np.geomspace(1e-3, 30, 400)]))
 

@@ -10,6 +10,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import lambertw
 
+from spicethermal.identify.readings import cooling_tj_c
 from spicethermal.io.bundle import Bundle
 from spicethermal.validation.cases import (
     ACCEPTABLE,
@@ -190,7 +191,7 @@ def test_bundles_read_back_through_the_project_reader(tmp_path):
     assert back.reference == "case" and len(back.cooling) == 2 and back.pwm.tj_c.size == 6
     assert all(c.tj_steady_c is None and c.tj_c is None for c in back.cooling)
     # noise-free, linear TSP: the reader's calibration turns the volts back into the truth
-    assert back.cooling_tj_c(1) == pytest.approx(rec.truth["cooling_2"], abs=1e-4)
+    assert cooling_tj_c(back, 1) == pytest.approx(rec.truth["cooling_2"], abs=1e-4)
     assert back.pwm.tj_c == pytest.approx(rec.truth["pwm"], abs=1e-5)
     assert back.extra == {}
 
@@ -258,7 +259,7 @@ def test_new_classes_read_back_through_the_project_reader(name, tmp_path):
                             "steady": False, "volts": True, "n_curves": 2})
     rec = measure(dev.network(), bench, 1)
     back = Bundle.read(rec.bundle.write(tmp_path / "b"))
-    assert back.cooling_tj_c(1) == pytest.approx(rec.truth["cooling_2"], abs=1e-4)
+    assert cooling_tj_c(back, 1) == pytest.approx(rec.truth["cooling_2"], abs=1e-4)
     assert back.pwm.tj_c == pytest.approx(rec.truth["pwm"], abs=1e-5)
     assert back.pwm.tj_c.size == 6 and back.reference == dev.bench.reference
 

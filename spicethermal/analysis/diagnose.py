@@ -239,11 +239,12 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
 
 def _status(chosen: Candidate, tied: Sequence[Candidate], data: BundleData) -> str:
     """A step's status (see :class:`~.diagnosis.Step`)."""
-    if not chosen.catalogued or any(not t.catalogued for t in tied):
+    if not chosen.catalogued:
         return RIVAL
+    named_too = any(t.catalogued for t in tied)
     if not chosen.effect.plugin.traits.needs <= data.kinds:
-        return AMBIGUOUS if tied else UNSHOWN
-    return AMBIGUOUS if tied else NAMED
+        return AMBIGUOUS if named_too else UNSHOWN
+    return AMBIGUOUS if named_too else NAMED
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict) -> Verdict:
@@ -266,7 +267,7 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     named = [s for s in live if s.status in (NAMED, AMBIGUOUS)]
     rivals = [s for s in live if s.status == RIVAL]
     alternatives = tuple(dict.fromkeys(
-        c.name for s in rivals for c in (s.chosen, *s.tied) if not c.catalogued))
+        c.name for s in live for c in (s.chosen, *s.tied) if not c.catalogued))
     beyond = _beyond(data, final)
     left = tuple(localise(comparison_of(data, final.predictions), noise, beyond))
     share = explained(base.chi2, final.chi2, data.sizes())
@@ -281,7 +282,7 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
                        + ("; and in ".join(left[:2]) or "no data set beyond its noise"),
                        alternatives, _separate(live), left)
     effects = tuple(dict.fromkeys(
-        n for s in named for n in (s.chosen.name, *(t.name for t in s.tied))))
+        n for s in named for n in (s.chosen.name, *(t.name for t in s.tied if t.catalogued))))
     separate = _separate(named)
     if rivals:
         return Verdict(NONE, (), f"{', '.join(effects)} would explain part of it, but "
@@ -307,7 +308,9 @@ def _named_reason(named: Sequence[Step], share: float, tail: str) -> str:
     parts = []
     for s in named:
         c = s.chosen
-        also = f" (or {', '.join(t.name for t in s.tied)}: as likely)" if s.tied else ""
+        names = [t.name for t in s.tied if t.catalogued]
+        names += [f"outside the catalogue, {t.evidence}" for t in s.tied if not t.catalogued]
+        also = f" (or {'; or '.join(names)}: as likely)" if names else ""
         parts.append(f"{c.name}{also} lowers the criterion by {c.delta_bic:.1f} and removes "
                      f"{100 * max(c.explained, 0):.0f} % of the misfit beyond the noise "
                      f"({c.evidence})")

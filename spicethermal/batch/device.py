@@ -24,8 +24,8 @@ from .. import __version__
 from ..analysis.diagnose import diagnose
 from ..core.errors import SpiceThermalError
 from ..fit.ladder import fit_model
+from ..identify.sources import read_source
 from ..io.bundle import Bundle
-from ..io.sources import read_source
 from ..spice.lib import check_name, render_lib
 
 __all__ = ["COLUMNS", "Options", "Source", "characterize", "make_row", "subckt_name"]

@@ -2,9 +2,10 @@
 
 Layers, bottom up:
 
-* :class:`RawLog` — every byte read from the port is appended to ``raw_frames.bin``
-  *before* it is processed, and fsynced before the host acknowledges it; every frame, both
-  directions, gets a line in ``frames.jsonl`` with what the link made of it (ok, crc, gap...).
+* :class:`~spicethermal.bench.link.RawLog` — every byte read from the port is appended to
+  ``raw_frames.bin`` *before* it is processed, and fsynced before the host acknowledges it;
+  every frame, both directions, gets a line in ``frames.jsonl`` with what the link made of it
+  (ok, crc, gap...).
 * :class:`~spicethermal.bench.link.Link` — the host side of the protocol
   (firmware/PROTOCOL.md §4, module :mod:`spicethermal.bench.link`): in-order, exactly-once
   delivery of device frames with cumulative ACKs, NAK/resend on a bad frame or a gap, command
@@ -23,76 +24,19 @@ Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 
 from __future__ import annotations
 
-import json
-import os
 import sys
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO
 
 from ..core.errors import DataFormatError, InstrumentError
 from . import protocol as p
-from .link import Link
+from .link import Link, RawLog
 
 SUPPORTED_FIRMWARE_MAJOR = 1
 ACTIONS = ("calibrate", "rth", "cooling", "pwm")
 #: The first protocol version with the FORWARD procedure and the sense current in INFO.
 FORWARD_PROTOCOL = 3
-
-
-# --------------------------------------------------------------------------- raw log
-class RawLog:
-    """Append-only raw records of a session in ``directory`` (created).
-
-    Received bytes are written to the file (they survive a crash of this process) before
-    the link decodes them, and fsynced (:meth:`sync`) before the host acknowledges them to
-    the device, which then forgets them: no frame is lost from both sides at once.
-    """
-
-    def __init__(self, directory: Path | None) -> None:
-        self.directory = directory
-        self._bin: IO[bytes] | None = None
-        self._jsonl: IO[str] | None = None
-        self._t0 = time.monotonic()
-        self._unsynced = False
-        if directory is not None:
-            directory.mkdir(parents=True, exist_ok=True)
-            self._bin = open(directory / "raw_frames.bin", "ab")
-            self._jsonl = open(directory / "frames.jsonl", "a", encoding="utf-8")
-
-    def received(self, data: bytes) -> None:
-        """Append ``data`` to ``raw_frames.bin``, written through to the kernel."""
-        if self._bin is not None and data:
-            self._bin.write(data)
-            self._bin.flush()
-            self._unsynced = True
-
-    def sync(self) -> None:
-        """fsync what was received so far (before acknowledging it to the device)."""
-        if self._bin is not None and self._unsynced:
-            os.fsync(self._bin.fileno())
-            self._unsynced = False
-
-    def frame(self, direction: str, block: bytes, status: str, frame: p.Frame | None = None
-              ) -> None:
-        if self._jsonl is None:
-            return
-        rec = {"t_s": round(time.monotonic() - self._t0, 6), "dir": direction,
-               "status": status, "hex": block.hex()}
-        if frame is not None:
-            rec["type"], rec["seq"] = frame.type, frame.seq
-        self._jsonl.write(json.dumps(rec) + "\n")
-        self._jsonl.flush()
-
-    def close(self) -> None:
-        for f in (self._bin, self._jsonl):
-            if f is not None:
-                f.flush()
-                os.fsync(f.fileno())
-                f.close()
-        self._bin = self._jsonl = None
 
 
 # --------------------------------------------------------------------------- progress

@@ -1,21 +1,77 @@
 """The host side of the link protocol (firmware/PROTOCOL.md §4): in-order, exactly-once
 delivery of device frames with cumulative ACKs, NAK/resend on a bad frame or a gap, command
 resend when SYNC shows the device never got it, timeouts and a silent-device error; and the
-link's statistics (:class:`LinkStats`). Every byte goes to a :class:`~.client.RawLog` first.
+link's statistics (:class:`LinkStats`). Every byte goes to a :class:`RawLog` first: the raw
+records of a session, written before the link decodes them.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import secrets
+import time
 from collections import deque
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import IO
 
 from ..core.errors import InstrumentError
 from . import protocol as p
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .client import RawLog
+
+# --------------------------------------------------------------------------- raw log
+class RawLog:
+    """Append-only raw records of a session in ``directory`` (created).
+
+    Received bytes are written to the file (they survive a crash of this process) before
+    the link decodes them, and fsynced (:meth:`sync`) before the host acknowledges them to
+    the device, which then forgets them: no frame is lost from both sides at once.
+    """
+
+    def __init__(self, directory: Path | None) -> None:
+        self.directory = directory
+        self._bin: IO[bytes] | None = None
+        self._jsonl: IO[str] | None = None
+        self._t0 = time.monotonic()
+        self._unsynced = False
+        if directory is not None:
+            directory.mkdir(parents=True, exist_ok=True)
+            self._bin = open(directory / "raw_frames.bin", "ab")
+            self._jsonl = open(directory / "frames.jsonl", "a", encoding="utf-8")
+
+    def received(self, data: bytes) -> None:
+        """Append ``data`` to ``raw_frames.bin``, written through to the kernel."""
+        if self._bin is not None and data:
+            self._bin.write(data)
+            self._bin.flush()
+            self._unsynced = True
+
+    def sync(self) -> None:
+        """fsync what was received so far (before acknowledging it to the device)."""
+        if self._bin is not None and self._unsynced:
+            os.fsync(self._bin.fileno())
+            self._unsynced = False
+
+    def frame(self, direction: str, block: bytes, status: str, frame: p.Frame | None = None
+              ) -> None:
+        if self._jsonl is None:
+            return
+        rec = {"t_s": round(time.monotonic() - self._t0, 6), "dir": direction,
+               "status": status, "hex": block.hex()}
+        if frame is not None:
+            rec["type"], rec["seq"] = frame.type, frame.seq
+        self._jsonl.write(json.dumps(rec) + "\n")
+        self._jsonl.flush()
+
+    def close(self) -> None:
+        for f in (self._bin, self._jsonl):
+            if f is not None:
+                f.flush()
+                os.fsync(f.fileno())
+                f.close()
+        self._bin = self._jsonl = None
+
 
 # --------------------------------------------------------------------------- link
 @dataclass

@@ -6,14 +6,16 @@
 piecewise-constant power: in the eigenbasis of the symmetrised network every mode is a scalar
 exponential, so a step of any length, and a block of N whole PWM periods, cost O(n) (the
 matrix exponential in closed form, the periodic sum as a geometric series). Device effects
-(``temperature-coefficient``, ``phase-change``, from :mod:`spicethermal.effects`) make the
-network depend on temperature; they are applied with coefficients frozen over short chunks
+(any device plugin of :mod:`spicethermal.effects`, through its own physics: the factor on each
+layer's resistance, the heat stored at each node) make the network depend on temperature;
+they are applied with coefficients frozen over short chunks
 (the driver keeps chunks below :attr:`Plant.max_chunk_s`), which the tests check against
 :meth:`spicethermal.model.ThermalModel.simulate`.
 
 :class:`Frontend` turns the plant's temperatures into the voltages at the ADC pins — the diode
-TSP with its nonlinearity, the electrical transient after a power cut, noise — and quantizes
-them like the PIC's 10-bit ADC.
+TSP with its curvature, the electrical transient after a power cut (the hardware artefacts of
+:data:`~spicethermal.bench.devices.ARTEFACTS`), noise — and quantizes them like the PIC's
+10-bit ADC.
 
 >>> from spicethermal.bench.devices import preset
 >>> p = Plant(preset("actuator"), effects=())
@@ -33,17 +35,12 @@ import numpy as np
 from ..core.diode import K_OVER_Q, ZERO_C_K
 from ..core.errors import InstrumentError
 from ..core.ladder import Cauer
-from ..effects import Effect
+from .devices import CURVED_TSP, CUT_TRANSIENT
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
     from .devices import Preset
-
-DEVICE_EFFECTS = ("temperature-coefficient", "phase-change")
-MEASUREMENT_EFFECTS = ("electrical-transient", "sample-window", "tsp-nonlinearity")
-#: Effects of the simulated bench when the URL names none: the paper's bench artefacts.
-DEFAULT_EFFECTS = MEASUREMENT_EFFECTS
 
 FIXTURE_TAU_S = 40.0          # calibration hot plate: first-order approach to its setpoint
 AMBIENT_DRIFT_K = 0.03        # slow ambient drift amplitude ...
@@ -56,7 +53,8 @@ class Plant:
     Parameters
     ----------
     preset : the device.
-    effects : names of the enabled effects (only device effects matter here).
+    effects : names of the enabled effects (only device effects matter here:
+        :meth:`~spicethermal.bench.devices.Preset.device_effects`).
     """
 
     def __init__(self, preset: Preset, effects: Iterable[str] = ()) -> None:
@@ -67,10 +65,7 @@ class Plant:
         self.cauer = cauer
         self.c0, self.g0 = cauer.state_matrices()
         self.n = cauer.order
-        names = set(effects)
-        self.device_effects = tuple(
-            Effect(name, preset.effect_params.get(name, {}))
-            for name in DEVICE_EFFECTS if name in names)
+        self.device_effects = preset.device_effects(effects)
         self._rate_k_per_s = math.inf   # fastest node change of the last step (effects only)
         self._cache: dict = {}
         self.theta = np.zeros(self.n)
@@ -216,19 +211,21 @@ class Frontend:
     Parameters
     ----------
     preset : the device and its board.
-    effects : enabled effect names (``tsp-nonlinearity``, ``electrical-transient`` matter here).
+    artefacts : the front end's artefacts switched on (of
+        :data:`~spicethermal.bench.devices.ARTEFACTS`; the TSP's curvature and the transient
+        after the cut matter here).
     noise_k : standard deviation of the TSP reading noise, expressed in kelvin.
     rng : the random generator (seeded by the URL's ``seed``).
     """
 
-    def __init__(self, preset: Preset, effects: Iterable[str], noise_k: float,
+    def __init__(self, preset: Preset, artefacts: Iterable[str], noise_k: float,
                  rng: np.random.Generator) -> None:
         if not (math.isfinite(noise_k) and noise_k >= 0):
             raise InstrumentError(f"noise = {noise_k!r}: must be >= 0 (kelvin)")
         self.preset = preset
-        names = set(effects)
-        self.nonlinear = "tsp-nonlinearity" in names
-        self.transient = "electrical-transient" in names
+        on = set(artefacts)
+        self.curved_tsp = CURVED_TSP in on
+        self.cut_transient = CUT_TRANSIENT in on
         self.noise_k = noise_k
         self.rng = rng
 
@@ -236,7 +233,7 @@ class Frontend:
         """TSP diode forward voltage at the bias current."""
         d = self.preset.diode
         x = t_c - 25.0
-        return d.v25 + d.slope_v_per_k * x + (d.quad_v_per_k2 * x * x if self.nonlinear else 0.0)
+        return d.v25 + d.slope_v_per_k * x + (d.quad_v_per_k2 * x * x if self.curved_tsp else 0.0)
 
     def v_diode(self, i_a: float, t_c: float) -> float:
         """Heater diode voltage at current ``i_a`` (the heating current, a forward-voltage
@@ -271,7 +268,7 @@ class Frontend:
             i = current_a
         else:
             vd = self.v_forward(tj_tsp_c)
-            if self.transient and since_cut_s is not None and \
+            if self.cut_transient and since_cut_s is not None and \
                     since_cut_s < 50 * self.preset.transient_tau_s:
                 vd += self.preset.transient_v * math.exp(-since_cut_s /
                                                           self.preset.transient_tau_s)

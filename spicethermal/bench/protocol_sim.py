@@ -9,12 +9,15 @@ URL: ``sim://DEVICE[?key=value&...]`` with DEVICE ``actuator`` or ``mur880e`` an
 * ``seed`` (int, 0): seeds the plant noise and the link faults;
 * ``noise`` (K, 0.03): TSP reading noise;
 * ``effects`` (comma list, default ``electrical-transient,sample-window,tsp-nonlinearity``):
-  the enabled effects of the DESIGN.md catalogue, ``none`` for an ideal bench. The list
-  replaces the default. Without ``sample-window`` the bench holds the TSP at the start of each
-  sample window (an ideal track-and-hold, INFO caps bit 0) and the bundle records
-  ``sample_window_s = 0``; without ``electrical-transient`` the cut-off is clean; without
-  ``tsp-nonlinearity`` the diode is linear in T. ``temperature-coefficient`` and
-  ``phase-change`` use the device's parameters from :mod:`.devices`;
+  the enabled effects of the catalogue (:mod:`spicethermal.effects`), ``none`` for an ideal
+  bench. The list replaces the default. A measurement effect switches on the front end's
+  hardware artefact that shows as it (:data:`~spicethermal.bench.devices.ARTEFACTS`, mapped in
+  ``spicethermal/data/sim_bench.json``): without ``sample-window`` the bench holds the TSP at
+  the start of each sample window (an ideal track-and-hold, INFO caps bit 0) and the bundle
+  records ``sample_window_s = 0``; without ``electrical-transient`` the cut-off is clean;
+  without ``tsp-nonlinearity`` the diode is linear in T. Any device effect of the registry is
+  simulated through its plugin, with the device's parameters from that file
+  (``temperature-coefficient``, ``phase-change``) or else the plugin's defaults;
 * ``faults`` (per byte, 0): link fault rate in both directions; each fault is a flipped bit,
   a dropped byte or a duplicated byte, in equal shares;
 * ``stall`` (reads, 0): with probability ``faults`` per read, the link holds the device's

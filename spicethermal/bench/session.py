@@ -3,7 +3,7 @@
 A session holds the bundle's lock (:func:`spicethermal.io.files.locked`) from start to end, so a
 second writer stops with a one-line error (or waits, ``wait=True``). Raw bytes go to
 ``BUNDLE/raw/<session>/`` inside the live bundle, appended and fsynced before they are
-processed (:class:`~spicethermal.bench.client.RawLog`); a new bundle starts empty on disk
+processed (:class:`~spicethermal.bench.link.RawLog`); a new bundle starts empty on disk
 for that. The data sets measured are *added*: a rerun gets a new file name (``cooling_3.csv``,
 ``calibration_2.csv``); a single section's previous entry (calibration, pwm, the Rth summary)
 moves to the manifest's ``superseded`` list and its file stays; only ``replace=[NAME]`` puts
@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError, InstrumentError, SpiceThermalError
+from ..identify.readings import converter
 from ..io.bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ForwardTable, PwmTable
 from ..io.files import clean_leftovers, locked
 from . import protocol as p
@@ -39,7 +40,7 @@ from .merge import SECTIONS, add_datasets
 from .plan import PLANS, Plan
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..identify.calibration import Calibration
+    from ..identify.calibration import Converter
 
 
 # --------------------------------------------------------------------------- conversion
@@ -52,7 +53,7 @@ class TspConversion:
     temperature ``T_rd`` gives ``g(Tj) = v + g(T_rd)``.
     """
 
-    def __init__(self, calibration: Calibration) -> None:
+    def __init__(self, calibration: Converter) -> None:
         self.cal = calibration
 
     def tj_c(self, v_tsp_v: np.ndarray, t_ref_diode_c: float) -> np.ndarray:
@@ -225,7 +226,7 @@ class Session:
                 new["forward"] = forward
         conv = None
         if calibration is not None:
-            conv = TspConversion(calibration.fit("auto"))
+            conv = TspConversion(converter(calibration, "auto"))
         if "rth" in actions:
             step(f"rth at {plan.rth_power_w:g} W", plan.settle_s)
             run = bench.rth(plan.rth_power_w, plan.settle_s, plan.window_s, plan.n_readings)

@@ -30,12 +30,12 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InstrumentError
+from .devices import SAMPLE_WINDOW, artefacts, shown_as, simulated_effects
 from .devices import preset as get_preset
-from .plant import DEFAULT_EFFECTS, DEVICE_EFFECTS, MEASUREMENT_EFFECTS, Frontend, Plant
+from .plant import Frontend, Plant
 
 FIRMWARE_DIR = Path(__file__).resolve().parents[2] / "firmware"
 LIBRARY = FIRMWARE_DIR / "build" / "libspicethermal_fw.so"
-KNOWN_EFFECTS = DEVICE_EFFECTS + MEASUREMENT_EFFECTS
 
 OP_DAC, OP_PWM, OP_CUT, OP_RELEASE, OP_ADC_AT, OP_ADC_AFTER_CUT, OP_ADC_ON_PHASE, OP_FIXTURE = (
     range(1, 9))
@@ -102,17 +102,26 @@ def firmware_library() -> ctypes.CDLL:
     return lib
 
 
+def default_effects() -> tuple[str, ...]:
+    """The effects of a URL without ``effects=``: what the paper's bench shows, every artefact
+    of the front end (:func:`~spicethermal.bench.devices.shown_as`)."""
+    return tuple(shown_as().values())
+
+
 def parse_effects(text: str | None) -> tuple[str, ...]:
-    """Effect names from a URL's ``effects=a,b`` (None: the defaults; ``none``: no effect)."""
+    """Effect names from a URL's ``effects=a,b`` (None: :func:`default_effects`; ``none``: no
+    effect), each one the simulated bench can switch on
+    (:func:`~spicethermal.bench.devices.simulated_effects`)."""
     if text is None:
-        return DEFAULT_EFFECTS
+        return default_effects()
     names = tuple(x.strip() for x in text.split(",") if x.strip())
     if names in ((), ("none",)):
         return ()
+    known = simulated_effects()
     for name in names:
-        if name not in KNOWN_EFFECTS:
+        if name not in known:
             raise InstrumentError(f"effects: unknown effect {name!r}; the simulated bench knows "
-                                  f"{', '.join(KNOWN_EFFECTS)}")
+                                  f"{', '.join(known)}")
     return names
 
 
@@ -124,7 +133,7 @@ class SimulatedDevice:
     device : preset name, ``actuator`` or ``mur880e``.
     seed : seed of the noise generator.
     noise_k : TSP noise, kelvin (standard deviation).
-    effects : enabled effect names (default: the bench artefacts, see ``plant.DEFAULT_EFFECTS``).
+    effects : enabled effect names (default: the bench's artefacts, :func:`default_effects`).
     firmware_version : report this version in INFO instead of the real one (tests).
     """
 
@@ -132,11 +141,12 @@ class SimulatedDevice:
                  effects: Iterable[str] | None = None,
                  firmware_version: tuple[int, int, int] | None = None) -> None:
         self.preset = get_preset(device)
-        self.effects = tuple(DEFAULT_EFFECTS if effects is None else effects)
+        self.effects = tuple(default_effects() if effects is None else effects)
         self.rng = np.random.default_rng(seed)
         self.plant = Plant(self.preset, self.effects)
-        self.frontend = Frontend(self.preset, self.effects, noise_k, self.rng)
-        self.ideal_hold = "sample-window" not in self.effects
+        on = artefacts(self.effects)
+        self.frontend = Frontend(self.preset, on, noise_k, self.rng)
+        self.ideal_hold = SAMPLE_WINDOW not in on  # an ideal track-and-hold: no sample window
         self._lib = firmware_library()
         self._version = firmware_version or self._lib.built_version
         self._dev = self._lib.hh_new()

@@ -17,6 +17,9 @@
   measurement, made from a three-layer model with 0.2 % noise: see its header); the README's
   ``compose`` example fits it.
 * ``model.schema.json`` — the JSON Schema of the model file (``docs/model-format.md``).
+* ``sim_bench.json`` — the simulated bench's data: each device preset's device effects (as a
+  model file holds them) and the catalogued effect each artefact of its front end shows as
+  (:mod:`spicethermal.bench.devices`).
 """
 
 from __future__ import annotations

@@ -30,7 +30,6 @@ from ..spice.lib import (
     render_lib,
     sanitize_comment,
 )
-from ..viz.pwm import plot_drive
 from .dynamics import Dynamics, PeriodMap
 from .release import Release
 from .twophase import TwoPhase
@@ -236,6 +235,8 @@ class DriveResult(JsonDocument):
         -------
         Axes
         """
+        from ..viz.pwm import plot_drive
+
         return plot_drive(self, ax)
 
     # -- SPICE ---------------------------------------------------------------------------

@@ -57,6 +57,23 @@ GAUSSIAN_SPICE_ERROR = 1.5e-4
 GAUSSIAN_LOGIT = (1.5976, 0.070566)
 #: Where a fit's first starts put the band: these fractions of the node's hottest rise.
 START_FRACTIONS = (0.4, 0.75)
+#: ... holding at least this fraction of the heat the node's capacity stores over that rise.
+START_HEAT = 0.1
+
+
+def _bump(t: NDArray, residual: NDArray) -> tuple[int, NDArray, float]:
+    """The largest residual's index, the indices of the readings around it above half of
+    it, and the integral over time of the residual where it stays positive around it."""
+    peak = int(np.argmax(residual))
+    if residual[peak] <= 0:
+        return peak, np.array([], dtype=int), 0.0
+    lo, hi = peak, peak
+    while lo > 0 and residual[lo - 1] > 0:
+        lo -= 1
+    while hi < residual.size - 1 and residual[hi + 1] > 0:
+        hi += 1
+    half = np.nonzero(residual[lo:hi + 1] >= 0.5 * residual[peak])[0] + lo
+    return peak, half, float(np.trapezoid(residual[lo:hi + 1], t[lo:hi + 1]))
 
 
 def _softplus(x: NDArray) -> NDArray:
@@ -183,10 +200,13 @@ class PhaseChange(DeviceEffect):
         """Starts from what the band would leave in the cooling curves. Heat ``L`` given off
         at node ``k`` while the curve cools through the band keeps the junction above the
         model by a bump whose integral over time is ``L`` times the transfer resistance from
-        node ``k`` to the junction: ``L ≈ ∫ r dt / Σ_{i≥k} R_i``, on the curve where that
+        node ``k`` to the junction: ``L ≈ ∫ r dt / Σ_{i≥k} R_i`` over the bump (the readings
+        around the largest residual where it stays positive), on the curve where that
         integral is largest; the band sits where the model's node ``k`` is when the bump
         peaks, about as wide as that node's fall over the bump's half-height span. Two more
-        starts place a band of that heat at fractions of the node's hottest rise."""
+        starts place a band at fractions of the node's hottest rise, holding at least
+        :data:`START_HEAT` of what the node's own capacity stores over that rise (a model
+        that took the band into its capacities leaves a bump too small to measure it)."""
         node = int(fixed.get("node", 0))
         curves = [c for c in evidence.cooling if c.node_paths_c is not None
                   and node < c.node_paths_c.shape[1] and c.t_s.size >= 3]
@@ -196,18 +216,17 @@ class PhaseChange(DeviceEffect):
         rise = max(max(float(c.nodes_c[node]) for c in curves) - tref, 1e-3)
         r_layers = evidence.layer_r_k_per_w
         transfer = sum(r_layers[node:]) if r_layers else evidence.rth_k_per_w
-        best = max(curves, key=lambda c: float(np.trapezoid(c.residual_k, c.t_s)))
-        area = float(np.trapezoid(best.residual_k, best.t_s))
+        bumps = [(c, *_bump(c.t_s, c.residual_k)) for c in curves]
+        best, peak, span, area = max(bumps, key=lambda b: b[3])
         latent = max(area / max(transfer, 1e-30), 1e-12)
-        peak = int(np.argmax(best.residual_k))
         path = best.node_paths_c[:, node]
-        half = best.residual_k >= 0.5 * best.residual_k[peak]
-        span = np.nonzero(half)[0]
         width = max(0.25 * float(path[span[0]] - path[span[-1]]), 0.01 * rise) \
             if span.size else 0.05 * rise
         found = {"t_c": float(path[peak]), "width_k": width, "latent_j": latent}
-        starts = [found] + [{"t_c": tref + f * rise, "width_k": 0.06 * rise, "latent_j": latent}
-                            for f in START_FRACTIONS]
+        c_node = evidence.node_c_j_per_k[node] if node < len(evidence.node_c_j_per_k) else 0.0
+        floor = START_HEAT * c_node * rise
+        starts = [found] + [{"t_c": tref + f * rise, "width_k": 0.06 * rise,
+                             "latent_j": max(latent, floor)} for f in START_FRACTIONS]
         if form == "plateau":
             starts = [{**s, "width_k": 4 * s["width_k"], "edge_k": s["width_k"] / 2}
                       for s in starts]

@@ -23,7 +23,7 @@ bands are a lower bound where the residuals are correlated (early-time correctio
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -33,16 +33,6 @@ from ..core.errors import DataFormatError, FitError
 from ..core.progress import bar
 from ..identify.spectrum import time_constant_spectrum
 from ..identify.structure import StructureFunction
-from ..viz.plots import (
-    new_figure,
-    plot_cumulative_structure,
-    plot_differential_structure,
-    plot_fit,
-    plot_residuals,
-    plot_spectrum,
-    plot_spectrum_fit,
-    save_figure,
-)
 from .ladder import fit_foster
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -222,56 +212,3 @@ def _log_c_at(sf: StructureFunction, r: NDArray) -> NDArray:
     """log10 ΣC of ``sf`` at ΣR = ``r`` (NaN beyond its Rth)."""
     lc = np.interp(r, sf.r_k_per_w, np.log10(sf.c_j_per_k), right=np.nan)
     return np.where(r <= sf.r_k_per_w[-1], lc, np.nan)
-
-
-def shade(ax, band: Band, color: str = "C0", label: str | None = None) -> None:
-    """Draw ``band`` on ``ax`` as a translucent area.
-
-    Parameters
-    ----------
-    ax : matplotlib axes.
-    band : the band.
-    color : its colour.
-    label : legend text (default: the level).
-    """
-    ax.fill_between(band.x, band.lo, band.hi, color=color, alpha=0.25, lw=0,
-                    label=label or f"{100 * band.level:g} % bootstrap band")
-
-
-def fig_fit_band(result: FitResult, fb: FitBootstrap, path, title: str | None = None):
-    """The fit (data, ladder, stages) with its bootstrap band, and the residuals. PNG."""
-    fig = new_figure(7.0, 6.5)
-    ax_a, ax_b = fig.subplots(2, 1, height_ratios=(3, 1.4))
-    plot_fit(result, ax_a)
-    shade(ax_a, fb.zth, "C3", f"{100 * fb.zth.level:g} % band ({fb.n} resamples)")
-    ax_a.legend(loc="upper left", fontsize="small")
-    if title:
-        ax_a.set_title(title, fontsize=10, loc="left")
-    plot_residuals(result, ax_b)
-    return save_figure(fig, path)
-
-
-def fig_spectrum_band(spectrum: Spectrum, sb: SpectrumBootstrap, path):
-    """The spectrum figure (Zth and model, derivative, R(τ)) with the band on R(τ). PNG."""
-    fig = new_figure(8.0, 9.0)
-    ax_a, ax_b, ax_c = fig.subplots(3, 1)
-    plot_spectrum_fit(spectrum, ax_a)
-    plot_spectrum_fit(spectrum, ax_b, derivative=True)
-    plot_spectrum(spectrum, ax_c)
-    shade(ax_c, sb.spectrum, "C0", f"{100 * sb.spectrum.level:g} % band ({sb.n} resamples)")
-    ax_c.legend(fontsize="small")
-    return save_figure(fig, path)
-
-
-def fig_structure_band(functions: Sequence[StructureFunction], bands: Sequence[Band | None],
-                       path, separation=None):
-    """Cumulative and differential structure functions, bands on the cumulative ones. PNG."""
-    fig = new_figure(7.5, 8.0)
-    ax_a, ax_b = fig.subplots(2, 1)
-    plot_cumulative_structure(list(functions), ax_a, separation)
-    for i, band in enumerate(bands):
-        if band is not None:
-            shade(ax_a, band, f"C{i}")
-    ax_a.legend(fontsize="small")
-    plot_differential_structure(list(functions), ax_b)
-    return save_figure(fig, path)

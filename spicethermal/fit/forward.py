@@ -14,6 +14,12 @@ measurement effects turn its true junction temperatures into readings, in the or
   :attr:`~spicethermal.effects.base.Observation.after_off`);
 * the calibration: the thermocouple temperatures (a TSP's law bends them).
 
+Every reading went through the same calibration line, fitted to the calibration's own noisy
+points: its error (an offset and a slope) is shared by every reading of every data set.
+:func:`line_error` finds the offset and slope that best fit a prediction to all the data sets,
+the calibration points included (whose misfit is the line's prior, exactly): the fits profile
+these two numbers out of every residual.
+
 >>> import numpy as np
 >>> from spicethermal.core.ladder import Foster
 >>> from spicethermal.io.bundle import Bundle, PwmTable
@@ -50,7 +56,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer, Foster
     from ..effects import Effect
 
-__all__ = ["MeasurementTerm", "observations", "predict", "predict_model"]
+__all__ = ["MeasurementTerm", "line_error", "observations", "predict", "predict_model"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -192,3 +198,40 @@ def predict_model(data: BundleData, ladder: Foster | Cauer,
     measures = [MeasurementTerm(e.plugin, e.form, scalar_params(e))  # type: ignore[arg-type]
                 for e in effects if isinstance(e.plugin, MeasurementEffect)]
     return {k: np.asarray(v[0]) for k, v in predict(data, net, measures).items()}
+
+
+def line_error(pred: NDArray, measured: NDArray, weight: NDArray,
+               centre_c: float) -> NDArray:
+    """The readings ``pred`` ``(B, N)`` (every data set side by side, the calibration's
+    included) corrected for the error of the calibration line they all went through: the
+    offset ``a`` and slope ``b`` that minimise ``Σ w² (pred + a + b (pred − centre) −
+    measured)²`` for each row (weighted least squares, closed form).
+
+    Parameters
+    ----------
+    pred, measured, weight : ndarray
+        ``(B, N)``, ``(N,)``, ``(N,)``: predictions, readings and ``1/noise``.
+    centre_c : float
+        Where the slope pivots (the calibration points' mean).
+
+    Returns
+    -------
+    ndarray
+        ``(B, N)``; rows with a non-finite prediction as they were.
+
+    >>> pred = np.array([[20.0, 40.0, 60.0]])
+    >>> line_error(pred, np.array([20.1, 40.2, 60.3]), np.ones(3), 40.0).round(6).tolist()
+    [[20.1, 40.2, 60.3]]
+    """
+    r = (pred - measured[None, :]) * weight[None, :]
+    u = np.broadcast_to(weight[None, :], pred.shape)
+    v = (pred - centre_c) * weight[None, :]
+    with np.errstate(all="ignore"):
+        a11, a12, a22 = np.sum(u * u, axis=1), np.sum(u * v, axis=1), np.sum(v * v, axis=1)
+        b1, b2 = -np.sum(u * r, axis=1), -np.sum(v * r, axis=1)
+        det = a11 * a22 - a12 * a12
+        off = (a22 * b1 - a12 * b2) / det
+        slope = (a11 * b2 - a12 * b1) / det
+    ok = np.isfinite(off) & np.isfinite(slope)
+    off, slope = np.where(ok, off, 0.0), np.where(ok, slope, 0.0)
+    return pred + off[:, None] + slope[:, None] * (pred - centre_c)

@@ -29,7 +29,7 @@ from ..effects.base import DeviceEffect, EffectPlugin
 from ..effects.registry import Effect
 from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch, as_cauer, cauer_of_foster
 from ..identify.curves import ZthCurve
-from .forward import MeasurementTerm, predict
+from .forward import MeasurementTerm, line_error, predict
 from .ladder import fit_foster
 from .lm import MAX_ROUNDS, levenberg_marquardt
 from .measurement import BundleData
@@ -176,6 +176,16 @@ class _Problem:
         self.ladders_c = np.array([s.ladder.c for s in starts])
         self.values = [{k: np.array([s.values[i][k] for s in starts], dtype=float)
                         for k in p.params} for i, (p, _f) in enumerate(layout.slots)]
+        self.line = _line_centre(data)
+        self.sizes = [data.measured(n).size for n in self.names]
+
+    def _read(self, pred: Mapping[str, NDArray]) -> NDArray:
+        """Every data set's predictions side by side, ``(B, N)``, corrected for the error of
+        the calibration line when the bundle holds its points."""
+        out = np.concatenate([pred[n] for n in self.names], axis=1)
+        if self.line is None:
+            return out
+        return line_error(out, self.measured, self.weight, self.line)
 
     def network(self, x: NDArray, rows: NDArray) -> tuple[NDArray, NDArray, list, list]:
         lay = self.layout
@@ -201,15 +211,16 @@ class _Problem:
         r, c, devices, measures = self.network(x, rows)
         with np.errstate(all="ignore"):
             pred = predict(self.data, NetworkBatch(r, c, devices, self.tol_rel), measures)
-            out = (np.concatenate([pred[n] for n in self.names], axis=1) - self.measured) \
-                * self.weight
+            out = (self._read(pred) - self.measured) * self.weight
         return np.where(np.isfinite(out), out, np.nan)
 
     def model(self, x: NDArray, row: int, noise: Mapping[str, float], k: int, work: int,
               converged: bool) -> ModelFit:
         r, c, devices, measures = self.network(x[None, :], np.array([row]))
         pred = predict(self.data, NetworkBatch(r, c, devices), measures)
-        preds = {n: np.asarray(pred[n][0]) for n in self.names}
+        read = self._read(pred)[0]
+        cuts = np.cumsum([0, *self.sizes])
+        preds = {n: read[cuts[i]:cuts[i + 1]] for i, n in enumerate(self.names)}
         chi2 = {n: float(np.sum(((preds[n] - self.data.measured(n)) / noise[n]) ** 2))
                 for n in self.names}
         effects = []
@@ -219,6 +230,14 @@ class _Problem:
                                            if k in term.params else float(values[k][row])
                                            for k in p.params}, form))
         return ModelFit(Cauer(r[0], c[0]), tuple(effects), preds, chi2, k, work, converged)
+
+
+def _line_centre(data: BundleData) -> float | None:
+    """The centre of the calibration line whose error the fits profile out (the calibration
+    points' mean), or None when the bundle holds no calibration points (no prior on it)."""
+    if data.calibration is None or data.calibration.temp_c.size < 3:
+        return None
+    return float(np.mean(data.calibration.temp_c))
 
 
 def tau_range(data: BundleData) -> tuple[float, float]:
@@ -272,7 +291,8 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
     x0 = np.array([layout.pack(s) for s in starts])
     lo, hi, typ = layout.bounds(tau_range(data))
     k_ladder = 2 * layout.n_nodes if n_ladder_params is None else n_ladder_params
-    k = k_ladder + sum(len(p.fitted_names(f)) for p, f in layout.slots)
+    k = k_ladder + sum(len(p.fitted_names(f)) for p, f in layout.slots) \
+        + (2 if _line_centre(data) is not None else 0)
     if x0.shape[1] == 0:
         res_x, work, conv = x0, 0, np.ones(len(starts), dtype=bool)
     else:

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..core.errors import DataFormatError
 from ..effects.base import CALIBRATION, COOLING, PWM, STEADY
+from ..identify.readings import converter
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -110,9 +111,8 @@ class BundleData:
     def from_bundle(cls, bundle: Bundle) -> BundleData:
         """The data sets of ``bundle``."""
         ambient = bundle.ambient_c if bundle.ambient_c is not None else 25.0
-        line = bundle.calibration
-        if line is not None and hasattr(line, "fit"):  # a K-factor is linear already
-            line = line.fit(1)
+        # the points' least-squares line (a polynomial as given; a K-factor is linear already)
+        line = None if bundle.calibration is None else converter(bundle.calibration, 1)
         curves = []
         for i, c in enumerate(bundle.cooling):
             tj = np.asarray(c.tj_c if c.tj_c is not None else line.temperature(c.v_tsp_v),

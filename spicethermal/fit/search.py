@@ -3,8 +3,9 @@
 :func:`fit_effect` adds one effect (a plugin) to a fitted model. For each form it fits the
 effect's own parameters from every start that the plugin's ``guess()`` gives for each of its
 variants (a node, a subset of layers), the ladder and the model's other effects held (a
-*screen*, all side by side); the best screened point of each form is then refitted jointly
-with the ladder and every other effect. :func:`refit` refits a model's every parameter;
+*screen*, all side by side, on the model's ladder); the best screened point of each form (of
+its two best variants for the first form, which ranks the variants for the forms that share
+them) is then refitted jointly with the ladder and every other effect, every form alike. :func:`refit` refits a model's every parameter;
 :func:`without` drops one effect and refits the rest.
 
 The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
@@ -17,10 +18,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.ladder import Cauer
 from ..effects.base import CurveEvidence, EffectPlugin, Evidence
 from ..engines.network import NetworkBatch
+from .forward import predict_model
 from .joint import (
     MAX_ORDER,
+    ORDER_PATIENCE,
     Layout,
     ModelFit,
     Start,
@@ -145,10 +149,11 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                forms: Sequence[str] | None = None,
                grow: Callable[[ModelFit], bool] | None = None) -> list[ModelFit]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
-    docstring); forms whose guess gives no start are left out. The first form is screened
-    from the plugin's starts for every variant and refitted jointly; each other form is
-    screened on the best joint refit's ladder (from the plugin's starts for the best variants
-    and from that refit's own values) and refitted jointly only when it already fits better.
+    docstring); forms whose guess gives no start are left out. Every form is screened on the
+    model's ladder from the plugin's starts (for every variant in the first form, for the
+    best variants in the forms that share them) and refitted jointly from its best screened
+    point; a form after the first is also screened on the best joint refit's ladder from
+    that refit's own values, and refitted from there when that screen is better.
 
     Parameters
     ----------
@@ -162,11 +167,13 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     forms : sequence of str, optional
         The forms to fit (default: all).
     grow : callable, optional
-        When ``grow(fit)`` is true of the best form's fit (it leaves a data set beyond its
-        noise), that form is also refitted on a ladder one stage longer (started from the
-        linear ladder of that order): the model's order was chosen without the effect, whose
-        misfit may have taken or hidden a stage. The longer ladder replaces the form's fit
-        when its criterion (two parameters more) is lower.
+        While ``grow(fit)`` is true of the best form's fit (it leaves a data set beyond its
+        noise), that form is also refitted on a ladder one stage longer, then another
+        (started from the linear ladder of that order), until
+        :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing: the
+        model's order was chosen without the effect, whose misfit may have taken or hidden
+        stages. A longer ladder replaces the form's fit when its criterion (two parameters
+        a stage) is lower.
 
     Returns
     -------
@@ -179,63 +186,91 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     n_points = sum(data.sizes().values())
     ranked: dict[frozenset[str], list[Mapping[str, float]]] = {}
     out: list[ModelFit] = []
-    lead: ModelFit | None = None  # the best joint refit so far: its ladder screens the rest
+    lead: ModelFit | None = None  # the best joint refit so far
+    others = tuple(dict(e.params) for e in model.effects)
+    seeds: list[list[dict[str, float]]] = []  # each form's screened values that were refitted
+
+    def screen(base: ModelFit, form: str, pairs: list) -> tuple[list[ModelFit | None], int]:
+        starts = [Start(base.ladder, (*others, _clip(plugin, {**defaults, **v, **s})))
+                  for v, s in pairs]
+        layout = Layout((*slots, (plugin, form)), base.ladder.order, hold_ladder=True,
+                        move=(False,) * len(slots) + (True,))
+        got = fit_starts(data, noise, layout, starts, screen_rounds, tol_rel=SCREEN_TOL_REL)
+        return got, sum(m.work for m in got if m is not None)
+
+    # the model's ladder took some of the effect into its own values (a band's heat into its
+    # capacities, a coefficient's rise into its resistances): the effect is also screened on
+    # the linear ladder of the least heated curve, which the effects change least
+    ref = start_ladders(data, [model.ladder.order]).get(model.ladder.order)
+    at_ref = _evaluated(data, noise, ref, model) if ref is not None else None
+    ev_ref = evidence(data, at_ref, noise) if at_ref is not None else None
+
     for form in forms or plugin.forms:
         variants = list(plugin.variants(form, ev))
         keys = frozenset().union(*(v.keys() for v in variants))
         if keys and keys in ranked:
             variants = [v for v in ranked[keys] if v in variants][:VARIANTS_KEPT] or variants
         pairs = [(v, s) for v in variants for s in plugin.guess(form, v, ev)]
-        base = lead or model
-        others = tuple(dict(e.params) for e in base.effects if e.name != plugin.name)
-        if lead is not None:  # the lead's own values, as far as this form shares them
-            mine = lead.effect(plugin.name)
-            shared = {k: v for k, v in mine.params.items() if plugin.params[k].used_by(form)}
-            pairs.append(({k: v for k, v in shared.items() if k in keys}, shared))
         if not pairs:
             continue
-        starts = [Start(base.ladder, (*others, _clip(plugin, {**defaults, **v, **s})))
-                  for v, s in pairs]
-        screen = Layout((*slots, (plugin, form)), base.ladder.order, hold_ladder=True,
-                        move=(False,) * len(slots) + (True,))
-        got = fit_starts(data, noise, screen, starts, screen_rounds, tol_rel=SCREEN_TOL_REL)
-        done = [i for i, m in enumerate(got) if m is not None]
-        if not done:
-            continue
-        done.sort(key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
-        if keys and keys not in ranked:
+        got, work = screen(model, form, pairs)
+        if at_ref is not None and ev_ref is not None:
+            more = [(v, s) for v in variants for s in plugin.guess(form, v, ev_ref)]
+            if more:
+                got_ref, spent = screen(at_ref, form, more)
+                pairs, got, work = pairs + more, got + got_ref, work + spent
+        done = sorted((i for i, m in enumerate(got) if m is not None),
+                      key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
+        if keys and keys not in ranked and done:
             ranked[keys] = [dict(v) for v in dict.fromkeys(
                 tuple(sorted(pairs[i][0].items())) for i in done)]
-        best = got[done[0]]
-        assert best is not None
-        work = sum(m.work for m in got if m is not None)
-        # a form is refitted jointly when, on the best ladder so far, it already fits better
-        # than the best joint refit; the first form always, from its best screened point in
-        # each of its best variants (a screen holds the ladder, which favours a variant that
-        # needs no ladder to move)
-        if lead is None:
-            firsts = list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}
-                          .values())
-            heads = sorted(firsts, key=lambda i: got[i].chi2_total)[:VARIANTS_KEPT]
-            fits = [_refine(data, noise, got[i], refine_rounds, 0) for i in heads]
-            fit = min(fits, key=lambda m: bic(m, n_points))
-            fit = ModelFit(fit.ladder, fit.effects, fit.predictions, fit.chi2, fit.n_params,
-                           work + sum(m.work for m in fits), fit.converged)
+        # the best screened point of each of the best variants (of the first form; one for
+        # the others: their variants are ranked already), refitted jointly
+        firsts = list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}.values())
+        kept = VARIANTS_KEPT if lead is None else 1
+        heads = [got[i] for i in sorted(firsts, key=lambda i: got[i].chi2_total)[:kept]]
+        if lead is not None:
+            # and the lead's own values, as far as this form shares them, on its ladder (a
+            # screen holds the ladder, which favours a variant that needs no ladder to move)
+            mine = lead.effect(plugin.name)
+            shared = {k: v for k, v in mine.params.items() if plugin.params[k].used_by(form)}
+            there, spent = screen(lead, form, [({k: v for k, v in shared.items() if k in keys},
+                                               shared)])
+            work += spent
+            if there[0] is not None and (not heads or
+                                         there[0].chi2_total < heads[0].chi2_total):
+                heads = [there[0]]
+        if not heads:
+            continue
+        seeds.append([dict(m.effect(plugin.name).params) for m in heads])  # type: ignore
+        fits = [_refine(data, noise, m, refine_rounds, 0) for m in heads]
+        fit = min(fits, key=lambda m: bic(m, n_points))
+        fit = ModelFit(fit.ladder, fit.effects, fit.predictions, fit.chi2, fit.n_params,
+                       work + sum(m.work for m in fits), fit.converged)
+        if lead is None or bic(fit, n_points) < bic(lead, n_points):
             lead = fit
-        elif bic(best, n_points) < bic(lead, n_points):
-            fit = _refine(data, noise, best, refine_rounds, work)
-            if bic(fit, n_points) < bic(lead, n_points):
-                lead = fit
-        else:
-            fit = ModelFit(best.ladder, best.effects, best.predictions, best.chi2,
-                           best.n_params, work, best.converged)
         out.append(fit)
     if grow and out:
         k = min(range(len(out)), key=lambda i: bic(out[i], n_points))
-        longer = _longer(data, noise, out[k], refine_rounds) if grow(out[k]) else None
-        if longer is not None and bic(longer, n_points) < bic(out[k], n_points):
-            out[k] = longer
+        current, misses = out[k], 0
+        while grow(out[k]) and misses < ORDER_PATIENCE:
+            longer = _longer(data, noise, current, refine_rounds, seeds[k])
+            if longer is None:
+                break
+            current = longer
+            if bic(longer, n_points) < bic(out[k], n_points):
+                out[k], misses = longer, 0
+            else:
+                misses += 1
     return out
+
+
+def _evaluated(data: BundleData, noise: Mapping[str, float], ladder: Cauer,
+               model: ModelFit) -> ModelFit:
+    """``model``'s effects on ``ladder``, evaluated (nothing fitted)."""
+    pred = predict_model(data, ladder, model.effects)
+    chi2 = {n: float(np.sum(((pred[n] - data.measured(n)) / noise[n]) ** 2)) for n in pred}
+    return ModelFit(ladder, model.effects, pred, chi2, model.n_params, 0, True)
 
 
 def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds: int,
@@ -266,9 +301,10 @@ def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds:
 
 
 def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
-            rounds: int) -> ModelFit | None:
-    """``fit`` refitted on a ladder one stage longer (the linear ladder of that order as the
-    start, the effects' values as they are)."""
+            rounds: int, seeds: Sequence[Mapping[str, float]]) -> ModelFit | None:
+    """``fit`` refitted on a ladder one stage longer: the linear ladder of that order as the
+    start, the last effect's values as they are and as each of ``seeds`` (its screened
+    values: a short ladder may have pulled the effect far from them); the best."""
     n = fit.ladder.order + 1
     if n > MAX_ORDER:
         return None
@@ -276,7 +312,11 @@ def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
     if ladder is None:
         return None
     values = tuple(dict(e.params) for e in fit.effects)
-    got = fit_starts(data, noise, Layout(_slots(fit), n), [Start(ladder, values)], rounds)[0]
-    return None if got is None else ModelFit(got.ladder, got.effects, got.predictions,
-                                             got.chi2, got.n_params, fit.work + got.work,
-                                             got.converged)
+    starts = [Start(ladder, values)] + [Start(ladder, (*values[:-1], dict(s))) for s in seeds]
+    got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds)
+           if m is not None]
+    if not got:
+        return None
+    best = min(got, key=lambda m: m.chi2_total)
+    return ModelFit(best.ladder, best.effects, best.predictions, best.chi2, best.n_params,
+                    fit.work + sum(m.work for m in got), best.converged)

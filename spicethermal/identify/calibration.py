@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.errors import DataFormatError
+from ..io.datasets import KFactorLaw, check_coefficients, check_monotonic
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -180,23 +181,12 @@ class Calibration:
         >>> cal.kind, cal.residuals_mv.round(9).tolist()
         ('polynomial', [0.0, 0.0])
         """
-        try:
-            coef = tuple(float(c) for c in coefficients)
-        except (TypeError, ValueError):
-            raise DataFormatError("calibration, coefficients_v: must be numbers") from None
-        if len(coef) not in (2, 3) or not all(math.isfinite(c) for c in coef):
-            raise DataFormatError(f"calibration, coefficients_v: {list(coefficients)!r} must be "
-                                  f"2 or 3 finite numbers (a line or a quadratic, ascending)")
+        coef = check_coefficients(coefficients)
         t, v = _as_points(temp_c, v_tsp_v)
         if t.size < 2:
             raise DataFormatError("calibration: a polynomial needs its points (at least 2)")
-        if len(coef) == 3 and coef[2] == 0.0:
-            coef = coef[:2]
         cal = cls(tuple(map(float, t)), tuple(map(float, v)), len(coef) - 1, coef, True)
-        slopes = cal.slope_v_per_k(np.array(cal.t_range_c))
-        if slopes[0] == 0 or np.sign(slopes[0]) != np.sign(slopes[1]):
-            raise DataFormatError("calibration, coefficients_v: the polynomial is not monotonic "
-                                  "over the calibrated range")
+        check_monotonic(coef, cal.t_range_c)
         return cal
 
     @property
@@ -352,61 +342,18 @@ class Calibration:
                 f"rms {self.rms_mv:.3g} mV = {self.rms_k:.3g} K")
 
 
-@dataclass(frozen=True)
-class KFactor:
-    """A K-factor calibration (JESD51-14 practice, PyRth's): ``V(T) = v_ref_v + K (T - t_ref_c)``.
-
-    Only the slope ``K`` (V/K) transfers from the calibration oven to the transient: the sensor
-    voltage's absolute level depends on the sense current and the amplifier's offset, so the
-    voltage at a known temperature (``v_ref_v`` at ``t_ref_c``, e.g. the end of a cooling record
-    when the device is back at the reference) anchors it. Immutable; raises
-    :class:`DataFormatError` naming the bad parameter.
+class KFactor(KFactorLaw):
+    """The converter of a K-factor calibration (:class:`~spicethermal.io.datasets.KFactorLaw`,
+    whose numbers and checks it has): ``V(T) = v_ref_v + K (T - t_ref_c)`` both ways.
 
     >>> k = KFactor.from_mv_per_k(-2.0, v_ref_v=0.6, t_ref_c=25.0)
     >>> round(float(k.temperature(0.55)), 9), round(float(k.voltage(50.0)), 9)
     (50.0, 0.55)
     """
 
-    k_v_per_k: float
-    v_ref_v: float
-    t_ref_c: float
-    label: str = field(default="calibration", compare=False)
-
-    def __post_init__(self) -> None:
-        for name in ("k_v_per_k", "v_ref_v", "t_ref_c"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
-                                                                 np.integer)):
-                raise DataFormatError(f"{self.label}, {name}: {value!r} is not a number")
-            if not math.isfinite(float(value)):
-                raise DataFormatError(f"{self.label}, {name}: {value!r} is not a finite number")
-            object.__setattr__(self, name, float(value))
-        if self.k_v_per_k == 0:
-            raise DataFormatError(f"{self.label}, k_v_per_k: zero, the TSP does not depend on T")
-        if self.t_ref_c < -273.15:
-            raise DataFormatError(f"{self.label}, t_ref_c: below absolute zero")
-
-    @classmethod
-    def from_mv_per_k(cls, k_mv_per_k: float, v_ref_v: float, t_ref_c: float,
-                      label: str = "calibration") -> KFactor:
-        """The K-factor given in mV/K (the usual datasheet and T3Ster unit)."""
-        if isinstance(k_mv_per_k, bool) or not isinstance(k_mv_per_k, (int, float, np.floating,
-                                                                       np.integer)):
-            raise DataFormatError(f"{label}, k_mv_per_k: {k_mv_per_k!r} is not a number")
-        return cls(float(k_mv_per_k) * 1e-3, v_ref_v, t_ref_c, label)
-
-    @property
-    def kind(self) -> str:
-        return "k-factor"
-
     @property
     def degree(self) -> int:
         return 1
-
-    @property
-    def k_factor_mv_per_k(self) -> float:
-        """K in mV/K."""
-        return self.k_v_per_k * 1e3
 
     def voltage(self, temp_c: ArrayLike) -> NDArray:
         """TSP voltage (V) at ``temp_c`` (degC)."""
@@ -423,15 +370,6 @@ class KFactor:
         if not np.all(np.isfinite(v)):
             raise DataFormatError("v_tsp_v: not a finite number")
         return self.t_ref_c + (v - self.v_ref_v) / self.k_v_per_k
-
-    def manifest(self) -> dict[str, float | str]:
-        """The ``calibration`` entry of ``bundle.json`` (see ``docs/bundle-format.md``)."""
-        return {"kind": self.kind, "k_mv_per_k": self.k_factor_mv_per_k,
-                "v_ref_v": self.v_ref_v, "t_ref_c": self.t_ref_c}
-
-    def __str__(self) -> str:
-        return (f"K-factor calibration: K = {self.k_factor_mv_per_k:.4g} mV/K, "
-                f"{self.v_ref_v:.6g} V at {self.t_ref_c:g} degC")
 
 
 #: Anything that converts TSP voltage to junction temperature (:class:`Calibration`,
@@ -462,3 +400,4 @@ def anchored(calibration: Converter, v_tsp_v: float, temp_c: float) -> KFactor:
     at = float(np.mean(calibration.temperature(v_tsp_v)))
     slope = float(calibration.slope_v_per_k(at))
     return KFactor(slope, float(v_tsp_v), float(temp_c), "calibration")
+

@@ -35,6 +35,7 @@ import numpy as np
 from ..core.errors import DataFormatError
 from ..io.columns import frozen
 from ..io.datasets import CoolingTable, ZthTable
+from .readings import cooling_tj_c
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -368,7 +369,7 @@ class ZthCurve:
         for i, c in enumerate(bundle.cooling):
             tref, tref_steady = bundle.cooling_reference_c(i)
             curves.append(cls.from_cooling(
-                c.t_s, bundle.cooling_tj_c(i), c.power_w, c.tj_steady_c, tref, tref_steady,
+                c.t_s, cooling_tj_c(bundle, i), c.power_w, c.tj_steady_c, tref, tref_steady,
                 label=c.file or f"cooling[{i}]", **options))
         curves.extend(cls.from_table(z, label=z.file or f"zth[{i}]")
                       for i, z in enumerate(bundle.zth))

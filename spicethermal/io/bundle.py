@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..core.errors import DataFormatError
-from ..identify.calibration import KFactor
 from .bundle_read import (
     CALIBRATION_KINDS,
     FORMAT,
@@ -41,14 +40,20 @@ from .columns import (
     COLUMNS,
     Columns,
     format_columns,
-    frozen,
     parse_columns,
     parse_number,
     read_columns,
     scalar,
     set_fields,
 )
-from .datasets import CalibrationTable, CoolingTable, ForwardTable, PwmTable, ZthTable
+from .datasets import (
+    CalibrationTable,
+    CoolingTable,
+    ForwardTable,
+    KFactorLaw,
+    PwmTable,
+    ZthTable,
+)
 from .files import (
     clean_leftovers,
     dumps_json,
@@ -61,13 +66,11 @@ from .files import (
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-    from ..identify.calibration import Converter
-
 #: Names of the bundle's pieces, importable from here as before the split.
 __all__ = ["CALIBRATION_KINDS", "COLUMNS", "FORMAT", "FORMATS", "MANIFEST", "Bundle",
-           "CalibrationTable", "Columns", "CoolingTable", "ForwardTable", "PwmTable", "ZthTable",
-           "format_columns",
-           "manifest_files", "parse_columns", "parse_number", "read_columns"]
+           "CalibrationTable", "Columns", "CoolingTable", "ForwardTable", "KFactorLaw",
+           "PwmTable", "ZthTable", "format_columns", "manifest_files", "parse_columns",
+           "parse_number", "read_columns"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -89,8 +92,9 @@ class Bundle:
         The reference node of every temperature: ``"case"``, ``"ambient"`` (default), ...
     ambient_c : float or None
         The ambient temperature (degC), when known.
-    calibration : CalibrationTable, KFactor or None
-        The TSP calibration (points or a K-factor).
+    calibration : CalibrationTable, KFactorLaw or None
+        The TSP calibration as read (points, or a K-factor's law); its converter is
+        :func:`spicethermal.identify.readings.calibration_fit`.
     cooling : tuple of CoolingTable
         The cooling curves.
     pwm : PwmTable or None
@@ -105,14 +109,14 @@ class Bundle:
         The directory the bundle was read from (None when built in memory).
 
     >>> b = Bundle(calibration=CalibrationTable([25, 75], [0.60, 0.50]))
-    >>> round(b.calibration_fit().k_factor_mv_per_k, 6)
-    -2.0
+    >>> b.calibration.kind, b.manifest()["format"]
+    ('table', 'spicethermal-bundle/1')
     """
 
     device: str = ""
     reference: str = "ambient"
     ambient_c: float | None = None
-    calibration: CalibrationTable | KFactor | None = None
+    calibration: CalibrationTable | KFactorLaw | None = None
     cooling: tuple[CoolingTable, ...] = ()
     pwm: PwmTable | None = None
     zth: tuple[ZthTable, ...] = ()
@@ -147,23 +151,6 @@ class Bundle:
             raise DataFormatError(f"{MANIFEST}: two sections use the file {sorted(dups)[0]}")
 
     # -- helpers for users of the bundle -------------------------------------------------
-    def calibration_fit(self, degree: int | str = "auto") -> Converter:
-        """The TSP converter of any calibration kind: the fitted or given polynomial of a
-        table, or the K-factor itself (raises if the bundle has none)."""
-        if self.calibration is None:
-            raise DataFormatError(f"{self._where()}the bundle has no calibration")
-        if isinstance(self.calibration, KFactor):
-            return self.calibration
-        return self.calibration.fit(degree)
-
-    def cooling_tj_c(self, index: int = 0) -> NDArray:
-        """Junction temperature of cooling curve ``index`` in degC (``v_tsp_v`` converted
-        through the calibration when the curve has no ``tj_c``)."""
-        c = self.cooling[index]
-        if c.tj_c is not None:
-            return c.tj_c
-        return frozen(self.calibration_fit().temperature(c.v_tsp_v))
-
     def cooling_reference_c(self, index: int = 0) -> tuple[NDArray | None, float | None]:
         """``(tref_c, tref_steady_c)`` of cooling curve ``index`` after the DESIGN rule:
         without ``tref_c`` the reference is ``tref_steady_c``, else ``ambient_c``."""
@@ -172,9 +159,6 @@ class Bundle:
         if steady is None and c.tref_c is None:
             steady = self.ambient_c
         return c.tref_c, steady
-
-    def _where(self) -> str:
-        return f"{self.source}: " if self.source else ""
 
     def _named_tables(self) -> list[tuple[str, Any]]:
         out: list[tuple[str, Any]] = []
@@ -193,7 +177,7 @@ class Bundle:
     # -- reading -------------------------------------------------------------------------
     @classmethod
     def read(cls, path: str | os.PathLike,
-             calibration: CalibrationTable | KFactor | None = None) -> Bundle:
+             calibration: CalibrationTable | KFactorLaw | None = None) -> Bundle:
         """Read and validate the bundle directory ``path`` (or its ``bundle.json``).
 
         ``calibration`` replaces the bundle's own (or supplies a missing one). Raises
@@ -219,7 +203,7 @@ class Bundle:
         if self.ambient_c is not None:
             doc["ambient_c"] = self.ambient_c
         named = dict((id(t), n) for n, t in self._named_tables())
-        if isinstance(self.calibration, KFactor):
+        if isinstance(self.calibration, KFactorLaw):
             doc["calibration"] = self.calibration.manifest()
         elif self.calibration is not None:
             doc["calibration"] = {"file": named[id(self.calibration)],

@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..core.errors import DataFormatError, where
-from ..identify.calibration import KFactor
 from .files import (
     read_json,
 )
@@ -19,7 +18,14 @@ if TYPE_CHECKING:  # pragma: no cover
     pass
 
 from .columns import Columns, read_columns, scalar
-from .datasets import CalibrationTable, CoolingTable, ForwardTable, PwmTable, ZthTable
+from .datasets import (
+    CalibrationTable,
+    CoolingTable,
+    ForwardTable,
+    KFactorLaw,
+    PwmTable,
+    ZthTable,
+)
 
 FORMAT = "spicethermal-bundle/2"
 #: The version that adds the ``forward`` section (the heater's Vf(I, T) points).
@@ -168,7 +174,7 @@ class ManifestReader:
             raise DataFormatError(text) from None
 
     # -- the sections ------------------------------------------------------------------------
-    def calibration(self) -> CalibrationTable | KFactor | None:
+    def calibration(self) -> CalibrationTable | KFactorLaw | None:
         """The ``calibration`` section, any kind, or None when there is none."""
         if self.doc.get("calibration") is None:
             return None
@@ -198,7 +204,7 @@ class ManifestReader:
             t = scalar(entry["t_ref_c"], f"{key}.t_ref_c", temperature=True, optional=False)
             if k == 0:
                 raise DataFormatError(f"{key}.{given[0]}: zero, the TSP does not depend on T")
-            return KFactor(k * (1e-3 if given[0] == "k_mv_per_k" else 1.0), v, t, key)
+            return KFactorLaw(k * (1e-3 if given[0] == "k_mv_per_k" else 1.0), v, t, key)
         name, cols = self.table(entry, "calibration", ["temp_c", "v_tsp_v"])
         coefficients = None
         if kind == "polynomial":
@@ -211,7 +217,8 @@ class ManifestReader:
             cols["temp_c"], cols["v_tsp_v"], file=name, rows=cols.rows,
             extra=self.known(entry, ("kind", "coefficients_v")), coefficients=coefficients), name)
 
-    def cooling(self, calibration: CalibrationTable | KFactor | None) -> tuple[CoolingTable, ...]:
+    def cooling(self, calibration: CalibrationTable | KFactorLaw | None
+                ) -> tuple[CoolingTable, ...]:
         """The ``cooling`` sections (TSP voltages need ``calibration`` to convert them)."""
         cooling = []
         if self.doc.get("cooling") is None:

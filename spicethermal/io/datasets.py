@@ -1,18 +1,23 @@
 """The data sets of a measurement bundle, one immutable table each: :class:`CalibrationTable`,
-:class:`CoolingTable`, :class:`PwmTable`, :class:`ZthTable`, :class:`ForwardTable`
-(``docs/bundle-format.md``).
+:class:`CoolingTable`, :class:`PwmTable`, :class:`ZthTable`, :class:`ForwardTable` (the heater's
+forward voltage, ``spicethermal-bundle/3``); a calibration declared as a law rather than points
+is a :class:`KFactorLaw` (``docs/bundle-format.md``).
+
+They hold what was read, checked: numbers, never an interpretation of them. The converters
+that turn TSP voltages into temperatures are built from them in
+:mod:`spicethermal.identify.calibration` (:func:`~spicethermal.identify.calibration.converter`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..core.errors import DataFormatError, where
-from ..identify.calibration import Calibration
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -31,13 +36,86 @@ from .columns import (
 # --------------------------------------------------------------------------------------------
 # the sections
 # --------------------------------------------------------------------------------------------
+def check_coefficients(coefficients: Sequence[float]) -> tuple[float, ...]:
+    """The coefficients of a declared polynomial calibration ``V(T) = Σ c[k] · T^k`` (V, T in
+    degC, ascending), checked: 2 or 3 finite numbers, a zero quadratic term dropped.
+
+    Parameters
+    ----------
+    coefficients : sequence of float
+        The coefficients as given.
+
+    Returns
+    -------
+    tuple of float
+
+    Examples
+    --------
+    >>> check_coefficients([0.65, -0.002, 0.0])
+    (0.65, -0.002)
+    """
+    try:
+        coef = tuple(float(c) for c in coefficients)
+    except (TypeError, ValueError):
+        raise DataFormatError("calibration, coefficients_v: must be numbers") from None
+    if len(coef) not in (2, 3) or not all(math.isfinite(c) for c in coef):
+        raise DataFormatError(f"calibration, coefficients_v: {list(coefficients)!r} must be "
+                              f"2 or 3 finite numbers (a line or a quadratic, ascending)")
+    return coef[:2] if len(coef) == 3 and coef[2] == 0.0 else coef
+
+
+def check_monotonic(coefficients: tuple[float, ...], t_range_c: tuple[float, float]
+                    ) -> tuple[float, ...]:
+    """``coefficients`` (:func:`check_coefficients`), checked to give a monotonic ``V(T)``
+    over the calibrated range: a TSP that turns cannot be read back as one temperature.
+
+    Parameters
+    ----------
+    coefficients : tuple of float
+        Checked coefficients, ascending.
+    t_range_c : (float, float)
+        The calibrated range, degC.
+
+    Returns
+    -------
+    tuple of float
+        ``coefficients`` unchanged.
+
+    Examples
+    --------
+    >>> check_monotonic((0.65, -0.002), (25.0, 75.0))
+    (0.65, -0.002)
+    """
+    c = coefficients
+    slopes = [c[1] + (2 * c[2] * t if len(c) == 3 else 0.0) for t in t_range_c]
+    if slopes[0] == 0 or np.sign(slopes[0]) != np.sign(slopes[1]):
+        raise DataFormatError("calibration, coefficients_v: the polynomial is not monotonic "
+                              "over the calibrated range")
+    return coefficients
+
+
 @dataclass(frozen=True, eq=False)
 class CalibrationTable:
     """TSP calibration points: ``temp_c`` (degC) and ``v_tsp_v`` (V), one row per point.
 
-    Kind ``table`` (a polynomial is fitted here, :meth:`fit`) or, with ``coefficients`` (V per
+    Kind ``table`` (a polynomial is fitted to the points,
+    :func:`spicethermal.identify.calibration.converter`) or, with ``coefficients`` (V per
     degC^k, ascending), kind ``polynomial``: a fit made elsewhere, the points kept for its
-    residuals. The other kind, a K-factor, is :class:`~spicethermal.identify.calibration.KFactor`.
+    residuals. The other kind, a K-factor, is :class:`KFactorLaw`.
+
+    Attributes
+    ----------
+    temp_c, v_tsp_v : NDArray
+        The points: temperatures (degC) and TSP voltages (V).
+    file : str or None
+        The CSV file's name.
+    rows : NDArray or None
+        The file row of each point.
+    extra : Mapping
+        Unknown keys of the section, kept and written back.
+    coefficients : tuple of float or None
+        The declared polynomial (kind ``polynomial``), checked (:func:`check_coefficients`,
+        :func:`check_monotonic`).
     """
 
     temp_c: NDArray
@@ -56,7 +134,9 @@ class CalibrationTable:
             raise DataFormatError(f"{where(f)}a calibration needs at least 2 points")
         set_fields(self, temp_c=t, v_tsp_v=v)
         if self.coefficients is not None:
-            set_fields(self, coefficients=self.fit().coefficients)
+            coef = check_coefficients(self.coefficients)
+            set_fields(self, coefficients=check_monotonic(coef, (float(t.min()),
+                                                                 float(t.max()))))
 
     @property
     def kind(self) -> str:
@@ -71,13 +151,104 @@ class CalibrationTable:
             return {}
         return {"kind": self.kind, "coefficients_v": list(self.coefficients)}
 
-    def fit(self, degree: int | str = "auto") -> Calibration:
-        """The :class:`~spicethermal.identify.calibration.Calibration`: fitted to the points
-        (``"auto"``: linear unless its linearity test fails, then quadratic), or the given
-        polynomial (``degree`` is then ignored)."""
-        if self.coefficients is not None:
-            return Calibration.from_coefficients(self.coefficients, self.temp_c, self.v_tsp_v)
-        return Calibration.fit(self.temp_c, self.v_tsp_v, degree=degree)
+
+@dataclass(frozen=True, eq=False)
+class KFactorLaw:
+    """A K-factor calibration as declared (JESD51-14 practice, PyRth's):
+    ``V(T) = v_ref_v + K (T - t_ref_c)``, kind ``k-factor`` of ``docs/bundle-format.md``.
+
+    Only the slope ``K`` (V/K) transfers from the calibration oven to the transient: the sensor
+    voltage's absolute level depends on the sense current and the amplifier's offset, so the
+    voltage at a known temperature (``v_ref_v`` at ``t_ref_c``, e.g. the end of a cooling record
+    when the device is back at the reference) anchors it. The law's numbers only; its converter
+    is :class:`spicethermal.identify.calibration.KFactor`. Immutable; raises
+    :class:`DataFormatError` naming the bad parameter. Two laws with the same numbers are equal.
+
+    Attributes
+    ----------
+    k_v_per_k : float
+        The slope K, V/K.
+    v_ref_v, t_ref_c : float
+        The anchor: the voltage (V) at the reference temperature (degC).
+    label : str
+        How messages name the calibration.
+
+    >>> law = KFactorLaw.from_mv_per_k(-2.0, v_ref_v=0.6, t_ref_c=25.0)
+    >>> law.kind, law.manifest()["k_mv_per_k"]
+    ('k-factor', -2.0)
+    """
+
+    k_v_per_k: float
+    v_ref_v: float
+    t_ref_c: float
+    label: str = "calibration"
+
+    def __post_init__(self) -> None:
+        for name in ("k_v_per_k", "v_ref_v", "t_ref_c"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
+                                                                 np.integer)):
+                raise DataFormatError(f"{self.label}, {name}: {value!r} is not a number")
+            if not math.isfinite(float(value)):
+                raise DataFormatError(f"{self.label}, {name}: {value!r} is not a finite number")
+            object.__setattr__(self, name, float(value))
+        if self.k_v_per_k == 0:
+            raise DataFormatError(f"{self.label}, k_v_per_k: zero, the TSP does not depend on T")
+        if self.t_ref_c < -273.15:
+            raise DataFormatError(f"{self.label}, t_ref_c: below absolute zero")
+
+    def _numbers(self) -> tuple[float, float, float]:
+        return self.k_v_per_k, self.v_ref_v, self.t_ref_c
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, KFactorLaw):
+            return NotImplemented
+        return self._numbers() == other._numbers()
+
+    def __hash__(self) -> int:
+        return hash(self._numbers())
+
+    @classmethod
+    def from_mv_per_k(cls, k_mv_per_k: float, v_ref_v: float, t_ref_c: float,
+                      label: str = "calibration") -> KFactorLaw:
+        """The K-factor given in mV/K (the usual datasheet and T3Ster unit).
+
+        Parameters
+        ----------
+        k_mv_per_k : float
+            K, mV/K.
+        v_ref_v, t_ref_c : float
+            The anchor: the voltage (V) at the reference temperature (degC).
+        label : str
+            How messages name the calibration.
+
+        Returns
+        -------
+        KFactorLaw
+            Of the class it is called on.
+        """
+        if isinstance(k_mv_per_k, bool) or not isinstance(k_mv_per_k, (int, float, np.floating,
+                                                                       np.integer)):
+            raise DataFormatError(f"{label}, k_mv_per_k: {k_mv_per_k!r} is not a number")
+        return cls(float(k_mv_per_k) * 1e-3, v_ref_v, t_ref_c, label)
+
+    @property
+    def kind(self) -> str:
+        return "k-factor"
+
+    @property
+    def k_factor_mv_per_k(self) -> float:
+        """K in mV/K."""
+        return self.k_v_per_k * 1e3
+
+    def manifest(self) -> dict[str, float | str]:
+        """The ``calibration`` entry of ``bundle.json`` (see ``docs/bundle-format.md``)."""
+        return {"kind": self.kind, "k_mv_per_k": self.k_factor_mv_per_k,
+                "v_ref_v": self.v_ref_v, "t_ref_c": self.t_ref_c}
+
+    def __str__(self) -> str:
+        return (f"K-factor calibration: K = {self.k_factor_mv_per_k:.4g} mV/K, "
+                f"{self.v_ref_v:.6g} V at {self.t_ref_c:g} degC")
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,11 +1,11 @@
-"""Importers of real thermal transients from other tools' files into a :class:`Bundle`.
+"""Real thermal transients in other tools' files, read: :class:`Record`.
 
-* :func:`read_pyrth` — the PyRth text format (``MOSFET_dry.txt``): a ``DATA`` line, a header
+* :func:`pyrth_record` — the PyRth text format (``MOSFET_dry.txt``): a ``DATA`` line, a header
   line, then two columns, time (s) and sensor voltage (V). The file holds no calibration and
   no power: pass them (the MOSFET files' calibration points are
   :data:`PYRTH_MOSFET_CALIBRATION`, shipped as ``pyrth_mosfet/calibration.csv``; PyRth's
   nominal power is 1 W). There is no default calibration: another device's would be wrong.
-* :func:`read_t3ster` — the legacy export of a Simcenter T3Ster: ``.raw`` (time response
+* :func:`t3ster_record` — the legacy export of a Simcenter T3Ster: ``.raw`` (time response
   record: ``time_us adc_count`` rows after a ``#`` header that gives the ADC step ``lsb`` (V,
   7th header line) and the offset voltage ``uref`` (V, 9th), so that
   ``V = uref + (count - 4095/2) · lsb``), ``.pwr`` (``Power=`` in its ``[power]`` section, the
@@ -15,17 +15,10 @@
 
 Both are cooling transients recorded from the trigger: leading samples taken before the
 switch (PyRth: the first run of identical values; T3Ster: time 0) are dropped, the times are
-kept as recorded. The reference temperature is taken as the junction temperature at the end
-of the record (``tref_steady_c``, the mean of the last 5 samples): the device is assumed back
-at its reference by then, so Rth is the rise recorded over the whole transient.
-
-The calibration may be a table or polynomial (converted as it stands) or a
-:class:`~spicethermal.identify.calibration.KFactor`. Given ``tref_c``, the temperature of the device
-at the end of the record, any of them is re-anchored there (its slope kept, its level moved:
-:func:`~spicethermal.identify.calibration.anchored`): the sensor voltage of a transient often sits
-tens of mV away from the oven calibration's (another sense current, an amplifier offset), so
-that the table alone puts a device at room temperature near 2 degC (the PyRth MOSFET files:
-0.608 V at the end of the record, where the table reads 0.558 V at 23.4 degC).
+kept as recorded. What the files hold is read here, as a :class:`Record`; the bundle made of
+it, with its calibration anchored and its reference temperature read through the calibration,
+is :func:`spicethermal.identify.records.read_pyrth` and
+:func:`~spicethermal.identify.records.read_t3ster`.
 """
 
 from __future__ import annotations
@@ -33,14 +26,15 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..core.errors import DataFormatError, where
-from ..identify.calibration import KFactor, anchored
-from .bundle import Bundle, CalibrationTable, CoolingTable, parse_number
+from .columns import parse_number
+from .datasets import CalibrationTable, KFactorLaw
 from .files import read_text
 
 #: Calibration points of the PyRth MOSFET files, (Tj degC, Usens V): about -2.32 mV/K.
@@ -54,16 +48,66 @@ T3STER_ADC_LEVELS = 4095.0
 
 
 #: What the importers accept as a calibration.
-CalibrationLike = CalibrationTable | KFactor | Sequence[Sequence[float]]
+CalibrationLike = CalibrationTable | KFactorLaw | Sequence[Sequence[float]]
 
 
-def _calibration_table(calibration: CalibrationLike | None, label: str
-                       ) -> CalibrationTable | KFactor:
+@dataclass(frozen=True, eq=False)
+class Record:
+    """A cooling transient as another tool's files hold it.
+
+    Attributes
+    ----------
+    t_s, v_tsp_v : ndarray
+        The samples after the switch: times (s, as recorded) and sensor voltages (V).
+    rows : ndarray
+        The file line of each sample.
+    label : str
+        The record's file, as messages name it.
+    device : str
+        The device's name (given, or made from the file's).
+    source : dict
+        What was read and dropped, for the bundle's ``source`` key.
+    power_w : float or None
+        The heating power step, when the files hold it (T3Ster's ``.pwr``).
+    calibration : CalibrationTable or None
+        The calibration, when the files hold it (T3Ster's ``.tco``).
+    """
+
+    t_s: np.ndarray
+    v_tsp_v: np.ndarray
+    rows: np.ndarray
+    label: str
+    device: str
+    source: dict[str, Any] = field(default_factory=dict)
+    power_w: float | None = None
+    calibration: CalibrationTable | None = None
+
+
+def calibration_table(calibration: CalibrationLike | None, label: str
+                      ) -> CalibrationTable | KFactorLaw:
+    """The calibration given for a record that holds none, as a bundle holds it.
+
+    Parameters
+    ----------
+    calibration : CalibrationTable, KFactorLaw or (temp_c, v_tsp_v) pairs
+        As given (None: an error that names the options).
+    label : str
+        The record, as messages name it.
+
+    Returns
+    -------
+    CalibrationTable or KFactorLaw
+
+    Examples
+    --------
+    >>> calibration_table(PYRTH_MOSFET_CALIBRATION, "x.txt").temp_c.tolist()[:2]
+    [23.4, 37.625]
+    """
     if calibration is None:
         raise DataFormatError(f"{label}: the file holds no calibration: give one (--calibration "
                               f"CSV with temp_c, v_tsp_v, or --k-factor MV_PER_K with --ambient "
                               f"DEGC)")
-    if isinstance(calibration, CalibrationTable | KFactor):
+    if isinstance(calibration, CalibrationTable | KFactorLaw):
         return calibration
     try:
         pts = np.asarray(calibration, dtype=float)
@@ -90,49 +134,27 @@ def _two_columns(lines: Sequence[tuple[int, str]], label: str, names: tuple[str,
     return np.array(a), np.array(b), np.array(rows)
 
 
-def _cooling_bundle(t: np.ndarray, v: np.ndarray, rows: np.ndarray, label: str,
-                    calibration: CalibrationTable | KFactor, power_w: float, device: str,
-                    source: dict, tref_c: float | None = None) -> Bundle:
-    cal = calibration if isinstance(calibration, KFactor) else calibration.fit("auto")
-    v_end = float(np.mean(v[-END_SAMPLES:]))
-    if tref_c is not None:
-        calibration = cal = anchored(cal, v_end, tref_c)
-        source = {**source, "anchored": f"{v_end:.6g} V (end of record) = {tref_c:g} degC"}
-    tref = float(cal.temperature(v_end))
-    cooling = CoolingTable(t, power_w, v_tsp_v=v, tref_steady_c=tref, file=label, rows=rows,
-                           extra={"tref_steady_from": f"mean of the last {END_SAMPLES} samples"})
-    bundle = Bundle(device=device, reference="ambient", ambient_c=tref_c,
-                    calibration=calibration, cooling=(cooling,), extra={"source": source})
-    # checked above under the source's name; written as a plain file name
-    return bundle.with_(cooling=(replace(cooling, file="cooling_1.csv"),), source=label)
-
-
-def read_pyrth(path: str | os.PathLike, calibration: CalibrationLike | None = None,
-               power_w: float = 1.0, device: str | None = None,
-               tref_c: float | None = None) -> Bundle:
+def pyrth_record(path: str | os.PathLike, device: str | None = None) -> Record:
     """Read a PyRth transient text file (``DATA`` line, header, ``time voltage`` rows).
 
     Parameters
     ----------
-    path : the ``.txt`` file.
-    calibration : (temp_c, v_tsp_v) pairs, a :class:`CalibrationTable` or a
-        :class:`~spicethermal.identify.calibration.KFactor`; required (the file has none).
-    power_w : the heating power step, W (PyRth's files do not store it; 1 W nominal).
-    tref_c : temperature of the device at the end of the record; re-anchors the calibration
-        there (module docstring). Default: the calibration's own reading.
+    path : str or os.PathLike
+        The ``.txt`` file.
+    device : str, optional
+        A name for the device (default: made from the file's).
 
     Returns
     -------
-    Bundle
-        Calibration and one cooling curve with raw ``v_tsp_v``.
+    Record
+        Without power or calibration (the file holds neither).
 
     Examples
     --------
     >>> from spicethermal.data import path
-    >>> b = read_pyrth(path("pyrth_mosfet/MOSFET_dry.txt"), PYRTH_MOSFET_CALIBRATION,
-    ...                tref_c=25.0)
-    >>> print(b.calibration_fit())
-    K-factor calibration: K = -2.324 mV/K, 0.607995 V at 25 degC
+    >>> r = pyrth_record(path("pyrth_mosfet/MOSFET_dry.txt"))
+    >>> r.device, r.source["dropped_before_switch"] > 0, r.power_w
+    ('PyRth transient MOSFET_dry', True, None)
     """
     path = Path(path)
     label = str(path)
@@ -150,12 +172,9 @@ def read_pyrth(path: str | os.PathLike, calibration: CalibrationLike | None = No
     first = same if same >= 2 else 0
     if v.size - first < 3:
         raise DataFormatError(f"{label}: fewer than 3 samples after the switch")
-    table = _calibration_table(calibration, label)
-    return _cooling_bundle(t[first:], v[first:], rows[first:], label, table, power_w,
-                           device or f"PyRth transient {path.stem}",
-                           {"format": "pyrth-text", "file": path.name,
-                            "dropped_before_switch": first, "power_w_nominal": power_w},
-                           tref_c)
+    return Record(t[first:], v[first:], rows[first:], label,
+                  device or f"PyRth transient {path.stem}",
+                  {"format": "pyrth-text", "file": path.name, "dropped_before_switch": first})
 
 
 def _t3ster_power(path: Path) -> float:
@@ -188,30 +207,32 @@ def _t3ster_calibration(path: Path) -> CalibrationTable:
     return CalibrationTable(temp, volt, file="calibration.csv", coefficients=coefficients)
 
 
-def read_t3ster(raw: str | os.PathLike, pwr: str | os.PathLike | None = None,
-                tco: str | os.PathLike | None = None, device: str | None = None,
-                tref_c: float | None = None) -> Bundle:
-    """Read a T3Ster measurement (``.raw`` + ``.pwr`` + ``.tco``) into a bundle.
+def t3ster_record(raw: str | os.PathLike, pwr: str | os.PathLike | None = None,
+                  tco: str | os.PathLike | None = None, device: str | None = None) -> Record:
+    """Read a T3Ster measurement (``.raw`` + ``.pwr`` + ``.tco``).
 
     Parameters
     ----------
-    raw : the ``.raw`` time response record.
-    pwr : the power file; default the ``.pwr`` beside ``raw`` with the same stem.
-    tco : the calibration; default the only ``.tco`` file in that directory.
-    device : a name for the bundle.
-    tref_c : temperature of the device at the end of the record (re-anchors the calibration).
+    raw : str or os.PathLike
+        The ``.raw`` time response record.
+    pwr : str or os.PathLike, optional
+        The power file; default the ``.pwr`` beside ``raw`` with the same stem.
+    tco : str or os.PathLike, optional
+        The calibration; default the only ``.tco`` file in that directory.
+    device : str, optional
+        A name for the device.
 
     Returns
     -------
-    Bundle
-        The ``.tco`` calibration (kind ``polynomial`` when its header holds the line) and one
-        cooling curve with raw ``v_tsp_v`` at the ``.pwr`` power.
+    Record
+        With the ``.pwr`` power and the ``.tco`` calibration (kind ``polynomial`` when its
+        header holds the line).
 
     Examples
     --------
     >>> from spicethermal.data import path
-    >>> b = read_t3ster(path("pyrth_mosfet/t3ster/T25_I-m5m-I-h600m_100s.raw"))
-    >>> b.calibration.kind, round(b.cooling[0].power_w, 4)
+    >>> r = t3ster_record(path("pyrth_mosfet/t3ster/T25_I-m5m-I-h600m_100s.raw"))
+    >>> r.calibration.kind, round(r.power_w, 4)
     ('polynomial', 1.7541)
     """
     raw = Path(raw)
@@ -252,8 +273,7 @@ def read_t3ster(raw: str | os.PathLike, pwr: str | os.PathLike | None = None,
     if after.sum() < 3:
         raise DataFormatError(f"{label}: fewer than 3 samples after the switch")
     v = uref + (counts[after] - T3STER_ADC_LEVELS / 2.0) * lsb
-    return _cooling_bundle(t_us[after] * 1e-6, v, rows[after], label, _t3ster_calibration(tco),
-                           _t3ster_power(pwr), device or f"T3Ster record {raw.stem}",
-                           {"format": "t3ster", "file": raw.name, "pwr": pwr.name,
-                            "tco": tco.name, "lsb_v": lsb, "uref_v": uref,
-                            "dropped_before_switch": int((~after).sum())}, tref_c)
+    return Record(t_us[after] * 1e-6, v, rows[after], label, device or f"T3Ster record {raw.stem}",
+                  {"format": "t3ster", "file": raw.name, "pwr": pwr.name, "tco": tco.name,
+                   "lsb_v": lsb, "uref_v": uref, "dropped_before_switch": int((~after).sum())},
+                  calibration=_t3ster_calibration(tco), power_w=_t3ster_power(pwr))

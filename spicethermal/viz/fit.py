@@ -17,7 +17,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer, Foster
     from ..fit.ladder import FitResult
     from ..identify.calibration import Calibration
-    from ..io.datasheet import Table1
+    from ..identify.datasheet import Table1
 
 from .base import axes, eng, finish, new_figure, save_figure
 

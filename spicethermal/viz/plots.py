@@ -1,7 +1,7 @@
 """Figures, organised by the paper's figure they reproduce (and extend): one import place.
 
-The figures live in ``plot_base`` (shared helpers), ``plot_fit``, ``plot_identify``,
-``plot_diagnosis`` and ``plot_pwm``; this module gathers their public names.
+The figures live in the modules of :mod:`spicethermal.viz`: ``base`` (shared helpers), ``fit``,
+``identify``, ``bootstrap``, ``diagnosis`` and ``pwm``; this module gathers their public names.
 
 matplotlib is imported only when a function here is called, and only its object-oriented API
 is used (``Figure`` with the Agg canvas, no pyplot state), so nothing here changes a user's
@@ -15,6 +15,8 @@ Contents
 * NID (T3Ster-style analysis): :func:`plot_spectrum_fit`, :func:`plot_spectrum`,
   :func:`fig_spectrum`; structure functions :func:`plot_cumulative_structure`,
   :func:`plot_differential_structure`, :func:`fig_structure` (separation marked).
+* Bootstrap bands — :func:`shade`, on the fit :func:`fig_fit_band`, the spectrum
+  :func:`fig_spectrum_band` and the structure functions :func:`fig_structure_band`.
 * Diagnosis — residuals per data set :func:`plot_dataset_residuals`, before/after an effect
   :func:`fig_before_after`, candidates :func:`plot_candidates`, :func:`fig_candidates`,
   the RMS staircase of the iterative diagnosis :func:`plot_staircase`, :func:`fig_staircase`,
@@ -34,6 +36,7 @@ from .base import (
     new_figure,
     save_figure,
 )
+from .bootstrap import fig_fit_band, fig_spectrum_band, fig_structure_band, shade
 from .diagnosis import (
     diagnosis_figures,
     fig_before_after,
@@ -76,12 +79,13 @@ from .pwm import (
 )
 
 __all__ = ["FIG8_DUTIES", "axes", "diagnosis_figures", "eng", "fig7", "fig8",
-           "fig_before_after", "fig_calibration", "fig_circuit", "fig_diode_fit", "fig_stages",
-           "fig_candidates", "fig_drive",
-           "fig_spectrum", "fig_staircase", "fig_structure", "fig_table1", "fig_table2",
+           "fig_before_after", "fig_calibration", "fig_candidates", "fig_circuit",
+           "fig_diode_fit", "fig_drive", "fig_fit_band", "fig_spectrum", "fig_spectrum_band",
+           "fig_stages", "fig_staircase", "fig_structure", "fig_structure_band", "fig_table1",
+           "fig_table2",
            "fig_table2_diagnosis", "new_figure", "plot_calibration", "plot_candidates",
            "plot_cumulative_structure", "plot_dataset_residuals",
            "plot_differential_structure", "plot_drive", "plot_drive_duty", "plot_fit",
            "plot_ladder", "plot_r_duty", "plot_residuals", "plot_spectrum",
            "plot_spectrum_fit", "plot_staircase", "plot_table2", "plot_table2_heatmap",
-           "save_figure"]
+           "save_figure", "shade"]

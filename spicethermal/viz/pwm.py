@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -18,13 +18,34 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..analysis.compare import Comparison
     from ..core.ladder import Cauer, Foster
-    from ..drive.optimize import DriveResult
 
 from ..core.errors import DataFormatError
 from ..engines.pwm import r_duty_eq3, r_duty_exact
 from .base import axes, eng, new_figure, save_figure
 
 # ------------------------------------------------------------ safe fast drive (drive.py)
+
+class DriveResult(Protocol):
+    """What the figures read of a drive (:class:`spicethermal.drive.result.DriveResult`: the
+    figures know its shape, not its module, which draws itself through them)."""
+
+    node: int
+    t_max_c: float
+    target_c: float
+    tol_k: float
+    hold_duty: float
+    schedule: Sequence[tuple[float, float]]
+    method: str
+    time_to_target_s: float
+    constant_duty_time_to_target_s: float
+    trace: Any  # a DriveTrace: t_s, node_c, junction_mean_c, junction_peak_c, ...
+
+    @property
+    def speedup(self) -> float: ...
+
+    @property
+    def period_s(self) -> float: ...
+
 
 def plot_drive(result: DriveResult, ax: Axes | None = None, constant: bool = True) -> Axes:
     """Predicted temperatures under the safe fast drive, on logarithmic time.

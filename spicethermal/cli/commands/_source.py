@@ -1,5 +1,5 @@
 """Options shared by the commands that take a curve, and the reading of SOURCE through
-:func:`spicethermal.io.sources.read_source`."""
+:func:`spicethermal.identify.sources.read_source`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from ...core.errors import DataFormatError
-from ...io.sources import read_source
+from ...identify.sources import read_source
 from ._types import (
     AliasFormatter,
     add_option,
@@ -21,8 +21,8 @@ from ._types import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ...identify.sources import Source
     from ...io.bundle import Bundle
-    from ...io.sources import Source
 
 SOURCE_HELP = ("bundle directory, Zth or datasheet points CSV (t_s, zth_k_per_w or r), cooling "
                "CSV (t_s, tj_c or v_tsp_v), PyRth .txt or T3Ster .raw")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ...analysis.tables import duty_family
+from ...report.tables import duty_family
 from ...core.errors import DataFormatError
 from ...io.bundle import format_columns
 from ...io.files import atomic_write_text

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...analysis.demo import run_demo
+from ...demo import run_demo
 from ._types import add_option
 
 NAME = "demo"

@@ -1,17 +1,16 @@
 """``spicethermal fit SOURCE [--order N|auto] [--effect NAME]... -o MODEL.json``.
 
-SOURCE is any curve source (:mod:`spicethermal.io.sources`): a measurement bundle directory (its
-first cooling curve, converted to Zth(t) with the early-time correction, or its first ``zth``
-table; ``--curve`` picks another), a Zth or datasheet points CSV (``t_s`` and ``zth_k_per_w``,
-or ``r`` with ``--rth``), a cooling CSV, a PyRth ``.txt`` or a T3Ster ``.raw`` (with
-``--calibration`` or ``--k-factor`` where the file has none).
-ΣR = Rth is held whenever Rth is known: measured by a cooling curve (eq. 1), given in the
-bundle or by ``--rth``. The fit's report (order, criterion, R ± u, τ ± u) goes into the model's
-provenance and its table to stdout. A bundle with forward-voltage points
-(``spicethermal-bundle/3``) also gets its heater's diode law Vf(I, T), fitted to them and the
-TSP calibration with the ladder's self-heating (:func:`spicethermal.fit.diode.fit_electrical`):
-its parameters ± u and residuals are printed, and the model (``spicethermal-model/4``) keeps it
-for ``export --electrothermal``.
+SOURCE is any curve source (:mod:`spicethermal.identify.sources`): a measurement bundle
+directory (its first cooling curve, converted to Zth(t) with the early-time correction, or its
+first ``zth`` table; ``--curve`` picks another), a Zth or datasheet points CSV (``t_s`` and
+``zth_k_per_w``, or ``r`` with ``--rth``), a cooling CSV, a PyRth ``.txt`` or a T3Ster ``.raw``
+(with ``--calibration`` or ``--k-factor`` where the file has none). ΣR = Rth is held whenever
+Rth is known: measured by a cooling curve (eq. 1), given in the bundle or by ``--rth``. The
+fit's report (order, criterion, R ± u, τ ± u) goes into the model's provenance and its table to
+stdout. A bundle with forward-voltage points (``spicethermal-bundle/3``) also gets its
+heater's diode law Vf(I, T), fitted to them and the TSP calibration with the ladder's
+self-heating (:func:`spicethermal.fit.diode.fit_electrical`): its parameters ± u and residuals
+are printed, and the model (``spicethermal-model/4``) keeps it for ``export --electrothermal``.
 """
 
 from __future__ import annotations
@@ -23,17 +22,18 @@ from pathlib import Path
 
 from ... import __version__
 from ...analysis.diagnose import fit_with_effects
-from ...analysis.tables import foster_table_csv
 from ...core.errors import DataFormatError
 from ...effects import plugin
-from ...fit.bootstrap import fig_fit_band, fit_bootstrap
+from ...fit.bootstrap import fit_bootstrap
 from ...fit.diode import fit_electrical
 from ...fit.ladder import check_rth, fit_model
+from ...identify.readings import cooling_tj_c
+from ...identify.sources import early_time_json
 from ...io.bundle import Bundle
 from ...io.files import atomic_write_text
-from ...io.sources import early_time_json
+from ...report.tables import foster_table_csv
 from ...viz.early_figure import fig_early_time
-from ...viz.plots import fig7
+from ...viz.plots import fig7, fig_fit_band
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import count as _count
 
@@ -124,7 +124,7 @@ def _early_plot(src, args: argparse.Namespace, curve) -> Path:
         raise DataFormatError(f"--early-plot: {curve.label} has no early-time correction (a "
                               f"cooling curve with Tj at the cut given, or a Zth table)")
     c = src.bundle.cooling[args.curve]
-    return fig_early_time(c.t_s, src.bundle.cooling_tj_c(args.curve), curve.early,
+    return fig_early_time(c.t_s, cooling_tj_c(src.bundle, args.curve), curve.early,
                           args.early_plot, title=f"{curve.label}: early-time correction")
 
 

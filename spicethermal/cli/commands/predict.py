@@ -2,7 +2,7 @@
 
 The junction temperature under a measured power profile (CSV ``t_s, power_w`` from t = 0,
 linear between samples, held after the last): the analytic engine (exact, mode by mode) for
-linear models, ngspice with device effects (:mod:`spicethermal.analysis.predict`). Writes ``t_s``,
+linear models, ngspice with device effects (:mod:`spicethermal.predict`). Writes ``t_s``,
 ``power_w``, ``tj_c`` at the profile's times and ``--points`` even ones, and prints the peak.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ...analysis.predict import (
+from ...predict import (
     DEFAULT_POINTS,
     ENGINES,
     PowerProfile,

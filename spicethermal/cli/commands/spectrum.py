@@ -1,11 +1,12 @@
 """``spicethermal spectrum SOURCE [--plot FIG.png] [-o MODEL.json] [--json]``: the spectrum (NID).
 
-SOURCE is any curve source (:mod:`spicethermal.io.sources`): a measurement bundle directory (its
-first cooling curve with the early-time correction, or first ``zth`` table; ``--curve`` picks
-another), a Zth CSV file (``t_s`` and ``zth_k_per_w``), a cooling CSV, a PyRth transient
-``.txt`` file (time and sensor voltage, converted through ``--calibration CSV`` or
-``--k-factor MV_PER_K`` anchored with ``--ambient DEGC`` — there is no default — at ``--power W``,
-default 1 W nominal) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco`` beside it).
+SOURCE is any curve source (:mod:`spicethermal.identify.sources`): a measurement bundle
+directory (its first cooling curve with the early-time correction, or first ``zth`` table;
+``--curve`` picks another), a Zth CSV file (``t_s`` and ``zth_k_per_w``), a cooling CSV, a PyRth
+transient ``.txt`` file (time and sensor voltage, converted through ``--calibration CSV`` or
+``--k-factor MV_PER_K`` anchored with ``--ambient DEGC`` — there is no default — at
+``--power W``, default 1 W nominal) or a T3Ster ``.raw`` record (with its ``.pwr`` and ``.tco``
+beside it).
 
 Prints the spectrum's summary, its peaks and the lumped Foster ladder; ``--json`` prints the
 spectrum (``spicethermal-spectrum/1``: ``tau_s``, ``r_density_k_per_w`` in K/W per unit ln τ,
@@ -26,12 +27,12 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from ... import __version__
-from ...fit.bootstrap import fig_spectrum_band, spectrum_bootstrap
+from ...fit.bootstrap import spectrum_bootstrap
+from ...identify.sources import early_time_json
 from ...identify.spectrum import time_constant_spectrum
 from ...io.files import dumps_json
-from ...io.sources import early_time_json
 from ...model import ThermalModel
-from ...viz.plots import fig_spectrum
+from ...viz.plots import fig_spectrum, fig_spectrum_band
 from ._source import SOURCE_HELP, add_bootstrap_arguments, add_source_arguments, read_source_args
 from ._types import add_option, old_figure_output
 from ._types import count as _count
@@ -75,8 +76,9 @@ def spectrum_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def load_curve(args: argparse.Namespace, source: str) -> ZthCurve:
-    """The Zth curve of ``source`` read with the shared options (:mod:`spicethermal.io.sources`);
-    what was assumed goes to stderr, the early-time correction too."""
+    """The Zth curve of ``source`` read with the shared options
+    (:mod:`spicethermal.identify.sources`); what was assumed goes to stderr, the early-time
+    correction too."""
     curve = read_source_args(args, source).curve(args.curve, early_window_s=args.early_window)
     if curve.early is not None:
         print(f"{curve.label}: early time: {curve.early}", file=sys.stderr)

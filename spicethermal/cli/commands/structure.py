@@ -25,11 +25,11 @@ from __future__ import annotations
 import argparse
 
 from ...core.errors import DataFormatError
-from ...fit.bootstrap import fig_structure_band, spectrum_bootstrap
+from ...fit.bootstrap import spectrum_bootstrap
 from ...identify.spectrum import time_constant_spectrum
 from ...identify.structure import SEPARATION_THRESHOLD, StructureFunction, separation
 from ...io.files import dumps_json
-from ...viz.plots import fig_structure
+from ...viz.plots import fig_structure, fig_structure_band
 from ._source import SOURCE_HELP
 from ._types import add_option, positive
 from .spectrum import add_spectrum_arguments, load_curve, spectrum_options

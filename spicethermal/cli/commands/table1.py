@@ -1,6 +1,6 @@
 """``spicethermal table1 SOURCE --datasheet CSV|mur880e [--json]``: the paper's Table 1 for a curve.
 
-SOURCE is any curve source (:mod:`spicethermal.io.sources`): a bundle directory (its first
+SOURCE is any curve source (:mod:`spicethermal.identify.sources`): a bundle directory (its first
 cooling curve, converted to Zth(t) with the early-time correction, or its first zth table;
 ``--curve`` picks another), a Zth CSV (``t_s`` and ``zth_k_per_w``, or ``r``), a cooling CSV
 (``t_s``, ``tj_c``, optional ``tref_c``; ``--ambient`` when it has no ``tref_c``), or a PyRth
@@ -15,9 +15,10 @@ import argparse
 from pathlib import Path
 
 from ...core.errors import DataFormatError
-from ...io.datasheet import Datasheet, mur880e, read_zth_points, table1
+from ...identify.datasheet import read_zth_points, table1
+from ...identify.sources import early_time_json
+from ...io.datasheet import Datasheet, mur880e
 from ...io.files import dumps_json
-from ...io.sources import early_time_json
 from ._source import SOURCE_HELP, add_source_arguments, read_source_args
 from ._types import add_option
 from ._types import number as _number

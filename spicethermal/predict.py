@@ -29,18 +29,18 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.errors import DataFormatError
-from ..core.progress import task
-from ..engines.interface import NAMES
-from ..engines.interface import engine as by_name
-from ..io.bundle import read_columns
-from ..io.files import atomic_open
-from ..model import Network
+from .core.errors import DataFormatError
+from .core.progress import task
+from .engines.interface import NAMES
+from .engines.interface import engine as by_name
+from .io.bundle import read_columns
+from .io.files import atomic_open
+from .model import Network
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
-    from ..model import ThermalModel
+    from .model import ThermalModel
 
 #: Engines of :func:`predict` (``auto``: analytic for linear models, ngspice otherwise).
 ENGINES = NAMES

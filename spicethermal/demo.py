@@ -1,5 +1,8 @@
 """The main job, end to end on the simulated bench (what ``spicethermal demo`` runs).
 
+It orchestrates every room (bench, identify, fit, spice, analysis, viz, report) and is none of
+them: it sits at the top of the package, and nothing imports it but the ``demo`` command.
+
 bench run of the actuator → bundle → Zth → automatic fit → the heater's diode law Vf(I, T) →
 ``.lib`` files (ngspice, PSPICE, LTspice × Foster, Cauer, and the electrothermal part) → the
 paper's Table 2 through ngspice, from the thermal-only deck and from the bench circuit around the
@@ -17,22 +20,24 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..bench.session import run_bench
-from ..core.errors import SpiceThermalError
-from ..core.progress import enabled
-from ..engines.circuit import CircuitPwm
-from ..fit.diode import fit_electrical
-from ..fit.ladder import fit_model
-from ..identify.curves import ZthCurve
-from ..io.bundle import Bundle
-from ..io.datasheet import mur880e, table1
-from ..io.files import write_json
-from ..report import html as report
-from ..spice.electrothermal import export_electrothermal
-from ..spice.lib import DIALECTS, TOPOLOGIES, export
-from ..viz import plots
-from .compare import compare
-from .diagnose import diagnose
+from .analysis.compare import compare
+from .analysis.diagnose import diagnose
+from .bench.session import run_bench
+from .core.errors import SpiceThermalError
+from .core.progress import enabled
+from .engines.circuit import CircuitPwm
+from .fit.diode import fit_electrical
+from .fit.ladder import fit_model
+from .identify.curves import ZthCurve
+from .identify.datasheet import table1
+from .identify.readings import calibration_fit
+from .io.bundle import Bundle
+from .io.datasheet import mur880e
+from .io.files import write_json
+from .report import html as report
+from .spice.electrothermal import export_electrothermal
+from .spice.lib import DIALECTS, TOPOLOGIES, export
+from .viz import plots
 
 #: The simulated devices. The actuator bench has the real bench's artefacts (electrical
 #: transient after the cut, 100 µs sample window, a slightly nonlinear TSP) and the device hides
@@ -85,7 +90,21 @@ class Steps:
 
 @dataclass(frozen=True)
 class DemoResult:
-    """Where everything went, and the five-line summary."""
+    """Where everything went, and the five-line summary.
+
+    Attributes
+    ----------
+    out : Path
+        The output directory.
+    report : Path
+        The HTML report (``out/index.html``).
+    libs : tuple of Path
+        Every ``.lib`` file written.
+    summary : tuple of str
+        The five lines ``spicethermal demo`` prints.
+    timings : dict of str to float
+        Seconds per step, by the step's title.
+    """
 
     out: Path
     report: Path
@@ -97,7 +116,25 @@ class DemoResult:
 def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -> DemoResult:
     """Run the whole job on the simulated bench and write the report into ``out``.
 
-    Returns a :class:`DemoResult` naming the report, the ``.lib`` files and a summary.
+    Parameters
+    ----------
+    out : path-like
+        The output directory (created).
+    seed : int
+        The simulated bench's seed.
+    quiet : bool
+        No progress lines on stderr.
+
+    Returns
+    -------
+    DemoResult
+        The report, the ``.lib`` files and a summary.
+
+    Examples
+    --------
+    >>> result = run_demo("out/demo", seed=1, quiet=True)  # doctest: +SKIP
+    >>> result.report.name  # doctest: +SKIP
+    'index.html'
     """
     out = Path(out)
     figs = out / "figures"
@@ -113,7 +150,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
 
     # 2. calibration and Zth --------------------------------------------------------------
     def calibrate_and_extract():
-        cal = bundle.calibration_fit()
+        cal = calibration_fit(bundle)
         curves = ZthCurve.from_bundle(bundle)
         plots.fig_calibration(cal, figs / "fig2_calibration.png")
         return cal, curves
