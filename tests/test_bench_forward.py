@@ -79,3 +79,28 @@ def test_firmware_without_the_procedure_gives_a_bundle_without_the_section(tmp_p
     assert Bundle.read(out).forward is None
     assert "no forward-voltage procedure" in capsys.readouterr().err
     assert json.loads((out / "bundle.json").read_text())["format"] == "spicethermal-bundle/1"
+
+
+@pytest.mark.ngspice
+@pytest.mark.parametrize("dialect", ("ngspice", "pspice", "ltspice"))
+def test_the_exported_part_reproduces_the_benchs_calibration(measured, dialect, tmp_path):
+    """Issue #46, check 2, on the simulated bench's own readings: the part exported from the
+    law fitted to them, under the sense current alone with its reference swept through the
+    calibration's temperatures, gives the calibration's TSP (plus the reference diode's
+    offset) within the calibration's noise."""
+    from spicethermal.spice.electrothermal import render_electrothermal
+    from spicethermal.spice.lib import NgspiceBatch
+
+    bundle = Bundle.read(measured)
+    fit = fit_electrical(bundle, ThermalModel(preset("actuator").foster))
+    model = ThermalModel(preset("actuator").foster, electrical=fit.law)
+    lib = tmp_path / "h.lib"
+    lib.write_text(render_electrothermal(model, dialect, "foster", "HEATER",
+                                         temperature="absolute"))
+    deck = (f"* calibration\n.include {lib}\nX1 A 0 TJ TREF HEATER\nVREF TREF 0 DC 25\n"
+            "ISENSE 0 A DC 1m\n.dc VREF 24 71 0.01\n.end\n")
+    w = NgspiceBatch(timeout_s=60).run(deck, ["V(A)"], dialect)
+    cal = bundle.calibration
+    error = np.interp(cal.temp_c, w.t_s, w["V(A)"]) - fit.law.tsp_offset_v - cal.v_tsp_v
+    noise = fit.rms_v["calibration"]
+    assert np.sqrt(np.mean(error ** 2)) < 1.5 * noise and np.max(np.abs(error)) < 3 * noise
