@@ -166,6 +166,7 @@ def test_content_hash_keys_on_bytes_not_paths(tmp_path):
     assert Source.read(a, "a").sha256 != Source.read(b, "b").sha256
 
 
+@pytest.mark.slow
 def test_command_end_to_end_on_a_simulated_population(tmp_path, capsys):
     out = tmp_path / "out"
     code = main(["batch", "--simulate", "12", "--seed", "4", "-o", str(out), "--workers", "2",

@@ -30,6 +30,7 @@ def test_on_linear_data_the_baseline_is_at_the_noise_and_nothing_is_named(case):
     assert d.verdict.reason.startswith("the linear ladder fits every data set within its noise")
 
 
+@pytest.mark.slow
 def test_the_work_is_the_same_on_every_run():
     b = linear_fast()[0].record().bundle
     one, two = diagnose(b), diagnose(b)

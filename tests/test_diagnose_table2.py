@@ -92,6 +92,7 @@ def _synthetic_table(tmp_path, window_s: float):
     return path
 
 
+@pytest.mark.slow
 def test_a_real_sample_window_is_recognised(tmp_path):
     d = diagnose_table(_synthetic_table(tmp_path, 1e-4))
     assert d.verdict_effect == "sample-window", d.verdict.reason

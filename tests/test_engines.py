@@ -104,6 +104,7 @@ def test_commands_refuse_analytic_for_a_nonlinear_model(tmp_path, capsys):
     assert not (tmp_path / "tj.csv").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.ngspice
 def test_commands_run_every_engine(tmp_path, capsys):
     import json

@@ -90,6 +90,7 @@ def test_the_default_window_is_said_and_moves_the_totals_by_its_t0(bundles, caps
     assert 2.1 <= two[0]["separation"]["r_k_per_w"] <= 2.8
 
 
+@pytest.mark.slow
 def test_fit_compare_and_diagnose_run_on_the_bundle(bundles, tmp_path, capsys) -> None:
     model = tmp_path / "dry.json"
     assert main(["fit", str(bundles["dry"]), "-o", str(model), "--early-window",
