@@ -7,16 +7,9 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ..core.errors import DataFormatError, where
-from .files import (
-    read_json,
-)
-
-if TYPE_CHECKING:  # pragma: no cover
-    pass
-
 from .columns import Columns, read_columns, scalar
 from .datasets import (
     CalibrationTable,
@@ -26,6 +19,7 @@ from .datasets import (
     PwmTable,
     ZthTable,
 )
+from .files import read_json
 
 FORMAT = "spicethermal-bundle/2"
 #: The version that adds the ``forward`` section (the heater's Vf(I, T) points).
