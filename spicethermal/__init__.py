@@ -55,12 +55,16 @@ _API: dict[str, str] = {
     "diagnose_table": "analysis.table2",
     "Diagnosis": "analysis.diagnosis",
     "fit_with_effects": "analysis.diagnose",
+    "DiodeLaw": "core.diode",
+    "fit_diode": "fit.diode",
     "table1": "identify.datasheet",
     "time_constant_spectrum": "identify.spectrum",
     "structure_function": "identify.structure",
     # SPICE
     "render_lib": "spice.lib",
     "export": "spice.lib",
+    "render_electrothermal": "spice.electrothermal",
+    "CircuitPwm": "engines.circuit",
     # effects
     "Effect": "effects",
     "DeviceEffect": "effects",

@@ -3,10 +3,12 @@
 It orchestrates every room (bench, identify, fit, spice, analysis, viz, report) and is none of
 them: it sits at the top of the package, and nothing imports it but the ``demo`` command.
 
-bench run of the actuator → bundle → Zth → automatic fit → ``.lib`` files (ngspice, PSPICE,
-LTspice × Foster, Cauer) → the paper's Table 2 through ngspice → diagnosis → the effect added →
-error before/after; and the MUR880E validation (Table 1). Everything lands in one directory
-with an HTML report (``index.html``) that reads offline.
+bench run of the actuator → bundle → Zth → automatic fit → the heater's diode law Vf(I, T) →
+``.lib`` files (ngspice, PSPICE, LTspice × Foster, Cauer, and the electrothermal part) → the
+paper's Table 2 through ngspice, from the thermal-only deck and from the bench circuit around the
+electrothermal part → diagnosis → the effect added → error before/after; and the MUR880E
+validation (Table 1). Everything lands in one directory with an HTML report (``index.html``)
+that reads offline.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +25,8 @@ from .analysis.diagnose import diagnose
 from .bench.session import run_bench
 from .core.errors import SpiceThermalError
 from .core.progress import enabled
+from .engines.circuit import CircuitPwm
+from .fit.diode import fit_electrical
 from .fit.ladder import fit_model
 from .identify.curves import ZthCurve
 from .identify.datasheet import table1
@@ -31,6 +35,7 @@ from .io.bundle import Bundle
 from .io.datasheet import mur880e
 from .io.files import write_json
 from .report import html as report
+from .spice.electrothermal import export_electrothermal
 from .spice.lib import DIALECTS, TOPOLOGIES, export
 from .viz import plots
 
@@ -134,7 +139,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
     out = Path(out)
     figs = out / "figures"
     figs.mkdir(parents=True, exist_ok=True)
-    steps = Steps(total=10, quiet=quiet)
+    steps = Steps(total=12, quiet=quiet)
     t_start = time.perf_counter()
 
     # 1. the bench ------------------------------------------------------------------------
@@ -163,6 +168,19 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
 
     model, fit_result = steps.run("automatic ladder fit (order and values)", fit)
 
+    # 3b. the heater's diode law ------------------------------------------------------------
+    def electrical():
+        law_fit = fit_electrical(bundle, model)
+        if law_fit is None:
+            return model, None
+        plots.fig_diode_fit(law_fit, bundle.forward, figs / "diode_law.png")
+        with_law = replace(model, electrical=law_fit.law)
+        with_law.save(out / "actuator_model.json")
+        return with_law, law_fit
+
+    model, law_fit = steps.run("the heater's diode law Vf(I, T) from the forward points",
+                               electrical)
+
     # 4. export ------------------------------------------------------------------------------
     def export_all():
         paths = []
@@ -171,9 +189,15 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
                 paths.append(export(model, out / "lib" / f"actuator_{dialect}_{topology}.lib",
                                     dialect, topology, SUBCKT["actuator"],
                                     temperature=TEMPERATURE))
+        if model.electrical is not None:  # the heater as an electrothermal part
+            paths += [export_electrothermal(
+                model, out / "lib" / f"actuator_heater_{dialect}_electrothermal.lib", dialect,
+                "cauer", SUBCKT["actuator"] + "_HEATER", temperature=TEMPERATURE)
+                for dialect in DIALECTS]
         return tuple(paths)
 
-    libs = steps.run("export .lib: ngspice, PSPICE, LTspice × Foster, Cauer", export_all)
+    libs = steps.run("export .lib: ngspice, PSPICE, LTspice × Foster, Cauer, electrothermal",
+                     export_all)
 
     # 5. Table 2 through ngspice ------------------------------------------------------------
     def table2():
@@ -183,6 +207,25 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         return cmp
 
     table2_cmp = steps.run("the paper's Table 2: 18 PWM points in ngspice", table2)
+
+    # 5b. Table 2 through the bench circuit (Fig. 3) around the electrothermal part ----------
+    def table2_circuit():
+        pwm = bundle.pwm
+        if model.electrical is None or pwm is None:
+            return None
+        ambient = bundle.ambient_c if bundle.ambient_c is not None else 25.0
+        sim = CircuitPwm(model, tref_c=ambient)
+        states = sim.grid(pwm.powers_w, pwm.freq_hz, pwm.duty, pwm.sample_window_s)
+        run = sim.run(float(pwm.powers_w[0]), 1e3, 0.5, pwm.sample_window_s)
+        plots.fig_circuit(run, figs / "circuit_pwm.png")
+        tref = pwm.tref_c if pwm.tref_c is not None else [ambient] * len(states)
+        # the reading as each row's temperature, as the thermal-only deck's column gives it
+        readings = {(s.freq_hz, s.duty): float(t) + s.reading_k
+                    for s, t in zip(states, tref, strict=True)}
+        return {"readings_c": readings, "run": run, "window_s": pwm.sample_window_s}
+
+    circuit = steps.run("Table 2 through the bench circuit around the electrothermal heater",
+                        table2_circuit)
 
     # 6. diagnosis ---------------------------------------------------------------------------
     # the same default path as `spicethermal diagnose BUNDLE`: one baseline, one set of numbers
@@ -223,7 +266,8 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         f"(time constants {min(model.ladder.time_constants()):.2g} s to "
         f"{max(model.ladder.time_constants()):.2g} s), chosen by {fit_result.criterion}",
         f"Table 2 in ngspice: RMS {table2_cmp.rms_k:.2f} K, worst {table2_cmp.max_abs_k:.2f} K "
-        f"over {len(table2_cmp.points)} PWM points",
+        f"over {len(table2_cmp.points)} PWM points" + _circuit_summary(law_fit, circuit,
+                                                                     table2_cmp),
         f"diagnosis: {diag.verdict_effect or 'no catalogued effect'} — {diag.verdict_reason}",
         (f"with {', '.join(diag.effects)}: RMS {before.rms_k:.3g} K -> {after.rms_k:.3g} K "
          f"({before.rms_k / max(after.rms_k, 1e-12):.3g}x lower)") if better is not None else
@@ -234,9 +278,22 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
     page = steps.run("HTML report", lambda: report.write_demo_report(
         out, bundle=bundle, calibration=cal, curves=curves, model=model, fit=fit_result,
         libs=libs, table2=table2_cmp, diagnosis=diag, better=better, before=before, after=after,
-        diagnosis_figures=diag_figs, table1=t1, summary=summary, elapsed_s=elapsed))
+        diagnosis_figures=diag_figs, table1=t1, summary=summary, elapsed_s=elapsed,
+        law_fit=law_fit, circuit=circuit))
     write_json(out / "summary.json", {"summary": summary, "timings_s": steps.timings})
     return DemoResult(out, page, tuple(libs), summary, steps.timings)
+
+
+def _circuit_summary(law_fit, circuit, table2_cmp) -> str:
+    """The summary's words on the electrothermal part: its law and Table 2 from the circuit."""
+    if law_fit is None or circuit is None:
+        return ""
+    diff = [circuit["readings_c"][(p.at["freq_hz"], p.at["duty"])] - p.model_c
+            for p in table2_cmp.points if p.dataset == "pwm"]
+    law = law_fit.law
+    return (f"; through the bench circuit around the electrothermal heater (diode law N = "
+            f"{law.n:.3f}, RS = {law.rs_ohm:.3g} ohm) within "
+            f"{max(abs(d) for d in diff):.3f} K of the thermal-only deck")
 
 
 __all__ = ["DemoResult", "SpiceThermalError", "run_demo"]

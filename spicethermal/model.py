@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .core.diode import DiodeLaw
 from .core.errors import DataFormatError, SimulationError
 from .core.ladder import Cauer, Foster
 from .core.network import Network, Schedule, Trajectory, linear_response
@@ -31,8 +32,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
 
 MODEL_FORMAT = "spicethermal-model/3"
+#: The version that adds the ``electrical`` key (the heater's Vf(I, T)); a model without it is
+#: written as /3, which older readers read.
+MODEL_FORMAT_ELECTRICAL = "spicethermal-model/4"
 #: Model-file formats :meth:`ThermalModel.from_dict` reads (see docs/model-format.md).
-MODEL_FORMATS_READ = ("spicethermal-model/1", "spicethermal-model/2", MODEL_FORMAT)
+MODEL_FORMATS_READ = ("spicethermal-model/1", "spicethermal-model/2", MODEL_FORMAT,
+                      MODEL_FORMAT_ELECTRICAL)
 REFERENCES = ("ambient", "case")
 
 
@@ -52,6 +57,8 @@ class ThermalModel:
     #: Heat capacity (J/K) of the reference node itself (a vendor's case capacitance): inert
     #: with an ideal reference, exported to the thermal ground when coupled.
     case_c_j_per_k: float = 0.0
+    #: The heater diode's forward voltage Vf(I, T) (``export --electrothermal``), or None.
+    electrical: DiodeLaw | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.ladder, Foster | Cauer):
@@ -71,6 +78,8 @@ class ThermalModel:
             if node is not None and int(node) >= self.ladder.order:
                 raise DataFormatError(f"effect {e.name}: node {int(node)} does not exist in a "
                                       f"{self.ladder.order}-stage ladder")
+        if self.electrical is not None and not isinstance(self.electrical, DiodeLaw):
+            raise DataFormatError("model: electrical must be a DiodeLaw")
         object.__setattr__(self, "effects", effects)
         object.__setattr__(self, "provenance", MappingProxyType(dict(self.provenance)))
 
@@ -278,15 +287,15 @@ class ThermalModel:
 
     # -- files ---------------------------------------------------------------------------
     def to_dict(self) -> dict:
-        """The ``spicethermal-model/3`` document (docs/model-format.md, schema in
-        ``spicethermal/data/model.schema.json``).
+        """The ``spicethermal-model/3`` document, ``/4`` with an ``electrical`` law
+        (docs/model-format.md, schema in ``spicethermal/data/model.schema.json``).
 
         >>> d = ThermalModel(Cauer([1.0, 2.0], [0.0, 3.0]), reference="case").to_dict()
         >>> d["format"], d["stages"][0], d["reference"]
         ('spicethermal-model/3', {'r_k_per_w': 1.0, 'c_j_per_k': 0.0}, 'case')
         """
         out = {
-            "format": MODEL_FORMAT,
+            "format": MODEL_FORMAT if self.electrical is None else MODEL_FORMAT_ELECTRICAL,
             "topology": self.ladder.topology,
             "stages": [{"r_k_per_w": r, "c_j_per_k": c}
                        for r, c in zip(self.ladder.r, self.ladder.c, strict=True)],
@@ -297,6 +306,8 @@ class ThermalModel:
         }
         if self.case_c_j_per_k:
             out["case_c_j_per_k"] = self.case_c_j_per_k
+        if self.electrical is not None:
+            out["electrical"] = self.electrical.to_dict()
         return out
 
     @classmethod
@@ -342,14 +353,21 @@ class ThermalModel:
         provenance = data.get("provenance", {}) or {}
         if not isinstance(provenance, Mapping):
             raise DataFormatError(f"{source}: 'provenance' must be an object")
+        electrical = None
+        if data.get("electrical") is not None:
+            if data["format"] != MODEL_FORMAT_ELECTRICAL:
+                raise DataFormatError(f"{source}, key electrical: a diode law needs format "
+                                      f"{MODEL_FORMAT_ELECTRICAL!r}")
+            electrical = DiodeLaw.from_dict(data["electrical"], source)
         try:
             model = cls(ladder, tuple(Effect.from_dict(e) for e in effects),
-                        data.get("reference", "ambient"), provenance, float(case_c))
+                        data.get("reference", "ambient"), provenance, float(case_c), electrical)
         except DataFormatError as exc:
             raise DataFormatError(f"{source}: {exc}") from None
         placed = next((e for e in model.effects if e.physical_nodes and "node" in e.params),
                       None)
-        if placed is not None and topology == "foster" and data["format"] != MODEL_FORMAT:
+        if placed is not None and topology == "foster" and data["format"] in \
+                MODEL_FORMATS_READ[:2]:
             raise DataFormatError(
                 f"{source}: {data['format']} puts the {placed.name} at node "
                 f"{int(placed.params['node'])} of the Foster network, which is no physical "
@@ -358,12 +376,12 @@ class ThermalModel:
         return model
 
     def save(self, path: str | Path) -> Path:
-        """Write the ``spicethermal-model/3`` JSON file atomically."""
+        """Write the ``spicethermal-model/3`` (``/4`` with a diode law) JSON file atomically."""
         return atomic_write_text(path, dumps_json(self.to_dict(), indent=2) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> ThermalModel:
-        """Read a ``spicethermal-model/3`` (or ``/2``, ``/1``) JSON file."""
+        """Read a ``spicethermal-model/4`` (or ``/3``, ``/2``, ``/1``) JSON file."""
         return cls.from_dict(read_json(path), str(path))
 
 

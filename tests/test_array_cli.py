@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spicethermal.cli import main as cli
 from spicethermal.array.model import ArrayModel, is_array_document
 from spicethermal.bench.array_devices import ArrayGeometry
 from spicethermal.bench.session import run_bench
+from spicethermal.cli import main as cli
 from spicethermal.core.ladder import Foster
 from spicethermal.model import ThermalModel
 from spicethermal.spice.lib import Pins, render_lib
@@ -80,6 +80,12 @@ def test_array_only_and_single_only_options_are_refused_in_one_line(
                      str(tmp_path / "x.lib")])
     _one_line_error(capsys, code, "--topology", "TJ1 ... TJN TREF")
     assert not (tmp_path / "x.lib").exists()
+    code = cli.main(["export", str(square_model), "--electrothermal", "-o",
+                     str(tmp_path / "x.lib")])
+    _one_line_error(capsys, code, "--electrothermal", "array model")
+    assert not (tmp_path / "x.lib").exists()
+    code = cli.main(["drive", str(square_model), *DRIVE, "--text", "ab", "--circuit"])
+    _one_line_error(capsys, code, "--circuit", "not for an array")
     code = cli.main(["drive", str(square_model), "--t-max", "85", "--target", "70",
                      "--text", "ab"])
     _one_line_error(capsys, code, "--actuation")

@@ -153,7 +153,7 @@ def test_heavy_link_faults_still_lose_nothing(clean_small, tmp_path, rate):
 
 def test_a_noisy_line_is_not_reported_as_a_silent_device(tmp_path):
     # 10 % of the bytes damaged: after the handshake no 50-byte frame gets through intact
-    with pytest.raises(InstrumentError, match=r"noisy line, not a silent device: 40 resend "
+    with pytest.raises(InstrumentError, match=r"noisy line, not a silent device: \d+ resend "
                                               r"requests .*byte-error rate of about \d\.\de-0[12]"):
         with bc.BenchClient("sim://actuator?seed=2&faults=0.1") as bench:
             bench.rth(0.094, 10.0, 1e-4, 16)

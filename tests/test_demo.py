@@ -22,7 +22,7 @@ from spicethermal.report.html import SECTION_IDS, figure_is_nontrivial
 
 #: A unit at the end of an axis label or a table header: ``(K)``, ``(K/W)``, ``(°C)``, ``(%)``,
 #: ``(1)`` for a ratio, with an SI prefix where it applies.
-UNIT = re.compile(r"\((?:[mµunk]?(?:K/W|J/K|K|s|V|W|Hz|B)|°C|%|1)\)\s*$")
+UNIT = re.compile(r"\((?:[mµunk]?(?:K/W|J/K|K|s|V|W|Hz|B|A|Ω)|°C|%|1)\)\s*$")
 
 
 @pytest.fixture(scope="module")
@@ -134,7 +134,8 @@ def test_report_has_every_section_and_real_figures(demo):
     page.feed(demo.report.read_text())
     assert set(SECTION_IDS) <= set(page.ids)
     for needed in ("fig2_calibration", "fig7_fit", "fig8_impedance", "table1_mur880e",
-                   "table2_delta", "diagnosis_before_after", "diagnosis_candidates"):
+                   "table2_delta", "diagnosis_before_after", "diagnosis_candidates",
+                   "diode_law", "circuit_pwm"):
         assert any(needed in src for src in page.images), needed
     for src in page.images:
         path = demo.report.parent / src
@@ -143,6 +144,10 @@ def test_report_has_every_section_and_real_figures(demo):
     text = " ".join(page.text)
     assert re.search(r"Verdict: (named|approximate) — temperature-coefficient", text)
     assert ".SUBCKT ACTUATOR TJ TREF" in text  # the usage snippet and a netlist
+    assert ".SUBCKT ACTUATOR_HEATER A K TJ TREF" in text  # the electrothermal part
+    # Table 2 from the circuit deck beside the thermal-only deck (issue #46)
+    circuit = re.search(r"agrees with the thermal-only deck within ([\d.]+) K", text)
+    assert circuit and float(circuit[1]) < 0.02
 
 
 @pytest.mark.slow
@@ -186,7 +191,9 @@ def test_report_tables_have_units_in_their_headers(demo):
 
 @pytest.mark.slow
 def test_demo_outputs_are_usable(demo):
-    assert len(demo.libs) == 9 and all(p.read_text().count(".SUBCKT") == 1 for p in demo.libs)
+    assert len(demo.libs) == 12 and all(p.read_text().count(".SUBCKT") == 1 for p in demo.libs)
+    heater = ThermalModel.load(demo.out / "actuator_model.json").electrical
+    assert heater is not None and heater.n == pytest.approx(1.75, abs=0.05)  # the bench's diode
     model = ThermalModel.load(demo.out / "actuator_model.json")
     assert model.rth == pytest.approx(146.0 * (1 - 2e-3 * 13.7), rel=0.02)  # Rth at its rise
     better = ThermalModel.load(demo.out / "actuator_model_temperature-coefficient.json")
@@ -245,7 +252,7 @@ def test_report_numbers_agree_with_the_files_and_the_command_line(demo, tmp_path
     tables = {t[0][0][1]: t[1:] for t in page.tables}
     # every .lib written is counted and listed once (the summary said 6 of 9)
     libs = sorted((demo.out / "lib").glob("*.lib"))
-    assert len(libs) == len(demo.libs) == 9
+    assert len(libs) == len(demo.libs) == 12
     assert f"{len(libs)} .lib files in" in demo.summary[4]
     assert sorted(row[0][1] for row in tables["file"]) == sorted(f"lib/{p.name}" for p in libs)
     # absolute temperatures, as the copy-paste deck reads V(TJ) and as `export` writes them

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spicethermal.predict import PowerProfile, predict, pwl_response
 from spicethermal.cli.main import main
 from spicethermal.core.errors import DataFormatError
 from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect
 from spicethermal.io.bundle import format_columns, read_columns
 from spicethermal.model import Schedule, ThermalModel
+from spicethermal.predict import PowerProfile, predict, pwl_response
 
 LADDER = Foster.from_tau([0.5, 2.0, 4.0], [1e-4, 1e-2, 1.0])
 

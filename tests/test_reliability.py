@@ -342,6 +342,7 @@ DIRECT_WRITES = {
         "worker's private temporary copy",
     ("engines/interface.py", "lib.write_text("): "private temporary directory",
     ("spice/array_lib.py", "lib.write_text("): "private temporary directory",
+    ("engines/circuit.py", "lib.write_text("): "private temporary directory",
 }
 WRITE_CALL = re.compile(r"\.write_(text|bytes)\(|\bopen\([^)]*['\"][wax]b?['\"]|\.savefig\(|"
                         r"shutil\.copy|np\.save|\.to_csv\(|json\.dumps?\(")

@@ -285,7 +285,7 @@ def test_version_1_files_are_read():
     with pytest.raises(DataFormatError, match="case_c_j_per_k"):
         ThermalModel.from_dict({**v1, "case_c_j_per_k": "big"})
     with pytest.raises(DataFormatError, match="format"):
-        ThermalModel.from_dict({**v1, "format": "spicethermal-model/4"})
+        ThermalModel.from_dict({**v1, "format": "spicethermal-model/5"})
 
 
 # ------------------------------------------------------------------ real vendor networks

@@ -5,6 +5,12 @@
 
 uint8_t st_fw_version[3] = {ST_FW_MAJOR, ST_FW_MINOR, ST_FW_PATCH};
 
+/* Procedures on the calibration fixture (no heating power regulated while they settle). */
+static int on_fixture(const st_proc_t *p)
+{
+    return p->proc == ST_PROC_CAL || p->proc == ST_PROC_FORWARD;
+}
+
 static int32_t elapsed(uint32_t now, uint32_t then)
 {
     return (int32_t)(now - then);
@@ -52,6 +58,7 @@ static void send_info(st_core_t *c)
     b[5] = (uint8_t)ST_RING_FRAMES;
     st_put_u16(b + 6, (uint16_t)(bd->caps | (bd->ports > 1 ? bd->ports << ST_CAP_PORTS_SHIFT : 0)));
     st_put_u32(b + 8, ST_SETTLE_MAX_MS);
+    st_put_u32(b + 12, bd->i_sense_ua);
     for (i = 0; i < sizeof bd->name && bd->name[i]; i++) {
         b[n++] = (uint8_t)bd->name[i];
     }
@@ -200,6 +207,13 @@ void st_finish(st_core_t *c, uint8_t status)
 }
 
 /* ------------------------------------------------------------------ commands */
+static void fixture(const st_board_t *bd, int32_t setpoint_mc)
+{
+    int32_t span = bd->fixture_max_mc - bd->fixture_min_mc;
+    uint32_t num = (uint32_t)(setpoint_mc - bd->fixture_min_mc);
+    hal_fixture_dac(st_dac_for_current(num, (uint32_t)span, bd->dac_max));
+}
+
 static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
 {
     st_proc_t *p = &c->p;
@@ -217,13 +231,38 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
         if (p->n == 0 || p->setpoint_mc < bd->fixture_min_mc ||
             p->setpoint_mc > bd->fixture_max_mc || p->settle_ms > ST_SETTLE_MAX_MS)
             return ST_E_PARAM;
-        {
-            int32_t span = bd->fixture_max_mc - bd->fixture_min_mc;
-            uint32_t num = (uint32_t)(p->setpoint_mc - bd->fixture_min_mc);
-            hal_fixture_dac(st_dac_for_current(num, (uint32_t)span, bd->dac_max));
-        }
+        fixture(bd, p->setpoint_mc);
         st_heater_off();
         break;
+    case ST_CMD_FORWARD: {
+        uint8_t k;
+        if (len < ST_LEN_FORWARD_FIXED || len != ST_LEN_FORWARD_FIXED + 4u * b[14])
+            return ST_E_LENGTH;
+        p->proc = ST_PROC_FORWARD;
+        p->setpoint_mc = (int32_t)st_get_u32(b);
+        p->settle_ms = st_get_u32(b + 4);
+        p->window_us = st_get_u16(b + 8); /* the pulse */
+        p->n = st_get_u16(b + 10);
+        p->interval_ms = st_get_u16(b + 12);
+        p->count = b[14];
+        if (p->n == 0 || p->count == 0 || p->count > ST_FORWARD_MAX || p->window_us < 10 ||
+            p->window_us > 4000 || p->interval_ms == 0 || p->setpoint_mc < bd->fixture_min_mc ||
+            p->setpoint_mc > bd->fixture_max_mc || p->settle_ms > ST_SETTLE_MAX_MS ||
+            (uint32_t)p->n * p->count > 0xFFFFu)
+            return ST_E_PARAM;
+        for (k = 0; k < p->count; k++) {
+            uint32_t i_ua = st_get_u32(b + ST_LEN_FORWARD_FIXED + 4u * k);
+            if (i_ua == 0 || i_ua > bd->i_full_ua) return ST_E_PARAM;
+            p->dac[k] = st_dac_for_current(i_ua, bd->i_full_ua, bd->dac_max);
+        }
+        /* one pulse per period of twice its length; the cut ends it, the reading is in its
+         * middle */
+        p->on_ns = (uint32_t)p->window_us * 1000U;
+        p->period_ns = 2U * p->on_ns;
+        fixture(bd, p->setpoint_mc);
+        st_heater_off();
+        break;
+    }
     case ST_CMD_RTH:
         if (len != 12) return ST_E_LENGTH;
         p->proc = ST_PROC_RTH;
@@ -282,7 +321,7 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
     default:
         return ST_E_UNKNOWN;
     }
-    if (p->proc != ST_PROC_CAL) {
+    if (!on_fixture(p)) {
         uint32_t i_ua = st_current_for_power(p->power_uw, bd->vd_nominal_uv);
         hal_fixture_dac(0); /* the device is off the calibration hot plate */
         hal_release();
@@ -294,7 +333,9 @@ static uint8_t start(st_core_t *c, uint8_t type, const uint8_t *b, uint8_t len)
     p->t_clock = now;
     p->t_status = now + ST_STATUS_MS * 1000U;
     p->t_next = now + ST_CONTROL_TICK_MS * 1000U;
-    if (p->proc != ST_PROC_COOLING) {
+    if (p->proc == ST_PROC_FORWARD) {
+        p->total = (uint16_t)(p->n * p->count);
+    } else if (p->proc != ST_PROC_COOLING) {
         p->total = p->n;
     }
     p->state = S_SETTLE;
@@ -407,6 +448,23 @@ static void next_reading(st_core_t *c, uint32_t now)
     p->state = S_POWER;
 }
 
+/* FORWARD: the next current pulse (reading k of the n at current k / n), or the end. */
+static void next_pulse(st_core_t *c)
+{
+    st_proc_t *p = &c->p;
+    if (p->k >= p->total) {
+        st_finish(c, ST_OK);
+        return;
+    }
+    hal_release();
+    hal_heater_dac(p->dac[p->k / p->n]);
+    hal_heater_pwm(p->period_ns, p->on_ns); /* starts with the on-phase */
+    hal_cut(1);                             /* ... which the cut ends */
+    hal_adc_on_phase();
+    st_arm(c, ST_KIND_FORWARD);
+    p->state = S_PULSE;
+}
+
 /* Advance the procedure's run time. Polls come at least every ST_STATUS_MS, so the unsigned
  * difference never wraps; the total counts milliseconds (49 days) and never wraps with the
  * microsecond clock (71.6 min). */
@@ -428,6 +486,7 @@ static void step(st_core_t *c)
     advance(p, now);
     if (p->state == S_SETTLE || p->state == S_GAP || p->state == S_CAL || p->state == S_CURVE ||
         p->state == S_SCAN) {
+        /* (S_PULSE lasts a few milliseconds at most: no heartbeat) */
         if (due(now, p->t_status)) {
             send_status(c);
             p->t_status = now + ST_STATUS_MS * 1000U;
@@ -441,7 +500,10 @@ static void step(st_core_t *c)
             regulate(c);
         }
         if (p->run_ms >= p->settle_ms) {
-            if (p->proc == ST_PROC_CAL) {
+            if (p->proc == ST_PROC_FORWARD) {
+                p->k = 0;
+                next_pulse(c);
+            } else if (p->proc == ST_PROC_CAL) {
                 p->state = S_CAL;
                 p->k = 0;
                 hal_adc_at(now);
@@ -453,7 +515,7 @@ static void step(st_core_t *c)
             }
         } else if (due(now, p->t_next)) {
             p->t_next = now + ST_CONTROL_TICK_MS * 1000U;
-            if (p->proc != ST_PROC_CAL) {
+            if (!on_fixture(p)) {
                 hal_adc_on_phase();
                 st_arm(c, ST_KIND_POWER);
             }
@@ -483,7 +545,21 @@ static void step(st_core_t *c)
         p->state = S_GAP;
         break;
     case S_GAP:
-        if (due(now, p->t_next)) next_reading(c, now);
+        if (!due(now, p->t_next)) break;
+        if (p->proc == ST_PROC_FORWARD) {
+            next_pulse(c);
+        } else {
+            next_reading(c, now);
+        }
+        break;
+    case S_PULSE:
+        if (!p->adc_ready) break;
+        p->adc_armed = 0;
+        st_record(c, ST_KIND_FORWARD, p->window_us / 2u);
+        st_heater_off();
+        p->k++;
+        p->t_next = now + (uint32_t)p->interval_ms * 1000U;
+        p->state = S_GAP;
         break;
     case S_CURVE:
         if (!p->adc_ready) break;
@@ -569,7 +645,8 @@ void st_core_poll(st_core_t *c)
     if (c->p.state != S_IDLE) {
         uint32_t now = hal_now_us();
         uint32_t w = c->p.t_status;
-        if (c->p.state == S_POWER || c->p.state == S_WINDOW || c->p.state == S_SCAN) {
+        if (c->p.state == S_POWER || c->p.state == S_WINDOW || c->p.state == S_SCAN ||
+            c->p.state == S_PULSE) {
             /* waiting for the ADC interrupt, no heartbeat in these states: a stale t_status
              * would make the core busy-poll (and froze the simulator at a float tie) */
             w = now + ST_STATUS_MS * 1000U;

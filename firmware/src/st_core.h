@@ -31,6 +31,8 @@ typedef struct {
     uint16_t window_us, n, interval_ms;
     uint8_t per_decade;
     int32_t setpoint_mc;
+    uint16_t dac[ST_FORWARD_MAX]; /* FORWARD: the currents' DAC codes */
+    uint8_t count;
     /* state machine */
     uint8_t state;
     uint32_t t_start, t_next, t_status, t_cut;

@@ -1,4 +1,4 @@
-/* Internals of the core shared by its two files: st_core.c (commands, the four single-heater
+/* Internals of the core shared by its two files: st_core.c (commands, the five single-heater
  * procedures, FIFO, link) and st_array.c (the coupling procedure of an array board). */
 #ifndef ST_CORE_INT_H
 #define ST_CORE_INT_H
@@ -13,6 +13,7 @@ enum {
     S_GAP,        /* between readings */
     S_CURVE,      /* cooling: log-spaced readings after the cut */
     S_CAL,        /* calibration readings */
+    S_PULSE,      /* forward voltage: reading armed in a current pulse */
     S_SCAN        /* array board: reading the ports one after the other */
 };
 

@@ -30,6 +30,7 @@ typedef struct {
     uint16_t caps;         /* ST_CAP_* bits reported in INFO */
     uint8_t adc_bits;
     char name[16];
+    uint32_t i_sense_ua;   /* the sense (calibration) current of block B, reported in INFO */
     uint8_t ports;         /* heaters (and TSP diodes) of an array board; 0 or 1: one */
     uint16_t scan_us;      /* array board: multiplexer settling + conversion per port */
 } st_board_t;

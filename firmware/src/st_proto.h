@@ -6,9 +6,9 @@
 #define ST_PROTO_H
 #include <stdint.h>
 
-#define ST_PROTO_VERSION 2u
+#define ST_PROTO_VERSION 4u
 #define ST_FW_MAJOR 1u
-#define ST_FW_MINOR 2u
+#define ST_FW_MINOR 3u
 #define ST_FW_PATCH 0u
 
 #define ST_MAX_PAYLOAD 48u
@@ -27,12 +27,15 @@
                                   t_first_us u32, t_last_ms u32, per_decade u8 */
 #define ST_CMD_PWM 0x13u       /* power_uw u32, freq_mhz u32, duty_ppm u32, settle_ms u32,
                                   window_us u16, n u16, interval_ms u16 */
-#define ST_CMD_COUPLING 0x14u  /* heater u8, ports u8, power_uw u32, settle_ms u32, window_us u16,
-                                  n u16, t_first_us u32, t_last_ms u32, per_decade u8 */
+#define ST_CMD_FORWARD 0x14u   /* setpoint_mc i32, settle_ms u32, pulse_us u16, n u16,
+                                  interval_ms u16, count u8, current_ua u32 x count (v3) */
+#define ST_CMD_COUPLING 0x15u  /* heater u8, ports u8, power_uw u32, settle_ms u32, window_us u16,
+                                  n u16, t_first_us u32, t_last_ms u32, per_decade u8 (v4) */
 
 /* device -> host */
 #define ST_MSG_INFO 0x80u   /* proto u8, fw_major u8, fw_minor u8, fw_patch u8, adc_bits u8,
-                               ring u8, caps u16, settle_max_ms u32, name (ASCII, rest) */
+                               ring u8, caps u16, settle_max_ms u32, i_sense_ua u32 (v3),
+                               name (ASCII, rest) */
 #define ST_MSG_ACK 0x81u    /* cmd_seq u16, cmd_type u8, status u8 */
 #define ST_MSG_SAMPLE 0x82u /* proc u8, kind u8, index u32, t_us u32, v_tsp_uv i32, v_d_uv i32,
                                i_ua i32, tamb_mc i32, taux_mc i32, code[5] u16 */
@@ -44,8 +47,10 @@
 
 #define ST_LEN_SAMPLE 40u
 #define ST_LEN_ARRAY_SAMPLE 41u
+#define ST_LEN_INFO_FIXED 16u
+#define ST_LEN_FORWARD_FIXED 15u
+#define ST_FORWARD_MAX 8u /* currents of one FORWARD command */
 #define ST_LEN_COUPLING 23u
-#define ST_LEN_INFO_FIXED 12u
 
 /* Limits the device enforces (a longer time is refused with ST_E_PARAM). Settling is timed in
  * milliseconds, immune to the 32-bit microsecond clock's wrap; ST_SETTLE_MAX_MS is reported
@@ -72,14 +77,16 @@
 #define ST_PROC_RTH 2u
 #define ST_PROC_COOLING 3u
 #define ST_PROC_PWM 4u
-#define ST_PROC_COUPLING 5u
+#define ST_PROC_FORWARD 5u
+#define ST_PROC_COUPLING 6u
 
 /* sample kinds */
 #define ST_KIND_CURVE 0u   /* cooling-curve point; t_us from the cut */
 #define ST_KIND_STEADY 1u  /* steady reading at the end of a sample window; t_us = window */
 #define ST_KIND_CAL 2u     /* calibration reading (heater off); t_us from the reading start */
 #define ST_KIND_POWER 3u   /* on-phase reading (heater current and voltage); t_us = 0 */
-#define ST_KIND_COLD 4u    /* coupling: every heater off, before heating; t_us from the start */
+#define ST_KIND_FORWARD 4u /* forward-voltage reading in a current pulse; t_us from its start */
+#define ST_KIND_COLD 5u    /* coupling: every heater off, before heating; t_us from the start */
 
 /* capability bits of INFO.caps */
 #define ST_CAP_IDEAL_HOLD 0x0001u /* the TSP is held at the window start (no window cooling) */

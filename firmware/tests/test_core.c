@@ -199,7 +199,7 @@ static void board(hh_device_t *d)
 {
     st_board_t b = {{{-78125, 1600000, 800}, {78125, 0, 16}, {78125, 0, 160},
                      {78125, 0, 1600}, {78125, -8000000, 800}},
-                    250000U, 1023, 700000U, -10000, 90000, 0, 10, "test", 0, 0};
+                    250000U, 1023, 700000U, -10000, 90000, 0, 10, "test", 1000U, 0, 0};
     d->s.board = b;
 }
 
@@ -265,6 +265,7 @@ static void test_core(void)
     CHECK(fr.f[1].type == ST_MSG_INFO && fr.f[1].seq == 1 &&
               fr.f[1].payload[0] == ST_PROTO_VERSION && fr.f[1].payload[1] == ST_FW_MAJOR &&
               st_get_u32(fr.f[1].payload + 8) == ST_SETTLE_MAX_MS &&
+              st_get_u32(fr.f[1].payload + 12) == 1000U &&
               memcmp(fr.f[1].payload + ST_LEN_INFO_FIXED, "test", 4) == 0,
           "info");
     /* the same command again is not executed twice */
@@ -449,6 +450,83 @@ static void test_long_settle(void)
     hh_free(d);
 }
 
+/* FORWARD: n pulses at each of count currents on the fixture, one reading in each pulse's
+ * middle; the heater off between them; malformed commands refused. */
+static void test_forward(void)
+{
+    hh_device_t *d = hh_new();
+    static frames_t fr;
+    uint8_t pl[ST_LEN_FORWARD_FIXED + 4 * ST_FORWARD_MAX];
+    int i, forward = 0, other = 0, done = -1, pwm_on = 0, cuts = 0, fixture_set = 0;
+    uint32_t i_ua[3] = {5000U, 100000U, 250000U};
+    board(d);
+    hh_init(d);
+    pl[0] = ST_PROTO_VERSION;
+    send(d, ST_CMD_HELLO, 1, pl, 1);
+    st_put_u32(pl, 45000);  /* 45 degC */
+    st_put_u32(pl + 4, 2000);
+    st_put_u16(pl + 8, 40); /* 40 us pulses */
+    st_put_u16(pl + 10, 2);
+    st_put_u16(pl + 12, 20);
+    pl[14] = 3;
+    for (i = 0; i < 3; i++) st_put_u32(pl + 15 + 4 * i, i_ua[i]);
+    send(d, ST_CMD_FORWARD, 2, pl, 15 + 12);
+    CHECK(d->core.p.proc == ST_PROC_FORWARD && d->core.p.total == 6 &&
+              d->core.p.dac[1] == st_dac_for_current(100000U, 250000U, 1023),
+          "forward parameters parsed (total %u)", d->core.p.total);
+    for (i = 0; i < (int)d->s.n_ops; i++) {
+        if (d->s.ops[i].op == HH_OP_FIXTURE && d->s.ops[i].a > 0) fixture_set = 1;
+    }
+    CHECK(fixture_set, "the fixture is set to the setpoint");
+    fr.n = 0;
+    {
+        /* the run loop answers ADC requests; count the pulses it sees as PWM ops */
+        int steps = 0;
+        while (steps++ < 100000 && hh_busy(d)) {
+            uint32_t k;
+            for (k = 0; k < d->s.n_ops; k++) {
+                if (d->s.ops[k].op == HH_OP_PWM && d->s.ops[k].a == 80000U &&
+                    d->s.ops[k].b == 40000U) pwm_on++;
+                if (d->s.ops[k].op == HH_OP_CUT && d->s.ops[k].a == 1) cuts++;
+            }
+            run(d, &fr, 0, 1);
+        }
+        run(d, &fr, 0, 50);
+    }
+    for (i = 0; i < fr.n; i++) {
+        const st_frame_t *f = &fr.f[i];
+        if (f->type == ST_MSG_SAMPLE) {
+            if (f->payload[0] == ST_PROC_FORWARD && f->payload[1] == ST_KIND_FORWARD &&
+                st_get_u32(f->payload + 6) == 20U) {
+                forward++;
+            } else {
+                other++;
+            }
+        }
+        if (f->type == ST_MSG_DONE) {
+            done = f->payload[1];
+            CHECK(st_get_u16(f->payload + 2) == 6, "done counts 6 samples");
+        }
+    }
+    CHECK(done == 0 && forward == 6 && other == 0, "forward: done %d, %d readings, %d other",
+          done, forward, other);
+    CHECK(pwm_on == 6 && cuts == 6, "one 40 us pulse per reading, each cut (%d, %d)", pwm_on,
+          cuts);
+    /* refused: bad length, no current, a current above full scale */
+    send(d, ST_CMD_FORWARD, 3, pl, 15 + 8);
+    pl[14] = 0;
+    send(d, ST_CMD_FORWARD, 4, pl, 15);
+    pl[14] = 1;
+    st_put_u32(pl + 15, 250001U);
+    send(d, ST_CMD_FORWARD, 5, pl, 15 + 4);
+    fr.n = 0;
+    collect(d, &fr);
+    CHECK(fr.n == 3 && fr.f[0].payload[3] == ST_E_LENGTH && fr.f[1].payload[3] == ST_E_PARAM &&
+              fr.f[2].payload[3] == ST_E_PARAM,
+          "forward refusals (%d frames)", fr.n);
+    hh_free(d);
+}
+
 /* The coupling procedure on an array board of 4 ports: heat port 2, read all. */
 static void test_coupling(void)
 {
@@ -537,6 +615,7 @@ int main(int argc, char **argv)
     test_ring();
     test_core();
     test_long_settle();
+    test_forward();
     test_coupling();
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;

@@ -47,7 +47,8 @@ def main() -> None:
         cobs.append({"kind": "cobs", "raw_hex": raw, "encoded_hex": enc})
 
     messages = [
-        ("hello", 0x1234, p.Hello(2)),
+        ("hello", 0x1234, p.Hello(3)),
+        ("hello_v4", 0x1235, p.Hello(4)),
         ("ack", 7, p.Ack(0x0102)),
         ("nak", 8, p.Nak(0xFFFF)),
         ("abort", 9, p.Abort()),
@@ -56,14 +57,18 @@ def main() -> None:
         ("rth", 12, p.Rth(94000, 120000, 100, 16)),
         ("cooling", 13, p.Cooling(94000, 120000, 100, 16, 100, 60000, 10)),
         ("pwm", 14, p.Pwm(94000, 25000000, 200000, 60000, 100, 8, 100)),
-        ("coupling", 15, p.Coupling(2, 8, 250000, 300000, 100, 4, 100, 300000, 10)),
-        ("info", 1, p.Info(2, 1, 1, 0, 10, 32, 1, 86_400_000, "actuator")),
+        ("forward", 15, p.Forward(45000, 5000, 40, 8, 20, (5000, 20000, 120000, 350000))),
+        ("forward_one", 16, p.Forward(-5000, 0, 10, 1, 1, (1,))),
+        ("coupling", 17, p.Coupling(2, 8, 250000, 300000, 100, 4, 100, 300000, 10)),
+        ("info_v2", 1, p.Info(2, 1, 1, 0, 10, 32, 1, 86_400_000, "actuator")),
+        ("info", 1, p.Info(3, 1, 2, 0, 10, 32, 1, 86_400_000, "actuator", 1000)),
+        ("info_v4", 1, p.Info(4, 1, 3, 0, 10, 32, 0x0801, 86_400_000, "array", 1000)),
         ("command_ack", 0, p.CommandAck(0x1234, 0x01, 0)),
         ("command_ack_busy", 65535, p.CommandAck(13, 0x12, 1)),
         ("sample", 300, p.Sample(3, 0, 123456, 100, -27400, 641000, 134000, 25012, 24950,
                                   560, 131, 274, 256, 711)),
         ("sample_zeros", 0, p.Sample(0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)),
-        ("array_sample", 301, p.ArraySample(5, 0, 123457, 120, -27400, 641000, 134000, 25012,
+        ("array_sample", 301, p.ArraySample(6, 0, 123457, 120, -27400, 641000, 134000, 25012,
                                             24950, 560, 131, 274, 256, 711, 7)),
         ("status", 42, p.Status(3, 1, 5, 59, 61000)),
         ("done", 43, p.Done(3, 0, 59, 1000)),
@@ -77,7 +82,7 @@ def main() -> None:
                  "payload_hex": payload.hex(), "wire_hex": msg.frame(seq).hex()}
         for k, v in msg.__dict__.items():
             if k != "next_seq":
-                entry[f"f_{k}"] = v
+                entry[f"f_{k}"] = list(v) if isinstance(v, tuple) else v
         frames.append(entry)
     for seq, payload in ((0xFFFF, bytes(48)), (0x00FF, b"\xff" * 48), (0x0100, b"\x00\x01")):
         frames.append({"kind": "frame", "name": f"raw_{seq:04x}", "type": 0x82, "seq": seq,

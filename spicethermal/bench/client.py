@@ -10,15 +10,17 @@ Layers, bottom up:
   (firmware/PROTOCOL.md §4, module :mod:`spicethermal.bench.link`): in-order, exactly-once
   delivery of device frames with cumulative ACKs, NAK/resend on a bad frame or a gap, command
   resend when SYNC shows the device never got it, timeouts and a silent-device error.
-* :class:`BenchClient` — handshake (protocol and firmware version) and the four procedures,
-  each returning the samples it received, checked complete (DONE count, contiguous indices).
+* :class:`BenchClient` — handshake (protocol and firmware version) and the procedures (the
+  four of the paper, the forward voltage of protocol 3 and an array board's coupling of
+  protocol 4), each returning the samples it received, checked complete (DONE count,
+  contiguous indices).
 
 Whole runs that write bundles are in :mod:`spicethermal.bench.session`.
 
 >>> # a simulated bench, quickly: just the handshake
 >>> with BenchClient("sim://actuator?seed=1") as bench:
 ...     bench.info.name, bench.info.firmware
-('actuator', '1.2.0')
+('actuator', '1.3.0')
 """
 
 from __future__ import annotations
@@ -36,6 +38,10 @@ SUPPORTED_FIRMWARE_MAJOR = 1
 ACTIONS = ("calibrate", "rth", "cooling", "pwm")
 #: Procedures of array boards only, never part of a whole run.
 ARRAY_ACTIONS = ("coupling",)
+#: The first protocol version with the FORWARD procedure and the sense current in INFO.
+FORWARD_PROTOCOL = 3
+#: The first protocol version with the COUPLING procedure (array boards, ports in INFO's caps).
+COUPLING_PROTOCOL = 4
 
 
 # --------------------------------------------------------------------------- progress
@@ -158,9 +164,10 @@ class BenchClient:
         if not isinstance(info, p.Info):
             raise InstrumentError(f"{self.url}: expected INFO after HELLO, got "
                                   f"{type(info).__name__}")
-        if info.proto != p.PROTOCOL_VERSION:
+        if info.proto not in p.PROTOCOLS:
             raise InstrumentError(f"{self.url}: the device speaks protocol version {info.proto}, "
-                                  f"this client speaks {p.PROTOCOL_VERSION}; update one of them")
+                                  f"this client speaks {' and '.join(map(str, p.PROTOCOLS))}; "
+                                  f"update one of them")
         if info.fw_major != SUPPORTED_FIRMWARE_MAJOR:
             raise InstrumentError(f"{self.url}: wrong firmware version {info.firmware} (board "
                                   f"{info.name!r}); this client needs firmware "
@@ -239,9 +246,32 @@ class BenchClient:
                                        _u16(n, "n"), round(t_first_s * 1e6), _ms(t_last_s),
                                        int(per_decade)), p.PROC_COOLING)
 
+    def forward(self, setpoint_c: float, settle_s: float, pulse_s: float, n: int,
+                interval_s: float, currents_a: Sequence[float]) -> Run:
+        """Forward voltage on the fixture at ``setpoint_c``: ``n`` pulses of ``pulse_s`` at each
+        current (protocol 3; firmware 1.2)."""
+        if self.info.proto < FORWARD_PROTOCOL:
+            raise InstrumentError(f"{self.url}: firmware {self.info.firmware} (protocol "
+                                  f"{self.info.proto}) has no forward-voltage procedure; "
+                                  f"update it to 1.2")
+        if not 1 <= len(currents_a) <= p.FORWARD_MAX:
+            raise DataFormatError(f"forward: give 1 to {p.FORWARD_MAX} currents")
+        currents = tuple(round(i * 1e6) for i in currents_a)
+        if any(not 0 < i < 2 ** 32 for i in currents):
+            raise DataFormatError(f"forward: currents {tuple(currents_a)} must lie in (0, 4294) A")
+        return self._collect(p.Forward(round(setpoint_c * 1e3), self._settle_ms(settle_s),
+                                       _us16(pulse_s), _u16(n, "n"),
+                                       _u16(round(interval_s * 1e3), "interval_ms"), currents),
+                             p.PROC_FORWARD)
+
     def coupling(self, heater: int, power_w: float, settle_s: float, window_s: float, n: int,
                  t_first_s: float, t_last_s: float, per_decade: int) -> Run:
-        """Heat ``heater`` and read every port of an array board (INFO caps: its ports)."""
+        """Heat ``heater`` and read every port of an array board (INFO caps: its ports;
+        protocol 4, firmware 1.3)."""
+        if self.info.proto < COUPLING_PROTOCOL:
+            raise InstrumentError(f"{self.url}: firmware {self.info.firmware} (protocol "
+                                  f"{self.info.proto}) has no coupling procedure; update it "
+                                  f"to 1.3")
         ports = self.info.ports
         if ports < 2:
             raise InstrumentError(f"{self.url}: board {self.info.name!r} (firmware "
@@ -269,8 +299,9 @@ def _check_range(s: p.Sample, url: str) -> None:
     """A TSP reading at the end of the ADC range is clipped, hence wrong: stop, don't record.
 
     Curve points within the first millisecond are exempt: the electrical transient after the
-    cut may drive the amplifier out of range there, and those points are masked anyway."""
-    if s.kind == p.KIND_POWER or (s.kind == p.KIND_CURVE and s.t_us < 1000):
+    cut may drive the amplifier out of range there, and those points are masked anyway; so are
+    readings while the heating current flows (the TSP amplifier saturates, by design)."""
+    if s.kind in (p.KIND_POWER, p.KIND_FORWARD) or (s.kind == p.KIND_CURVE and s.t_us < 1000):
         return
     if s.code_tsp in (0, ADC_MAX_CODE):
         where = "above" if s.code_tsp == ADC_MAX_CODE else "below"

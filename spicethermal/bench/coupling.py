@@ -24,6 +24,7 @@ from ..array.braille import cell_ports
 from ..core.errors import DataFormatError, InstrumentError
 from ..io.coupling import CouplingSection, CouplingTable, Port
 from . import protocol as p
+from .client import COUPLING_PROTOCOL
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import ArrayLike, NDArray
@@ -152,6 +153,9 @@ def measure_coupling(bench: BenchClient, plan: Plan, conv: TspConversion | None,
     -------
     CouplingSection
     """
+    if bench.info.proto < COUPLING_PROTOCOL:
+        raise InstrumentError(f"{bench.url}: firmware {bench.info.firmware} (protocol "
+                              f"{bench.info.proto}) has no coupling procedure; update it to 1.3")
     heaters = bench.info.ports
     if heaters < 2:
         raise InstrumentError(f"{bench.url}: board {bench.info.name!r} (firmware "

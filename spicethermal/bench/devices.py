@@ -104,16 +104,18 @@ class Board:
 
 @dataclass(frozen=True)
 class Diode:
-    """Forward voltage of the heater diode: at the small TSP bias current ``Vf(T) = v25 +
-    slope·(T − 25) + quad·(T − 25)²`` (the TSP; ``quad`` only with the front end's
-    :data:`CURVED_TSP`), at the heating current ``hot_v25 + hot_slope·(T − 25)`` (sets
-    P = I·V)."""
+    """The heater diode. At the small TSP bias (sense) current ``i_bias_a`` its forward voltage
+    is ``Vf(T) = v25 + slope·(T − 25) + quad·(T − 25)²`` (the TSP; ``quad`` only with the front
+    end's :data:`CURVED_TSP`); at any current ``I`` it follows the junction-diode law through
+    that point, ``Vf(T) + n·(k/q)·T·ln(I/i_bias) + rs·(I − i_bias)`` (SPICE's law with
+    ``XTI = 0``, T in kelvin): the heating current's voltage (P = I·V) and the forward-voltage
+    points."""
 
     v25: float = 0.60
     slope_v_per_k: float = -2.0e-3
     quad_v_per_k2: float = -1.5e-6
-    hot_v25: float = 0.70
-    hot_slope_v_per_k: float = -1.8e-3
+    n: float = 1.75
+    rs_ohm: float = 0.57
     i_bias_a: float = 1e-3
 
 
@@ -189,7 +191,7 @@ def _mur880e() -> Preset:
         reference="case",
         board=Board(name="mur880e", i_sense_v_per_a=0.2, i_full_a=25.0, vd_nominal_v=0.95,
                     tamb_v_per_k=0.1),
-        diode=Diode(v25=0.55, hot_v25=0.95, hot_slope_v_per_k=-1.5e-3, i_bias_a=10e-3),
+        diode=Diode(v25=0.55, n=1.5, rs_ohm=0.0125, i_bias_a=10e-3),
         heatsink=(0.3, 300.0),
         powers_w=(10.0, 20.0),
         pwm_power_w=10.0,

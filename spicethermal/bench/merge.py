@@ -1,7 +1,7 @@
 """Adding a run's data sets to a bundle, losing nothing (docs/reliability.md).
 
 A rerun gets a new file name (``cooling_3.csv``, ``calibration_2.csv``); a single section's
-previous entry (calibration, pwm, the Rth summary) moves to the manifest's ``superseded``
+previous entry (calibration, forward, pwm, the Rth summary) moves to the manifest's ``superseded``
 list and its file stays; only ``replace_names`` puts new data in the place of a listed file.
 """
 
@@ -43,8 +43,8 @@ def add_datasets(bundle: Bundle, new: dict, taken: set[str],
     Parameters
     ----------
     bundle : the bundle as it is on disk.
-    new : section -> new data: ``calibration`` and ``pwm`` a table, ``cooling`` a list of
-        tables, ``coupling`` a section, ``rth`` a summary dict (any may be missing).
+    new : section -> new data: ``calibration``, ``forward`` and ``pwm`` a table, ``cooling`` a
+        list of tables, ``coupling`` a section, ``rth`` a summary dict (any may be missing).
     taken : every name in the bundle's directory (new names avoid them; updated).
     replace_names : listed files whose data sets the new ones of the same section replace
         (same name, same place); without them a new data set gets a new name and a single
@@ -66,7 +66,7 @@ def add_datasets(bundle: Bundle, new: dict, taken: set[str],
         return fresh_name(stem, taken)
 
     changes: dict = {}
-    for section in ("calibration", "pwm"):
+    for section in ("calibration", "pwm", "forward"):
         table = new.get(section)
         if table is None:
             continue

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.diode import K_OVER_Q, ZERO_C_K
 from ..core.errors import InstrumentError
 from ..core.ladder import Cauer
 from .devices import CURVED_TSP, CUT_TRANSIENT
@@ -243,10 +244,13 @@ class Frontend:
         x = t_c - 25.0
         return d.v25 + d.slope_v_per_k * x + (d.quad_v_per_k2 * x * x if self.curved_tsp else 0.0)
 
-    def v_hot(self, t_c: float) -> float:
-        """Heater diode voltage at the heating current."""
+    def v_diode(self, i_a: float, t_c: float) -> float:
+        """Heater diode voltage at current ``i_a`` (the heating current, a forward-voltage
+        pulse): the TSP's law at the bias current carried to ``i_a`` by the diode law."""
         d = self.preset.diode
-        return d.hot_v25 + d.hot_slope_v_per_k * (t_c - 25.0)
+        n_vt = d.n * K_OVER_Q * (t_c + ZERO_C_K)
+        return self.v_forward(t_c) + n_vt * math.log(max(i_a, 1e-12) / d.i_bias_a) + \
+            d.rs_ohm * (i_a - d.i_bias_a)
 
     @staticmethod
     def code(v: float) -> int:
@@ -268,7 +272,7 @@ class Frontend:
         noise_v = self.noise_k * abs(d.slope_v_per_k)
         gauss = self.rng.normal
         if heater_on:
-            vd = self.v_hot(tj_c)
+            vd = self.v_diode(current_a, tj_c)
             tsp_pin = 0.0  # the INA saturates low while the heating current flows
             i = current_a
         else:

@@ -19,182 +19,43 @@ Sync(last_cmd_seq=5, busy=1, next_seq=3)
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterator
 from dataclasses import dataclass, fields
 from typing import ClassVar
 
-from ..core.errors import InstrumentError
+from .framing import (  # noqa: F401  (the framing's names, re-exported: one protocol module)
+    CRC_INIT,
+    MAX_PAYLOAD,
+    Frame,
+    FrameError,
+    FrameReader,
+    cobs_decode,
+    cobs_encode,
+    crc16,
+    decode_block,
+    encode_frame,
+)
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 4
+#: Device protocol versions this host speaks: 2 has no FORWARD procedure and no sense current in
+#: INFO, 3 no COUPLING procedure (nor ARRAY_SAMPLE, nor ports in INFO's caps); everything else
+#: is the same.
+PROTOCOLS = (2, 3, 4)
 #: Last cooling-curve sample the device accepts, ms after the cut (ST_CURVE_MAX_MS).
 CURVE_MAX_MS = 2_000_000
-MAX_PAYLOAD = 48
-CRC_INIT = 0xFFFF
 
 # procedures and sample kinds (st_proto.h)
-PROC_CAL, PROC_RTH, PROC_COOLING, PROC_PWM, PROC_COUPLING = 1, 2, 3, 4, 5
-PROC_NAMES = dict(enumerate(("calibrate", "rth", "cooling", "pwm", "coupling"), start=1))
-KIND_CURVE, KIND_STEADY, KIND_CAL, KIND_POWER, KIND_COLD = 0, 1, 2, 3, 4
+PROC_CAL, PROC_RTH, PROC_COOLING, PROC_PWM, PROC_FORWARD, PROC_COUPLING = 1, 2, 3, 4, 5, 6
+PROC_NAMES = {PROC_CAL: "calibrate", PROC_RTH: "rth", PROC_COOLING: "cooling", PROC_PWM: "pwm",
+              PROC_FORWARD: "forward", PROC_COUPLING: "coupling"}
+KIND_CURVE, KIND_STEADY, KIND_CAL, KIND_POWER, KIND_FORWARD, KIND_COLD = 0, 1, 2, 3, 4, 5
+#: Currents of one FORWARD command at most (ST_FORWARD_MAX).
+FORWARD_MAX = 8
 CAP_IDEAL_HOLD = 0x0001
-CAP_PORTS_SHIFT = 8  # INFO caps bits 8..15: the heaters of an array board (0: one heater)
+CAP_PORTS_SHIFT = 8  # INFO caps bits 8..15 (protocol 4): an array board's heaters (0: one)
 ACK_STATUS = {0: "ok", 1: "busy", 2: "bad length", 3: "bad parameter", 4: "unknown command"}
 DONE_STATUS = {0: "ok", 2: "sample buffer overflow (the host read too slowly)"}
 ERROR_CODES = {1: "frame lost for good (no longer in the device's ring buffer)",
                2: "sample buffer overflow", 3: "resend asked for a frame never sent"}
-
-
-class FrameError(InstrumentError):
-    """A received block that is not a valid frame (``reason``: cobs, length or crc)."""
-
-    def __init__(self, reason: str, block: bytes) -> None:
-        super().__init__(f"bad frame ({reason}): {block.hex()}")
-        self.reason = reason
-        self.block = block
-
-
-# ------------------------------------------------------------------------------- CRC, COBS
-def _crc_table() -> tuple[int, ...]:
-    table = []
-    for byte in range(256):
-        crc = byte << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
-        table.append(crc & 0xFFFF)
-    return tuple(table)
-
-
-_CRC_TABLE = _crc_table()
-
-
-def crc16(data: bytes, crc: int = CRC_INIT) -> int:
-    """CRC-16/CCITT-FALSE of ``data``.
-
-    >>> hex(crc16(b"123456789"))
-    '0x29b1'
-    """
-    for b in data:
-        crc = ((crc << 8) & 0xFFFF) ^ _CRC_TABLE[((crc >> 8) ^ b) & 0xFF]
-    return crc
-
-
-def cobs_encode(data: bytes) -> bytes:
-    """COBS-encode ``data`` (the result holds no zero byte; no delimiter appended).
-
-    >>> cobs_encode(b"\\x11\\x22\\x00\\x33").hex()
-    '0311220233'
-    """
-    out = bytearray([0])
-    code_at, code = 0, 1
-    for i, b in enumerate(data):
-        if b == 0:
-            out[code_at] = code
-            code_at, code = len(out), 1
-            out.append(0)
-        else:
-            out.append(b)
-            code += 1
-            if code == 0xFF:
-                out[code_at] = code
-                code = 1
-                if i + 1 == len(data):
-                    return bytes(out)  # a full block ends the data: no trailing code
-                code_at = len(out)
-                out.append(0)
-    out[code_at] = code
-    return bytes(out)
-
-
-def cobs_decode(block: bytes) -> bytes:
-    """Decode one COBS block (no delimiter); raises :class:`FrameError` when malformed.
-
-    >>> cobs_decode(bytes.fromhex("0311220233"))
-    b'\\x11"\\x003'
-    """
-    out = bytearray()
-    i, n = 0, len(block)
-    while i < n:
-        code = block[i]
-        i += 1
-        if code == 0 or i + code - 1 > n:
-            raise FrameError("cobs", bytes(block))
-        chunk = block[i:i + code - 1]
-        if 0 in chunk:
-            raise FrameError("cobs", bytes(block))
-        out += chunk
-        i += code - 1
-        if code != 0xFF and i < n:
-            out.append(0)
-    return bytes(out)
-
-
-# ------------------------------------------------------------------------------- frames
-@dataclass(frozen=True)
-class Frame:
-    """One frame: message type, sequence number and payload bytes."""
-
-    type: int
-    seq: int
-    payload: bytes
-
-
-def encode_frame(type_: int, seq: int, payload: bytes = b"") -> bytes:
-    """Wire form of a frame: COBS(type | seq | payload | crc) followed by ``0x00``.
-
-    >>> encode_frame(0x04, 1).hex()
-    '030401036d2300'
-    """
-    if len(payload) > MAX_PAYLOAD:
-        raise InstrumentError(f"payload of {len(payload)} bytes exceeds {MAX_PAYLOAD}")
-    body = struct.pack("<BH", type_, seq & 0xFFFF) + bytes(payload)
-    body += struct.pack("<H", crc16(body))
-    return cobs_encode(body) + b"\x00"
-
-
-def decode_block(block: bytes) -> Frame:
-    """Decode the bytes between two delimiters; raises :class:`FrameError` (cobs, length, crc).
-
-    >>> decode_block(bytes.fromhex("030401036d23"))
-    Frame(type=4, seq=1, payload=b'')
-    """
-    body = cobs_decode(block)
-    if not 5 <= len(body) <= 5 + MAX_PAYLOAD:
-        raise FrameError("length", bytes(block))
-    if crc16(body[:-2]) != struct.unpack_from("<H", body, len(body) - 2)[0]:
-        raise FrameError("crc", bytes(block))
-    type_, seq = struct.unpack_from("<BH", body)
-    return Frame(type_, seq, bytes(body[3:-2]))
-
-
-class FrameReader:
-    """Split a byte stream at ``0x00`` delimiters and decode each block.
-
-    >>> r = FrameReader()
-    >>> [x for _, x in r.feed(encode_frame(4, 1) + b"\\x05\\x00")][0]
-    Frame(type=4, seq=1, payload=b'')
-    """
-
-    MAX_BLOCK = 2 * (5 + MAX_PAYLOAD) + 8
-
-    def __init__(self) -> None:
-        self._buf = bytearray()
-
-    def feed(self, data: bytes) -> Iterator[tuple[bytes, Frame | FrameError]]:
-        """Yield ``(block, Frame or FrameError)`` for every complete block in ``data``."""
-        for b in data:
-            if b != 0:
-                self._buf.append(b)
-                continue
-            if not self._buf:
-                continue  # spare delimiter
-            block = bytes(self._buf)
-            self._buf.clear()
-            if len(block) > self.MAX_BLOCK:
-                yield block, FrameError("length", block)
-                continue
-            try:
-                yield block, decode_block(block)
-            except FrameError as exc:
-                yield block, exc
 
 
 # ------------------------------------------------------------------------------- messages
@@ -305,9 +166,39 @@ class Pwm(Message):
 
 
 @dataclass(frozen=True)
-class Coupling(Message):
-    """Array boards: heat ``heater``, read ports ``0 .. ports-1`` (PROTOCOL.md, firmware 1.2)."""
+class Forward(Message):
+    """Forward voltage on the fixture at ``setpoint_mc``: after ``settle_ms``, ``n`` pulses of
+    ``pulse_us`` at each current of ``currents_ua`` (1 to :data:`FORWARD_MAX`), ``interval_ms``
+    apart, each read in its middle (protocol 3)."""
+
     TYPE: ClassVar[int] = 0x14
+    FORMAT: ClassVar[str] = "<iIHHHB"
+    setpoint_mc: int = 25000
+    settle_ms: int = 5000
+    pulse_us: int = 40
+    n: int = 8
+    interval_ms: int = 20
+    currents_ua: tuple[int, ...] = (10000,)
+
+    def payload(self) -> bytes:
+        return struct.pack(self.FORMAT, self.setpoint_mc, self.settle_ms, self.pulse_us,
+                           self.n, self.interval_ms, len(self.currents_ua)) + \
+            b"".join(struct.pack("<I", i) for i in self.currents_ua)
+
+    @classmethod
+    def from_payload(cls, payload: bytes, seq: int) -> Forward:
+        size = struct.calcsize(cls.FORMAT)
+        if len(payload) < size or len(payload) != size + 4 * payload[size - 1]:
+            raise FrameError("length", payload)
+        *head, count = struct.unpack_from(cls.FORMAT, payload)
+        return cls(*head, currents_ua=struct.unpack_from(f"<{count}I", payload, size))
+
+
+@dataclass(frozen=True)
+class Coupling(Message):
+    """Array boards: heat ``heater``, read ports ``0 .. ports-1`` (protocol 4)."""
+
+    TYPE: ClassVar[int] = 0x15
     FORMAT: ClassVar[str] = "<BBIIHHIIB"
     heater: int = 0
     ports: int = 2
@@ -323,6 +214,8 @@ class Coupling(Message):
 # device -> host ------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Info(Message):
+    """The device's identity; ``i_sense_ua`` (the sense current) only from protocol 3 on."""
+
     TYPE: ClassVar[int] = 0x80
     FORMAT: ClassVar[str] = "<BBBBBBHI"
     proto: int = PROTOCOL_VERSION
@@ -334,6 +227,7 @@ class Info(Message):
     caps: int = 0
     settle_max_ms: int = 86_400_000
     name: str = ""
+    i_sense_ua: int = 0
 
     @property
     def firmware(self) -> str:
@@ -341,20 +235,23 @@ class Info(Message):
 
     @property
     def ports(self) -> int:  # heaters of an array board (0: a single-heater board)
-        return self.caps >> CAP_PORTS_SHIFT
+        return self.caps >> CAP_PORTS_SHIFT if self.proto >= 4 else 0
 
     def payload(self) -> bytes:
+        sense = struct.pack("<I", self.i_sense_ua) if self.proto >= 3 else b""
         return struct.pack(self.FORMAT, self.proto, self.fw_major, self.fw_minor, self.fw_patch,
                            self.adc_bits, self.ring, self.caps, self.settle_max_ms
-                           ) + self.name.encode("ascii")
+                           ) + sense + self.name.encode("ascii")
 
     @classmethod
     def from_payload(cls, payload: bytes, seq: int) -> Info:
         size = struct.calcsize(cls.FORMAT)
-        if len(payload) < size:
+        if len(payload) < size or (payload[0] >= 3 and len(payload) < size + 4):
             raise FrameError("length", payload)
+        sense = struct.unpack_from("<I", payload, size)[0] if payload[0] >= 3 else 0
+        size += 4 if payload[0] >= 3 else 0
         name = payload[size:].decode("ascii", errors="replace")
-        return cls(*struct.unpack_from(cls.FORMAT, payload), name=name)
+        return cls(*struct.unpack_from(cls.FORMAT, payload), name=name, i_sense_ua=sense)
 
 
 @dataclass(frozen=True)
@@ -411,7 +308,8 @@ class Sample(Message):
 
 @dataclass(frozen=True)
 class ArraySample(Sample):
-    """A sample of the coupling procedure: the port read (the diode; a power reading's heater)."""
+    """A sample of the coupling procedure (protocol 4): the port read (the diode; a power
+    reading's heater)."""
     TYPE: ClassVar[int] = 0x87
     FORMAT: ClassVar[str] = "<BBII5i5HB"
     port: int = 0
@@ -478,8 +376,8 @@ class DeviceError(Message):
 
 
 MESSAGES: dict[int, type[Message]] = {cls.TYPE: cls for cls in (
-    Hello, Ack, Nak, Abort, Calibrate, Rth, Cooling, Pwm, Coupling, Info, CommandAck, Sample,
-    ArraySample, Status, Done, Sync, DeviceError)}
+    Hello, Ack, Nak, Abort, Calibrate, Rth, Cooling, Pwm, Forward, Coupling,
+    Info, CommandAck, Sample, ArraySample, Status, Done, Sync, DeviceError)}
 UNSEQUENCED = frozenset({Sync.TYPE, DeviceError.TYPE})
 
 

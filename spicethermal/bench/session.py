@@ -32,10 +32,10 @@ import numpy as np
 
 from ..core.errors import DataFormatError, InstrumentError, SpiceThermalError
 from ..identify.readings import converter
-from ..io.bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, PwmTable
+from ..io.bundle import MANIFEST, Bundle, CalibrationTable, CoolingTable, ForwardTable, PwmTable
 from ..io.files import clean_leftovers, locked
 from . import protocol as p
-from .client import ACTIONS, ARRAY_ACTIONS, BenchClient, Run
+from .client import ACTIONS, ARRAY_ACTIONS, FORWARD_PROTOCOL, BenchClient, Run
 from .coupling import measure_coupling
 from .merge import SECTIONS, add_datasets
 from .plan import PLANS, Plan
@@ -107,8 +107,11 @@ class Session:
 
     def _check_replace(self, previous: Bundle, actions: Sequence[str]) -> None:
         measured = {SECTIONS[a] for a in actions if a in SECTIONS}
+        if "calibrate" in actions:
+            measured.add("forward")
         kinds = {t.file: s for s, ts in (("calibration", [previous.calibration]),
-                                         ("cooling", previous.cooling), ("pwm", [previous.pwm]))
+                                         ("cooling", previous.cooling), ("pwm", [previous.pwm]),
+                                         ("forward", [previous.forward]))
                  for t in ts if t is not None}
         for name in self.replace_names:
             if name not in kinds:
@@ -172,7 +175,7 @@ class Session:
                     raw_dir.parent.rmdir()
                 raise
             session = f"raw/{raw_dir.name}/"
-            for key in ("calibration", "pwm"):
+            for key in ("calibration", "pwm", "forward"):
                 if new.get(key) is not None:
                     new[key] = replace(new[key], extra={**new[key].extra, "raw": session})
             new["cooling"] = [replace(c, extra={**c.extra, "raw": session})
@@ -200,7 +203,8 @@ class Session:
         base = previous.with_(device=previous.device or plan.description,
                               reference=plan.reference)
         new: dict = {}
-        steps = {"calibrate": plan.calibration_settle_s * len(plan.calibration_c),
+        steps = {"calibrate": (plan.calibration_settle_s + plan.forward_settle_s)
+                 * len(plan.calibration_c),
                  "rth": plan.settle_s,
                  "cooling": (plan.settle_s + plan.cooling_t_last_s) * len(plan.cooling_powers_w),
                  "pwm": plan.pwm_settle_s * len(plan.pwm_freqs_hz) * len(plan.pwm_duties),
@@ -222,7 +226,10 @@ class Session:
 
         calibration = previous.calibration
         if "calibrate" in actions:
-            calibration = new["calibration"] = self._calibrate(bench, plan, step)
+            calibration, forward = self._calibrate(bench, plan, step)
+            new["calibration"] = calibration
+            if forward is not None:
+                new["forward"] = forward
         conv = None
         if calibration is not None:
             conv = TspConversion(converter(calibration, "auto"))
@@ -252,8 +259,19 @@ class Session:
         new["base"] = base
         return new
 
-    def _calibrate(self, bench: BenchClient, plan: Plan, step):
-        temps, volts = [], []
+    def _calibrate(self, bench: BenchClient, plan: Plan, step
+                   ) -> tuple[CalibrationTable, ForwardTable | None]:
+        """The TSP calibration and, where the plan and the firmware have it, the forward
+        voltage at each calibration temperature: the sense current's (the calibration's own
+        readings of the heater's voltage) and one point per pulsed current."""
+        temps, volts, rows = [], [], []
+        forward = bool(plan.forward_currents_a)
+        if forward and bench.info.proto < FORWARD_PROTOCOL:
+            forward = False
+            print(f"bench: firmware {bench.info.firmware} (protocol {bench.info.proto}) has no "
+                  "forward-voltage procedure: no forward section (export --electrothermal needs "
+                  "it; update the firmware to 1.2)", file=sys.stderr)
+        i_sense = bench.info.i_sense_ua / 1e6
         for t_set in plan.calibration_c:
             step(f"calibration at {t_set:g} degC", plan.calibration_settle_s)
             run = bench.calibrate(t_set, plan.calibration_settle_s, plan.calibration_n,
@@ -262,7 +280,26 @@ class Session:
             cal = run.of_kind(p.KIND_CAL)
             temps.append(round(_mean(cal, "taux_c"), 4))
             volts.append(round(_mean(cal, "v_tsp_v"), 8))
-        return CalibrationTable(temp_c=temps, v_tsp_v=volts, file="calibration.csv")
+            if not forward:
+                continue
+            if i_sense > 0:
+                rows.append((temps[-1], i_sense, round(_mean(cal, "v_d_uv") / 1e6, 7), 0.0))
+            step(f"forward voltage at {t_set:g} degC", plan.forward_settle_s)
+            fwd = bench.forward(t_set, plan.forward_settle_s, plan.forward_pulse_s,
+                                plan.forward_n, plan.forward_interval_s,
+                                plan.forward_currents_a).of_kind(p.KIND_FORWARD)
+            bench.progress.advance(plan.forward_settle_s)
+            for k in range(len(plan.forward_currents_a)):
+                group = fwd[k * plan.forward_n:(k + 1) * plan.forward_n]
+                rows.append((temps[-1], round(_mean(group, "i_ua") / 1e6, 8),
+                             round(_mean(group, "v_d_uv") / 1e6, 7), group[0].t_s))
+        table = CalibrationTable(temp_c=temps, v_tsp_v=volts, file="calibration.csv")
+        if not rows:
+            return table, None
+        arr = np.array(rows)
+        return table, ForwardTable(arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3],
+                                   sense_current_a=i_sense if i_sense > 0 else None,
+                                   file="forward.csv")
 
     @staticmethod
     def _window_s(bench: BenchClient, plan: Plan) -> float:
@@ -361,7 +398,7 @@ def run_bench(url: str, out_dir: str | os.PathLike, *, progress: bool = False,
     >>> path = run_bench("sim://actuator?seed=1", out, actions=["calibrate"],
     ...                  calibration_c=(25.0, 50.0), calibration_settle_s=60.0)
     >>> sorted(x.name for x in path.iterdir())
-    ['bundle.json', 'calibration.csv', 'raw']
+    ['bundle.json', 'calibration.csv', 'forward.csv', 'raw']
     """
     unknown = set(overrides) - set(Plan.__dataclass_fields__)
     if unknown:

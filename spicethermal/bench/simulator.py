@@ -57,7 +57,8 @@ class _Board(ctypes.Structure):
                 ("vd_nominal_uv", ctypes.c_uint32), ("fixture_min_mc", ctypes.c_int32),
                 ("fixture_max_mc", ctypes.c_int32), ("caps", ctypes.c_uint16),
                 ("adc_bits", ctypes.c_uint8), ("name", ctypes.c_char * 16),
-                ("ports", ctypes.c_uint8), ("scan_us", ctypes.c_uint16)]
+                ("i_sense_ua", ctypes.c_uint32), ("ports", ctypes.c_uint8),
+                ("scan_us", ctypes.c_uint16)]
 
 
 class _Op(ctypes.Structure):
@@ -191,6 +192,7 @@ class SimulatedDevice:
         bd.caps = CAP_IDEAL_HOLD if self.ideal_hold else 0
         bd.adc_bits = 10
         bd.name = b.name.encode("ascii")[:15]
+        bd.i_sense_ua = round(self.preset.diode.i_bias_a * 1e6)
         if isinstance(self.plant, ArrayPlant):
             bd.ports = self.plant.n_ports
             bd.scan_us = SCAN_US
@@ -333,7 +335,7 @@ class SimulatedDevice:
         return t - start < on
 
     def _power(self) -> float:
-        return self.current_a * self.frontend.v_hot(self.plant.tj_c)
+        return self.current_a * self.frontend.v_diode(self.current_a, self.plant.tj_c)
 
     # -- plant -------------------------------------------------------------------------
     def advance_to(self, t_end: float) -> None:

@@ -117,7 +117,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     --------
     >>> build_parser("pwm").parse_args(["pwm", "m.json", "--freq", "1k", "--duty", "0.5",
     ...                                 "--power", "1"]).freq
-    1000.0
+    (1000.0,)
     """
     parser = _Parser(prog="spicethermal", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"spicethermal {__version__}")

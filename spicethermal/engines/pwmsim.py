@@ -240,28 +240,11 @@ class SpicePwm:
             lib.write_text(self.lib_text, encoding="utf-8")
             text, t_read = self.netlist(lib, power_w, freq_hz, duty, window_s)
             waves = simulator(self.engine).run(text, ["V(TJ)"], self.dialect)
-        t = np.asarray(waves.t_s, dtype=float)
         rise = np.asarray(waves["V(TJ)"], dtype=float) - reference_drive(self._model,
                                                                          self.tref_c)[0]
-        keep = np.concatenate([[True], np.diff(t) > 0])  # ngspice may repeat a time point
-        t, rise = t[keep], rise[keep]
-        if t.size < 3 or not np.all(np.isfinite(rise)) or t[-1] < t_read * (1 - 1e-9):
-            raise SimulationError(f"ngspice returned an incomplete waveform at {freq_hz:g} Hz, "
-                                  f"duty {duty:g} (ended at {t[-1]:g} s of {t_read:g} s)")
-        period = 1.0 / freq_hz
-        first = _period_summary(t, rise, 0, period, duty)
-        last = _period_summary(t, rise, self.periods - 1, period, duty)
-        drift = float(np.max(np.abs(np.subtract(last, first))))
-        _, peak, valley, mean, _ = last
-        tol = self.tol_k + self.rel_tol * (peak - valley)
-        if not drift <= tol:
-            raise SimulationError(
-                f"ngspice PWM run at {freq_hz:g} Hz, duty {duty:g} is not periodic: the last of "
-                f"{self.periods} periods differs from the first by {drift:.3g} K "
-                f"(tolerance {tol:.3g} K: {self.tol_k:g} K + {self.rel_tol:g} of the ripple)")
-        state = PwmState(float(freq_hz), float(duty), float(power_w), float(window_s),
-                         peak_k=peak, mean_k=mean, valley_k=valley,
-                         reading_k=float(np.interp(t_read, t, rise)))
+        state, t, rise, drift = periodic_state(
+            waves.t_s, rise, t_read, self.periods, power_w, freq_hz, duty, window_s,
+            self.tol_k, self.rel_tol)
         return PwmRun(state, t, rise, self.periods, drift, self.engine, self.dialect)
 
     def state(self, power_w: float, freq_hz: float, duty: float,
@@ -274,13 +257,26 @@ class SpicePwm:
              duty: Sequence[float], window_s: float | Sequence[float] = 0.0) -> list[PwmState]:
         """:meth:`state` at every ``(freq_hz[i], duty[i])`` (``power_w``, ``window_s`` per point
         or one), the points in parallel (:func:`run_parallel`)."""
-        f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
-        d = np.atleast_1d(np.asarray(duty, dtype=float))
-        if f.shape != d.shape:
-            raise DataFormatError("grid: freq_hz and duty must be equally long")
-        p = np.broadcast_to(np.asarray(power_w, dtype=float), f.shape)
-        w = np.broadcast_to(np.asarray(window_s, dtype=float), f.shape)
-        return run_parallel([(self, *map(float, x)) for x in zip(p, f, d, w, strict=True)])
+        return run_grid(self, power_w, freq_hz, duty, window_s)
+
+
+def run_grid(sim: SpicePwm, power_w: float | Sequence[float], freq_hz: Sequence[float],
+             duty: Sequence[float], window_s: float | Sequence[float] = 0.0) -> list[PwmState]:
+    """``sim.state`` at every ``(freq_hz[i], duty[i])`` (``power_w``, ``window_s`` per point or
+    one), the points in parallel (:func:`run_parallel`); ``sim`` is any simulator with
+    ``state``, ``engine`` and ``model`` (:class:`SpicePwm`, the bench circuit's
+    :class:`~spicethermal.engines.circuit.CircuitPwm`).
+
+    >>> run_grid(SpicePwm.__new__(SpicePwm), 0.1, [], [])
+    []
+    """
+    f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    d = np.atleast_1d(np.asarray(duty, dtype=float))
+    if f.shape != d.shape:
+        raise DataFormatError("grid: freq_hz and duty must be equally long")
+    p = np.broadcast_to(np.asarray(power_w, dtype=float), f.shape)
+    w = np.broadcast_to(np.asarray(window_s, dtype=float), f.shape)
+    return run_parallel([(sim, *map(float, x)) for x in zip(p, f, d, w, strict=True)])
 
 
 def run_parallel(jobs: Sequence[tuple[SpicePwm, float, float, float, float]], *,
@@ -343,6 +339,60 @@ def workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not on Linux
         return max(1, os.cpu_count() or 1)
+
+
+def periodic_state(t_s: NDArray, rise: NDArray, t_read: float, periods: int, power_w: float,
+                   freq_hz: float, duty: float, window_s: float, tol_k: float,
+                   rel_tol: float) -> tuple[PwmState, NDArray, NDArray, float]:
+    """The periodic steady state an ngspice run from the periodic start shows, checked.
+
+    ``rise`` is the junction rise against ``t_s`` over ``periods`` periods, one more on-phase
+    and the sample window (:func:`pwm_waveform`); the run is accepted only if its last period
+    repeats its first within ``tol_k`` plus ``rel_tol`` of the ripple (else
+    :class:`SimulationError`). Peak, valley and mean are the last period's, the reading the
+    rise at ``t_read``.
+
+    Parameters
+    ----------
+    t_s, rise : NDArray
+        The simulated waveform (ngspice may repeat a time point).
+    t_read : float
+        The reading's time, s.
+    periods : int
+        Whole periods simulated.
+    power_w, freq_hz, duty, window_s : float
+        The operating point.
+    tol_k, rel_tol : float
+        The periodicity tolerance, K and relative to the ripple.
+
+    Returns
+    -------
+    tuple
+        ``(state, t, rise, drift_k)``: the state, the waveform without repeated points and how
+        far the last period strayed from the first.
+    """
+    t = np.asarray(t_s, dtype=float)
+    rise = np.asarray(rise, dtype=float)
+    keep = np.concatenate([[True], np.diff(t) > 0])  # ngspice may repeat a time point
+    t, rise = t[keep], rise[keep]
+    if t.size < 3 or not np.all(np.isfinite(rise)) or t[-1] < t_read * (1 - 1e-9):
+        raise SimulationError(f"ngspice returned an incomplete waveform at {freq_hz:g} Hz, "
+                              f"duty {duty:g} (ended at {t[-1]:g} s of {t_read:g} s)")
+    period = 1.0 / freq_hz
+    first = _period_summary(t, rise, 0, period, duty)
+    last = _period_summary(t, rise, periods - 1, period, duty)
+    drift = float(np.max(np.abs(np.subtract(last, first))))
+    _, peak, valley, mean, _ = last
+    tol = tol_k + rel_tol * (peak - valley)
+    if not drift <= tol:
+        raise SimulationError(
+            f"ngspice PWM run at {freq_hz:g} Hz, duty {duty:g} is not periodic: the last of "
+            f"{periods} periods differs from the first by {drift:.3g} K "
+            f"(tolerance {tol:.3g} K: {tol_k:g} K + {rel_tol:g} of the ripple)")
+    state = PwmState(float(freq_hz), float(duty), float(power_w), float(window_s),
+                     peak_k=peak, mean_k=mean, valley_k=valley,
+                     reading_k=float(np.interp(t_read, t, rise)))
+    return state, t, rise, drift
 
 
 def _period_summary(t: NDArray, rise: NDArray, k: int, period: float,

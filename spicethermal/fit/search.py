@@ -5,8 +5,9 @@ effect's own parameters from every start that the plugin's ``guess()`` gives for
 variants (a node, a subset of layers), the ladder and the model's other effects held (a
 *screen*, all side by side, on the model's ladder); the best screened point of each form (of
 its two best variants for the first form, which ranks the variants for the forms that share
-them) is then refitted jointly with the ladder and every other effect, every form alike. :func:`refit` refits a model's every parameter;
-:func:`without` drops one effect and refits the rest.
+them) is then refitted jointly with the ladder and every other effect, every form alike.
+:func:`refit` refits a model's every parameter; :func:`without` drops one effect and refits
+the rest.
 
 The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 """

@@ -1,12 +1,12 @@
-"""Measurement bundles (``spicethermal-bundle/2``, ``docs/bundle-format.md``), read and written.
+"""Measurement bundles (``spicethermal-bundle/4``, ``docs/bundle-format.md``), read and written.
 
 A bundle is a directory with ``bundle.json`` and CSV files (a header row, SI units in the
 column names, ``#`` comments allowed). :class:`Bundle` is its immutable in-memory form; each
 section is one table: :class:`CalibrationTable`, :class:`CoolingTable`, :class:`PwmTable`,
-:class:`ZthTable`. Every problem found on reading (or on building one in memory) raises
-:class:`~spicethermal.core.errors.DataFormatError` naming the file, the row (the line number in the
-file, the header being line 1 of a file without comments) and the column, or the key of
-``bundle.json``.
+:class:`ZthTable`, :class:`ForwardTable`. Every problem found on reading (or on building one in
+memory) raises :class:`~spicethermal.core.errors.DataFormatError` naming the file, the row (the
+line number in the file, the header being line 1 of a file without comments) and the column,
+or the key of ``bundle.json``.
 
 >>> import tempfile, pathlib
 >>> b = Bundle(device="diode", reference="case", ambient_c=25.0,
@@ -30,6 +30,8 @@ from ..core.errors import DataFormatError
 from .bundle_read import (
     CALIBRATION_KINDS,
     FORMAT,
+    FORMAT_COUPLING,
+    FORMAT_FORWARD,
     FORMATS,
     MANIFEST,
     ManifestReader,
@@ -46,7 +48,14 @@ from .columns import (
     set_fields,
 )
 from .coupling import CouplingSection
-from .datasets import CalibrationTable, CoolingTable, KFactorLaw, PwmTable, ZthTable
+from .datasets import (
+    CalibrationTable,
+    CoolingTable,
+    ForwardTable,
+    KFactorLaw,
+    PwmTable,
+    ZthTable,
+)
 from .files import (
     clean_leftovers,
     dumps_json,
@@ -61,8 +70,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Names of the bundle's pieces, importable from here as before the split.
 __all__ = ["CALIBRATION_KINDS", "COLUMNS", "FORMAT", "FORMATS", "MANIFEST", "Bundle",
-           "CalibrationTable", "Columns", "CoolingTable", "KFactorLaw", "PwmTable", "ZthTable",
-           "format_columns", "manifest_files", "parse_columns", "parse_number", "read_columns"]
+           "CalibrationTable", "Columns", "CoolingTable", "ForwardTable", "KFactorLaw",
+           "PwmTable", "ZthTable", "format_columns", "manifest_files", "parse_columns",
+           "parse_number", "read_columns"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -70,7 +80,8 @@ __all__ = ["CALIBRATION_KINDS", "COLUMNS", "FORMAT", "FORMATS", "MANIFEST", "Bun
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Bundle:
-    """A measurement bundle (``spicethermal-bundle/2``, or /1); every section is optional.
+    """A measurement bundle (``spicethermal-bundle/4``, /3, /2 or /1); every section is
+    optional.
 
     Build it from tables (as the bench does), read it with :meth:`read`, write it with
     :meth:`write`. Unknown keys of ``bundle.json`` are kept in ``extra`` (and in each
@@ -93,8 +104,11 @@ class Bundle:
         The PWM grid of junction temperatures.
     zth : tuple of ZthTable
         Zth(t) curves given as such (datasheet or measured).
+    forward : ForwardTable or None
+        The heater's forward voltage at a few currents and temperatures (its Vf(I, T); format
+        version 3).
     coupling : CouplingSection or None
-        "Heat one, read all" on an array of devices (format version 3).
+        "Heat one, read all" on an array of devices (format version 4).
     extra : Mapping
         Unknown keys of ``bundle.json``, kept and written back.
     source : str or None
@@ -112,6 +126,7 @@ class Bundle:
     cooling: tuple[CoolingTable, ...] = ()
     pwm: PwmTable | None = None
     zth: tuple[ZthTable, ...] = ()
+    forward: ForwardTable | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
     source: str | None = field(default=None, compare=False)
     coupling: CouplingSection | None = None
@@ -134,6 +149,8 @@ class Bundle:
         for i, z in enumerate(zth):
             if not isinstance(z, ZthTable):
                 raise DataFormatError(f"{MANIFEST}, key zth[{i}]: not a ZthTable")
+        if self.forward is not None and not isinstance(self.forward, ForwardTable):
+            raise DataFormatError(f"{MANIFEST}, key forward: not a ForwardTable")
         set_fields(self, ambient_c=ambient, cooling=cooling, zth=zth, extra=dict(self.extra))
         names = [n for n, _ in self._named_tables()]
         dups = {n for n in names if names.count(n) > 1}
@@ -160,6 +177,8 @@ class Bundle:
             out.append((self.pwm.file or "pwm.csv", self.pwm))
         for i, z in enumerate(self.zth, start=1):
             out.append((z.file or f"zth_{i}.csv", z))
+        if self.forward is not None:
+            out.append((self.forward.file or "forward.csv", self.forward))
         for i, c in enumerate(self.coupling.curves if self.coupling else (), start=1):
             out.append((c.file or f"coupling_{i}.csv", c))
         return out
@@ -178,8 +197,8 @@ class Bundle:
         if calibration is None:
             calibration = reader.calibration()
         cooling = reader.cooling(calibration)
-        pwm, zth = reader.pwm(), reader.zth()
-        return cls(calibration=calibration, cooling=cooling, pwm=pwm, zth=zth,
+        pwm, zth, forward = reader.pwm(), reader.zth(), reader.forward()
+        return cls(calibration=calibration, cooling=cooling, pwm=pwm, zth=zth, forward=forward,
                    source=str(reader.path), coupling=CouplingSection.read(reader),
                    **reader.top_level())
 
@@ -188,8 +207,10 @@ class Bundle:
         """The ``bundle.json`` document (file names as :meth:`write` uses them)."""
         v1 = isinstance(self.calibration, CalibrationTable | None) and (
             self.calibration is None or self.calibration.kind == "table")
-        fmt = FORMATS[2] if self.coupling is not None else FORMATS[0] if v1 else FORMAT
-        doc: dict[str, Any] = {"format": fmt, "device": self.device,
+        version = (FORMAT_COUPLING if self.coupling is not None
+                   else FORMAT_FORWARD if self.forward is not None
+                   else FORMATS[0] if v1 else FORMAT)
+        doc: dict[str, Any] = {"format": version, "device": self.device,
                                "reference": self.reference}
         if self.ambient_c is not None:
             doc["ambient_c"] = self.ambient_c
@@ -206,6 +227,9 @@ class Bundle:
             doc["pwm"] = {"file": named[id(self.pwm)], **self.pwm.manifest(), **self.pwm.extra}
         if self.zth:
             doc["zth"] = [{"file": named[id(z)], **z.manifest(), **z.extra} for z in self.zth]
+        if self.forward is not None:
+            doc["forward"] = {"file": named[id(self.forward)], **self.forward.manifest(),
+                              **self.forward.extra}
         if self.coupling is not None:
             doc["coupling"] = self.coupling.manifest([named[id(c)]
                                                       for c in self.coupling.curves])

@@ -7,24 +7,29 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ..core.errors import DataFormatError, where
-from .files import (
-    read_json,
-)
-
-if TYPE_CHECKING:  # pragma: no cover
-    pass
-
 from .columns import Columns, read_columns, scalar
-from .datasets import CalibrationTable, CoolingTable, KFactorLaw, PwmTable, ZthTable
+from .datasets import (
+    CalibrationTable,
+    CoolingTable,
+    ForwardTable,
+    KFactorLaw,
+    PwmTable,
+    ZthTable,
+)
+from .files import read_json
 
 FORMAT = "spicethermal-bundle/2"
+#: The version that adds the ``forward`` section (the heater's Vf(I, T) points).
+FORMAT_FORWARD = "spicethermal-bundle/3"
+#: The version that adds the ``coupling`` section of an array (:mod:`spicethermal.io.coupling`).
+FORMAT_COUPLING = "spicethermal-bundle/4"
 #: Versions read; a bundle is written with the lowest one that holds it (a /1 reader still
 #: reads every bundle whose calibration is a table). /2 adds calibration kinds, /3 the
-#: ``coupling`` section of an array (:mod:`spicethermal.io.coupling`).
-FORMATS = ("spicethermal-bundle/1", FORMAT, "spicethermal-bundle/3")
+#: ``forward`` section, /4 the ``coupling`` section.
+FORMATS = ("spicethermal-bundle/1", FORMAT, FORMAT_FORWARD, FORMAT_COUPLING)
 #: Calibration kinds of ``bundle.json`` (``docs/bundle-format.md``).
 CALIBRATION_KINDS = ("table", "k-factor", "polynomial")
 MANIFEST = "bundle.json"
@@ -48,7 +53,7 @@ def manifest_files(path: str | os.PathLike) -> set[str]:
     if isinstance(doc, dict):
         coupling = doc.get("coupling")
         extra = coupling.get("curves") if isinstance(coupling, dict) else None
-        for key in ("calibration", "cooling", "pwm", "zth", "curves"):
+        for key in ("calibration", "cooling", "pwm", "zth", "forward", "curves"):
             entries = extra if key == "curves" else doc.get(key)
             for entry in entries if isinstance(entries, list) else [entries]:
                 if isinstance(entry, dict) and isinstance(entry.get("file"), str):
@@ -282,12 +287,26 @@ class ManifestReader:
                 extra=self.known(entry, ("rth_k_per_w", "normalized"))), name))
         return tuple(zth)
 
+    def forward(self) -> ForwardTable | None:
+        """The ``forward`` section (``spicethermal-bundle/3`` on), or None when there is none."""
+        if self.doc.get("forward") is None:
+            return None
+        if self.format not in (FORMAT_FORWARD, FORMAT_COUPLING):
+            raise DataFormatError(f"{self.label}, key forward: forward-voltage points need "
+                                  f"format {FORMAT_FORWARD!r}")
+        entry = self.section("forward")
+        name, cols = self.table(entry, "forward", ["temp_c", "i_a", "vf_v"], ["t_pulse_s"])
+        sense = self.num(entry, "forward", "sense_current_a", positive=True)
+        return self.wrap(lambda: ForwardTable(
+            cols["temp_c"], cols["i_a"], cols["vf_v"], cols.get("t_pulse_s"), sense,
+            file=name, rows=cols.rows, extra=self.known(entry, ("sense_current_a",))), name)
+
     def top_level(self) -> dict[str, Any]:
         """``device``, ``reference``, ``ambient_c`` and the unknown top-level keys (``extra``)."""
         doc = self.doc
         ambient = self.num(doc, "", "ambient_c", temperature=True) if "ambient_c" in doc else None
         extra = {k: v for k, v in doc.items() if k not in (
             "format", "device", "reference", "ambient_c", "calibration", "cooling", "pwm",
-            "zth", "coupling")}
+            "zth", "forward", "coupling")}
         return {"device": doc.get("device", ""), "reference": doc.get("reference", "ambient"),
                 "ambient_c": ambient, "extra": extra}

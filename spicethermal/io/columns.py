@@ -42,10 +42,14 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "r_k_per_w": ("r", "stage resistance in K/W"),
     "tau_s": ("tau", "time constant in s"),
     "c_j_per_k": ("c", "capacitance in J/K"),
+    "i_a": ("i", "current in A"),
+    "vf_v": ("vf", "forward voltage in V"),
+    "t_pulse_s": ("t_pulse", "time into the current pulse in s"),
 }
 
 #: Unit suffixes that mark a column as a known one in a foreign unit (``t_ms`` for ``t_s``).
-_UNITS = {"s", "ms", "us", "ns", "min", "h", "hr", "c", "degc", "k", "f", "degf", "v", "mv",
+_UNITS = {"s", "ms", "us", "ns", "min", "h", "hr", "c", "degc", "k", "f", "degf", "v", "mv", "ma",
+          "ua", "a",
           "uv", "hz", "khz", "mhz", "w", "mw", "kw", "uw", "k_per_w", "c_per_w", "k_per_mw",
           "degc_per_w", "pct", "percent", "j_per_k", "mj_per_k", "ws_per_k"}
 

@@ -4,7 +4,7 @@ One :class:`CouplingTable` per heated port: the scans after the power cut (``t_s
 reading; port ``k`` is read ``(k − 1) · scan_s`` later), every port's junction temperature
 (``tj1_c`` ... ``tjN_c``), the reference (``tref_c``), the heating power and the steady
 temperatures just before the cut. :class:`CouplingSection` holds them with the ports (names
-and positions) and the scan spacing. ``docs/bundle-format.md`` (version 3) is the contract.
+and positions) and the scan spacing. ``docs/bundle-format.md`` (version 4) is the contract.
 
 >>> sec = CouplingSection((Port("D1"), Port("D2")), 2e-5, (CouplingTable(
 ...     0, [1e-4, 1e-3], [[40.0, 27.0], [39.0, 27.1]], 0.25, file="coupling_1.csv"),))
@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..core.errors import DataFormatError, where
-from .bundle_read import FORMATS, ManifestReader
+from .bundle_read import FORMAT_COUPLING, ManifestReader
 from .columns import check_temperatures, check_times, frozen, scalar, set_fields
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -279,8 +279,8 @@ class CouplingSection:
             return None
         key = f"{reader.label}, key coupling"
         sec = reader.section("coupling")
-        if reader.format != FORMATS[2]:
-            raise DataFormatError(f"{key}: the coupling section needs format {FORMATS[2]!r}")
+        if reader.format != FORMAT_COUPLING:
+            raise DataFormatError(f"{key}: the coupling section needs format {FORMAT_COUPLING!r}")
         entries = sec.get("ports")
         if not isinstance(entries, list) or not entries:
             raise DataFormatError(f"{key}.ports: must be a non-empty list of ports")

@@ -1,6 +1,7 @@
 """The data sets of a measurement bundle, one immutable table each: :class:`CalibrationTable`,
-:class:`CoolingTable`, :class:`PwmTable`, :class:`ZthTable`; a calibration declared as a law
-rather than points is a :class:`KFactorLaw` (``docs/bundle-format.md``).
+:class:`CoolingTable`, :class:`PwmTable`, :class:`ZthTable`, :class:`ForwardTable` (the heater's
+forward voltage, ``spicethermal-bundle/3``); a calibration declared as a law rather than points
+is a :class:`KFactorLaw` (``docs/bundle-format.md``).
 
 They hold what was read, checked: numbers, never an interpretation of them. The converters
 that turn TSP voltages into temperatures are built from them in
@@ -403,4 +404,49 @@ class ZthTable:
         entry: dict[str, Any] = {"normalized": self.normalized}
         if self.rth_k_per_w is not None:
             entry["rth_k_per_w"] = self.rth_k_per_w
+        return entry
+
+
+@dataclass(frozen=True, eq=False)
+class ForwardTable:
+    """The heater's forward voltage at a few currents and temperatures (the points of its law
+    Vf(I, T), ``spicethermal-bundle/3``): ``temp_c`` the fixture's temperature (°C), ``i_a``
+    the current (A), ``vf_v`` the voltage (V), optional ``t_pulse_s`` the time from the start
+    of the current pulse to the reading (s; 0 or absent: a steady reading), and
+    ``sense_current_a`` the bench's sense current, at which the TSP calibration was taken."""
+
+    temp_c: NDArray
+    i_a: NDArray
+    vf_v: NDArray
+    t_pulse_s: NDArray | None = None
+    sense_current_a: float | None = None
+    file: str | None = None
+    rows: NDArray | None = field(default=None, repr=False)
+    extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        f = self.file or "forward.csv"
+        t = check_column("temp_c", self.temp_c, f, self.rows)
+        check_temperatures(t, f, self.rows, "temp_c")
+        i = check_column("i_a", self.i_a, f, self.rows, t.size)
+        check_range(i, f, self.rows, "i_a", low=0, low_open=True, what="must be > 0")
+        v = check_column("vf_v", self.vf_v, f, self.rows, t.size)
+        check_range(v, f, self.rows, "vf_v", low=0, low_open=True, what="must be > 0")
+        tp = check_column("t_pulse_s", self.t_pulse_s, f, self.rows, t.size)
+        if tp is not None:
+            check_range(tp, f, self.rows, "t_pulse_s", low=0, what="must be >= 0")
+        set_fields(self, temp_c=t, i_a=i, vf_v=v, t_pulse_s=tp,
+                   sense_current_a=scalar(self.sense_current_a, f"{f}: sense_current_a",
+                                          positive=True))
+
+    def columns(self) -> dict[str, NDArray]:
+        cols = {"temp_c": self.temp_c, "i_a": self.i_a, "vf_v": self.vf_v}
+        if self.t_pulse_s is not None:
+            cols["t_pulse_s"] = self.t_pulse_s
+        return cols
+
+    def manifest(self) -> dict[str, Any]:
+        entry: dict[str, Any] = {}
+        if self.sense_current_a is not None:
+            entry["sense_current_a"] = self.sense_current_a
         return entry

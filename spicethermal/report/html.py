@@ -18,7 +18,8 @@ from .. import __version__
 from ..io.files import atomic_write_text
 from ..spice.templates import environment
 
-SECTION_IDS = ("calibration", "fit", "impedance", "table1", "table2", "diagnosis", "netlists",
+SECTION_IDS = ("calibration", "fit", "impedance", "table1", "table2", "electrothermal",
+               "diagnosis", "netlists",
                "limits")
 
 
@@ -70,8 +71,10 @@ def usage_snippet(lib: Path, name: str, power_w: float) -> str:
 
 def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, libs, table2,
                       diagnosis, better, before, after, diagnosis_figures, table1, summary,
-                      elapsed_s: float) -> Path:
-    """Write ``out/index.html`` for the demo run and return its path."""
+                      elapsed_s: float, law_fit=None, circuit=None) -> Path:
+    """Write ``out/index.html`` for the demo run and return its path (``law_fit`` and
+    ``circuit``: the heater's diode law and Table 2 through the bench circuit, when the bundle
+    has forward points)."""
     figs = out / "figures"
     secs: list[Section] = []
 
@@ -168,6 +171,8 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
     s.figure(figs / "table2_delta.png", out, "PWM readings minus the ngspice model, "
              "Δ = T_exp − T_mod in K, by frequency and duty cycle (bars and heat map)")
     secs.append(s)
+    if law_fit is not None and circuit is not None:
+        secs.append(electrothermal_section(out, law_fit, circuit, table2, libs))
 
     s = Section("diagnosis", "6. Diagnosis: what the linear ladder misses")
     doc = diagnosis.to_dict()
@@ -205,8 +210,9 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
     s.paragraphs.append(
         f"{len(libs)} files, each holding .SUBCKT NAME TJ TREF: heat flow in W is a current "
         f"into TJ; temperatures are absolute, V(TJ) in °C with TREF driven at the ambient in "
-        f"°C (the temperature rise in K is V(TJ) − V(TREF)). The header of each file carries "
-        f"Rth, the time constants and the provenance.")
+        f"°C (the temperature rise in K is V(TJ) − V(TREF)). The electrothermal parts hold "
+        f".SUBCKT NAME A K TJ TREF: the diode between A and K heats TJ itself (section 5b). "
+        f"The header of each file carries Rth, the time constants and the provenance.")
     s.table(["file", "dialect", "topology", "size"],
             [[os.path.relpath(p, out), *_dialect_topology(p), f"{p.stat().st_size} B"]
              for p in libs])
@@ -233,6 +239,63 @@ def write_demo_report(out: Path, *, bundle, calibration, curves, model, fit, lib
                   f"Simulated bench run of {bundle.device or 'the actuator'}; "
                   "the paper's procedure end to end.", summary, secs, elapsed_s)
     return atomic_write_text(out / "index.html", html)
+
+
+def electrothermal_section(out: Path, law_fit, circuit: dict, table2, libs) -> Section:
+    """The report's section on the heater as an electrothermal part: the diode law fitted to
+    the forward points, Table 2 from the bench circuit (Fig. 3) beside the thermal-only deck,
+    and a run of the circuit (Vf, I, Tj)."""
+    figs = out / "figures"
+    law, u = law_fit.law, law_fit.u
+    s = Section("electrothermal", "5b. The heater as an electrothermal part: Vf(I, T) and "
+                                  "Table 2 through the bench circuit")
+    s.paragraphs.append(
+        f"The bench read the heater's forward voltage at {law_fit.residual_v.size} points "
+        "(a few currents, each in the middle of a short pulse, at every calibration "
+        "temperature, and under the sense current); SPICE's diode law was fitted to them and to "
+        "the TSP calibration, each point at its junction temperature (the pulse's and the "
+        "sense current's heating from the thermal model). The exported part "
+        ".SUBCKT NAME A K TJ TREF carries it: its current follows Vf(I, T(TJ)), its I·V heats "
+        "the ladder, TJ is a pin.")
+    s.table(["diode law parameter", "value", "1σ uncertainty"],
+            [["N (ideality)", f"{law.n:.4f}", f"{u['n']:.2g}"],
+             ["IS at 25 °C", f"{law.is_a:.4g} A", f"{100 * u['is_a'] / law.is_a:.2g} %"],
+             ["RS", f"{law.rs_ohm:.4g} Ω", f"{u['rs_ohm']:.2g} Ω"],
+             ["XTI", f"{law.xti:.3g}", f"{u['xti']:.2g}"],
+             ["EG", f"{law.eg_ev:.4f} eV", f"{u['eg_ev']:.2g} eV"]]
+            + [[f"residual, {k} points", f"{1e3 * v:.3g} mV",
+                f"{law_fit.rms_k[k]:.2g} K"] for k, v in law_fit.rms_v.items()],
+            "The fitted law Vf(I, T) = N·Vt·ln(I/Is(T) + 1) + RS·I")
+    s.figure(figs / "diode_law.png", out, "The heater's forward voltage (V) against the "
+             "current (A) at each calibration temperature: the bench's points, the fitted "
+             "law, and the residuals in mV")
+    pwm = [p for p in table2.points if p.dataset == "pwm"]
+    rows = []
+    for p in sorted(pwm, key=lambda p: (p.at["duty"], p.at["freq_hz"])):
+        c = circuit["readings_c"][(p.at["freq_hz"], p.at["duty"])]
+        rows.append([f"{p.at['freq_hz'] / 1e3:g}", f"{100 * p.at['duty']:g}",
+                     f"{p.measured_c:.2f}", f"{p.model_c:.3f}", f"{c:.3f}",
+                     f"{c - p.model_c:+.3f}"])
+    worst = max(abs(float(r[-1])) for r in rows)
+    s.paragraphs.append(
+        "Table 2 again, now from the paper's measurement circuit (Fig. 3) in ngspice: the "
+        "PIC's PWM switching the heating current that the power loop sets, the sense current, "
+        f"the TSP read at the end of the {circuit['window_s'] * 1e6:.0f} µs sample window "
+        "through the calibration, as the bench reads it. It agrees with the thermal-only "
+        f"deck within {worst:.3f} K.")
+    s.table(["f (kHz)", "D (%)", "T_exp (°C)", "thermal-only deck (°C)",
+             "bench circuit (°C)", "circuit − thermal (K)"], rows,
+            "Table 2 — the readings from the circuit deck beside the thermal-only deck")
+    run = circuit["run"]
+    s.figure(figs / "circuit_pwm.png", out,
+             f"The bench circuit at {run.state.freq_hz / 1e3:g} kHz, "
+             f"{100 * run.state.duty:g} % duty: forward voltage (V), current (mA) and junction "
+             "temperature (°C) over three periods and the sample window")
+    heater = [p for p in libs if "electrothermal" in Path(p).name]
+    if heater:
+        s.code.append({"caption": f"{os.path.relpath(heater[0], out)}",
+                       "text": Path(heater[0]).read_text()})
+    return s
 
 
 #: What each figure of :func:`spicethermal.viz.plots.diagnosis_figures` shows, by file stem.

@@ -10,7 +10,6 @@ rendered with ``StrictUndefined``. The decks run in ngspice through
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,6 +30,7 @@ from .ngspice import (  # the simulators, re-exported: decks rendered here run t
     sanitize_comment,
     simulator,  # noqa: F401
 )
+from .pins import Pins, check_name, default_name  # noqa: F401  (names, re-exported here)
 from .templates import environment, template_dir
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -43,14 +43,6 @@ TOPOLOGIES = ("foster", "cauer")
 TEMPERATURES = ("absolute", "rise")
 #: Stages whose resistance is below this fraction of Rth are merged before export.
 NEGLIGIBLE = 1e-9
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
-_PIN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
-_INTERNAL = re.compile(r"(N|PCQ|PCS)[0-9]+", re.I)
-_RESERVED = {"end", "ends", "subckt", "control", "endc", "include", "lib", "param", "model",
-             "tran", "ac", "dc", "op", "options", "option", "global", "func", "ic", "nodeset",
-             "gnd", "0"}
-_ROLES = {"junction": "junction", "j": "junction", "case": "reference",
-          "reference": "reference", "ref": "reference", "ambient": "ambient", "amb": "ambient"}
 
 
 # ------------------------------------------------------------------------------ templates
@@ -61,107 +53,6 @@ _template_dir = template_dir
 
 #: A number in SPICE syntax with full double precision (no engineering suffixes).
 fmt = number
-
-
-def check_name(name: str) -> str:
-    """Validate a subcircuit name as vendors spell part numbers: a letter or digit, then up to
-    63 letters, digits, ``_``, ``-`` or ``.``; not a SPICE keyword.
-
-    >>> check_name("SPD22N08S2L-50"), check_name("2N7002")
-    ('SPD22N08S2L-50', '2N7002')
-    """
-    if not isinstance(name, str) or not _NAME.fullmatch(name) or name.lower() in _RESERVED:
-        raise DataFormatError(
-            f"subcircuit name {name!r} is not allowed: use a letter or digit followed by up to "
-            "63 letters, digits, '_', '-' or '.', not a SPICE keyword")
-    return name
-
-
-def default_name(model: ThermalModel, filename: str | os.PathLike = "") -> str:
-    """A subcircuit name from the model's device (provenance ``device``) or the file's stem.
-
-    Characters a name may not hold become ``_``; ``THERMAL_MODEL`` when nothing is left.
-
-    >>> from spicethermal.core.ladder import Foster
-    >>> from spicethermal.model import ThermalModel
-    >>> default_name(ThermalModel(Foster.from_tau([1], [1]), provenance={"device": "my diode"}))
-    'my_diode'
-    >>> default_name(ThermalModel(Foster.from_tau([1], [1])), "out/IPB019N08N3.lib")
-    'IPB019N08N3'
-    """
-    text = str(model.provenance.get("device") or Path(filename).stem or "")
-    name = re.sub(r"[^A-Za-z0-9_.\-]+", "_", text).strip("_.-")[:64]
-    try:
-        return check_name(name)
-    except DataFormatError:
-        return "THERMAL_MODEL"
-
-
-@dataclass(frozen=True)
-class Pins:
-    """Pin names of an exported subcircuit and their order on its ``.SUBCKT`` line.
-
-    ``junction`` takes the heat (a current in), ``reference`` is the case or ambient the Zth
-    was measured to, ``ambient`` (optional, Cauer only) the thermal ground the capacitors
-    connect to instead of node 0.
-
-    >>> Pins.parse("case=TC,junction=TJ").names
-    ('TC', 'TJ')
-    >>> Pins.parse("Tj,Tcase,Tamb").ambient
-    'Tamb'
-    """
-
-    junction: str = "TJ"
-    reference: str = "TREF"
-    ambient: str | None = None
-    order: tuple[str, ...] = ("junction", "reference")
-
-    @classmethod
-    def parse(cls, text: str) -> Pins:
-        """``--pins`` text: 2 or 3 comma-separated names, junction, reference[, ambient] in
-        that order, or each as ``role=NAME`` (roles junction, case|reference, ambient) in the
-        order they take on the ``.SUBCKT`` line."""
-        items = [x.strip() for x in str(text).split(",")]
-        if len(items) not in (2, 3) or not all(items):
-            raise DataFormatError(f"--pins {text!r}: give 2 or 3 comma-separated pin names "
-                                  "(junction, reference[, ambient]), e.g. TJ,TCASE")
-        names: dict[str, str] = {}
-        order = []
-        for k, item in enumerate(items):
-            role, _, name = item.rpartition("=")
-            role = _ROLES.get(role.strip().lower()) if role else \
-                ("junction", "reference", "ambient")[k]
-            if role is None or role in names:
-                raise DataFormatError(f"--pins {text!r}: item {item!r}: role must be junction, "
-                                      "case, reference or ambient, each once")
-            names[role] = name.strip()
-            order.append(role)
-        if "junction" not in names or "reference" not in names:
-            raise DataFormatError(f"--pins {text!r}: a junction and a reference pin are needed")
-        return cls(names["junction"], names["reference"], names.get("ambient"), tuple(order))
-
-    def __post_init__(self) -> None:
-        seen = set()
-        for name in self.names:
-            if (not isinstance(name, str) or not _PIN.fullmatch(name)
-                    or name.lower() in _RESERVED or _INTERNAL.fullmatch(name)):
-                raise DataFormatError(
-                    f"pin name {name!r} is not allowed: use a letter followed by up to 31 "
-                    "letters, digits or underscores, not a SPICE keyword, 0, GND or an inner "
-                    "node name (N1, ...)")
-            if name.lower() in seen:
-                raise DataFormatError(f"pin name {name!r} appears twice")
-            seen.add(name.lower())
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """The pin names in ``.SUBCKT`` order."""
-        return tuple(getattr(self, role) for role in self.order)
-
-    @property
-    def ground(self) -> str:
-        """Where a Cauer ladder's capacitors connect: the ambient pin, else node 0."""
-        return self.ambient or "0"
 
 
 def simulator_ready(ladder: Foster | Cauer) -> tuple[Foster | Cauer, list[str]]:
@@ -363,6 +254,36 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
     >>> ".SUBCKT DUT TJ TREF" in text
     True
     """
+    if pins is not None and pins.electrical:
+        raise DataFormatError("--pins: anode and cathode pins belong to an electrothermal part "
+                              "(export --electrothermal)")
+    ctx = lib_context(model, dialect, topology, name, filename, pins=pins,
+                      temperature=temperature)
+    return environment().get_template(f"lib/{dialect}.lib.j2").render(**ctx)
+
+
+def lib_context(model: ThermalModel, dialect: str = "ngspice", topology: str | None = None,
+                name: str | None = None, filename: str = "model.lib", *,
+                pins: Pins | None = None, temperature: str = "rise") -> dict:
+    """What the ``.lib`` templates render: the checked names, the ladder's stages with the
+    device effects' SPICE renderings (each effect plugin renders its own), the header's facts.
+
+    The arguments are those of :func:`render_lib`; the electrothermal part
+    (:mod:`spicethermal.spice.electrothermal`) renders the same ladder inside its subcircuit.
+
+    Returns
+    -------
+    dict
+        The template context (``stages``, ``heats``, ``pins``, ``offset``, header lines ...).
+
+    Examples
+    --------
+    >>> from spicethermal.core.ladder import Foster
+    >>> from spicethermal.model import ThermalModel
+    >>> ctx = lib_context(ThermalModel(Foster.from_tau([1.0], [1e-3])), name="DUT")
+    >>> ctx["name"], [s["r"] for s in ctx["stages"]]
+    ('DUT', [1.0])
+    """
     if dialect not in DIALECTS:
         raise DataFormatError(f"dialect {dialect!r}: expected one of {', '.join(DIALECTS)}")
     if topology is not None and topology not in TOPOLOGIES:
@@ -389,16 +310,16 @@ def render_lib(model: ThermalModel, dialect: str = "ngspice", topology: str | No
         "reference": model.reference, "reference_label": _REFERENCE_LABEL[model.reference],
         "filename": sanitize_comment(filename, 80), "pins": pins, "temperature": temperature,
         "offset": offset,
-        "usage_nodes": [{"junction": "TJ", "reference": "TREF",
+        "usage_nodes": [{"junction": "TJ", "reference": "TREF", "anode": "A", "cathode": "0",
                          "ambient": "TAMB" if temperature == "absolute" else "0"}[role]
                         for role in pins.order],
         "taus": [f"{t:.4g}" for t in ladder.time_constants()],
         "provenance": _provenance_lines(model.provenance), "facts": _facts(model),
         "notes": notes, "case_c": model.case_c_j_per_k if ladder.topology == "cauer" else 0.0,
         "effects": [e for e in model.device_effects],
-        "stages": stages, "heats": heats,
+        "stages": stages, "heats": heats, "electrothermal": False,
     }
-    return environment().get_template(f"lib/{dialect}.lib.j2").render(**ctx)
+    return ctx
 
 
 def written_topology(model: ThermalModel, topology: str | None = None) -> str:

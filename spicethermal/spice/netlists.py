@@ -12,9 +12,11 @@ from pathlib import Path
 from .. import __version__
 from ..core.ladder import Foster
 from ..data import path as data_path
+from ..engines.circuit import CircuitPwm
 from ..io.files import atomic_write_text
 from ..io.vendor import import_model
 from ..model import ThermalModel
+from .electrothermal import render_electrothermal
 from .lib import (
     DIALECTS,
     TOPOLOGIES,
@@ -36,6 +38,11 @@ HEATSINK_EXAMPLE = {"heatsink_c": 2.0, "heatsink_r": 1.0, "ambient_c": 25.0, "po
 #: The model file of the example with device effects (kept beside the golden files it makes).
 EFFECTS_EXAMPLE = Path(__file__).resolve().parents[2] / "netlists" / \
     "actuator_effects.model.json"
+#: The paper-like actuator with the simulated bench's heater diode (its Vf(I, T)): the
+#: electrothermal part and the bench circuit around it.
+HEATER_EXAMPLE = EFFECTS_EXAMPLE.with_name("actuator_heater.model.json")
+#: The bench circuit's operating point (the paper's Table 2 conditions at 1 kHz, 50 %).
+CIRCUIT_EXAMPLE = {"power_w": 0.094, "freq_hz": 1e3, "duty": 0.5, "window_s": 1e-4}
 
 
 def golden_models() -> dict[str, ThermalModel]:
@@ -65,6 +72,23 @@ def _pwm_bench() -> str:
                         description="run: ngspice actuator_pwm_1khz.cir")
 
 
+def heater_model() -> ThermalModel:
+    """The paper-like actuator with the simulated bench's heater diode (``electrical``)."""
+    return ThermalModel.load(HEATER_EXAMPLE)
+
+
+def _heater_lib(dialect: str) -> Callable[[], str]:
+    return lambda: render_electrothermal(heater_model(), dialect, "cauer", "HEATER",
+                                         f"actuator_heater_{dialect}.lib", temperature="rise")
+
+
+def _circuit_deck() -> str:
+    c = CIRCUIT_EXAMPLE
+    text, _, _ = CircuitPwm(heater_model().with_topology("cauer")).netlist(
+        "actuator_heater_ngspice.lib", c["power_w"], c["freq_hz"], c["duty"], c["window_s"])
+    return text
+
+
 def vendor_model() -> ThermalModel:
     """The README example's vendor network, imported from the shipped excerpt."""
     return import_model(data_path(VENDOR_EXAMPLE[0]), VENDOR_EXAMPLE[1])
@@ -88,6 +112,8 @@ GOLDEN: dict[str, Callable[[], str]] = {
     "actuator_pwm_1khz.cir": _pwm_bench,
     f"{VENDOR_EXAMPLE[1]}.lib": _vendor_lib,
     f"{VENDOR_EXAMPLE[1]}_heatsink.cir": _heatsink_deck,
+    **{f"actuator_heater_{d}.lib": _heater_lib(d) for d in DIALECTS},
+    "actuator_fig3_bench.cir": _circuit_deck,
 }
 
 

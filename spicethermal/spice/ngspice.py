@@ -199,7 +199,8 @@ def _read_wrdata(path: Path, vectors: Sequence[str]) -> Waveforms:
     if not first.strip():
         raise SimulationError("ngspice wrote no data")
     # numpy's C reader on the file itself (a list of lines goes through Python)
-    data = np.loadtxt(path, skiprows=int(first.strip().startswith("time")), ndmin=2)
+    # the header names the scale: time, or v-sweep for a .dc analysis
+    data = np.loadtxt(path, skiprows=int(first.strip()[:1].isalpha()), ndmin=2)
     if data.shape[1] != len(vectors) + 1:
         raise SimulationError(f"ngspice wrote {data.shape[1]} columns, expected "
                               f"{len(vectors) + 1}")

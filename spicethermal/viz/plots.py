@@ -24,6 +24,8 @@ Contents
 * Fig. 8 and Table 2 — duty-cycle impedance curves :func:`plot_r_duty`, :func:`fig8`; PWM
   residuals as grouped bars :func:`plot_table2` and heat map :func:`plot_table2_heatmap`, both in
   :func:`fig_table2`.
+* The heater as an electrothermal part — the diode law's fit :func:`fig_diode_fit`; Vf, I and
+  Tj in the bench circuit (Fig. 3) :func:`fig_circuit`.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ from .diagnosis import (
     plot_dataset_residuals,
     plot_staircase,
 )
+from .electrothermal import fig_circuit, fig_diode_fit
 from .fit import (
     fig7,
     fig_calibration,
@@ -76,9 +79,10 @@ from .pwm import (
 )
 
 __all__ = ["FIG8_DUTIES", "axes", "diagnosis_figures", "eng", "fig7", "fig8",
-           "fig_before_after", "fig_calibration", "fig_candidates", "fig_drive",
-           "fig_fit_band", "fig_spectrum", "fig_spectrum_band", "fig_stages", "fig_staircase",
-           "fig_structure", "fig_structure_band", "fig_table1", "fig_table2",
+           "fig_before_after", "fig_calibration", "fig_candidates", "fig_circuit",
+           "fig_diode_fit", "fig_drive", "fig_fit_band", "fig_spectrum", "fig_spectrum_band",
+           "fig_stages", "fig_staircase", "fig_structure", "fig_structure_band", "fig_table1",
+           "fig_table2",
            "fig_table2_diagnosis", "new_figure", "plot_calibration", "plot_candidates",
            "plot_cumulative_structure", "plot_dataset_residuals",
            "plot_differential_structure", "plot_drive", "plot_drive_duty", "plot_fit",

@@ -45,7 +45,8 @@ static const st_board_t board = {
      {78125L, 0L, 160L},          /* Id: uA */
      {78125L, 0L, 1600L},         /* Tamb: m degC */
      {78125L, -8000000L, 800L}},  /* Taux: m degC */
-    250000UL, 1023u, 700000UL, -10000L, 90000L, 0u, 10u, "pic18f4431", 0u, 0u};
+    250000UL, 1023u, 700000UL, -10000L, 90000L, 0u, 10u, "pic18f4431",
+    1000UL, 0u, 0u}; /* block B's sense current: 1 mA; one heater (no array) */
 
 const st_board_t *hal_board(void) { return &board; }
 

@@ -213,7 +213,8 @@ def run_drive(args: argparse.Namespace) -> int:
     int
     """
     for flag, bad in (("--node", args.node != 0), ("--release", args.release is not None),
-                      ("--keep-warm", args.keep_warm != 0), ("--spice", args.spice)):
+                      ("--keep-warm", args.keep_warm != 0), ("--spice", args.spice),
+                      ("--circuit", args.circuit)):
         if bad:
             raise DataFormatError(f"{flag}: not for an array (its dots are its ports)")
     if (args.text is None) == (args.patterns is None):

@@ -31,11 +31,13 @@ HELP = ("measure on the bench or the simulated bench (sim://actuator, sim://mur8
 
 ACTION_HELP = {
     "run": "the whole run: calibrate, rth, cooling (two powers), pwm (the 18-point grid)",
-    "calibrate": "TSP calibration on the hot plate at several temperatures",
+    "calibrate": "TSP calibration on the hot plate at several temperatures, with the heater's "
+                 "forward voltage at a few currents (firmware 1.2 on, bench protocol 3)",
     "rth": "thermal resistance at 99.9 %% duty with sample windows",
     "cooling": "cooling curves at log-spaced times after power cut-off, one per power",
     "pwm": "PWM readings at a grid of frequencies and duty cycles",
-    "coupling": "array boards: heat each heater in turn, read every port (heat one, read all)",
+    "coupling": "array boards (firmware 1.3, bench protocol 4): heat each heater in turn, read "
+                "every port (heat one, read all)",
 }
 
 

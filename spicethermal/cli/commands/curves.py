@@ -14,11 +14,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ...report.tables import duty_family
 from ...core.errors import DataFormatError
 from ...io.bundle import format_columns
 from ...io.files import atomic_write_text
 from ...model import ThermalModel
+from ...report.tables import duty_family
 from ...viz.plots import FIG8_DUTIES, fig8
 from ._types import duty as _duty
 from ._types import listed, old_figure_output

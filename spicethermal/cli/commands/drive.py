@@ -6,7 +6,9 @@ PWM ripple included, stays at or below ``--t-max``; then holds it. Prints the sc
 the time to target against the constant duty with the same steady state; ``--json`` prints
 the result document, ``--plot`` writes the figure, ``--spice`` a self-contained ngspice deck
 that reproduces the switched drive, and ``--verify`` runs that deck in ngspice and compares
-the junction peak with the prediction.
+the junction peak with the prediction; with ``--circuit`` the deck and the check are the
+paper's bench circuit around the electrothermal heater (a model with a diode law), the
+schedule switching the heating current (:mod:`spicethermal.drive.circuit`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import argparse
 
 from ...core.errors import DataFormatError
 from ...drive.check import verify
+from ...drive.circuit import circuit_deck, verify_circuit
 from ...drive.optimize import (
     DEFAULT_DUTY_STEP,
     DEFAULT_F_PWM_HZ,
@@ -24,6 +27,7 @@ from ...drive.optimize import (
 from ...engines.interface import NAMES
 from ...io.files import atomic_write_text, dumps_json
 from ...model import ThermalModel
+from ...spice.lib import DIALECTS
 from ...viz.plots import fig_drive
 from ._array import add_drive_arguments, is_array_document, run_drive
 from ._types import add_engine_options, add_option, frequency, positive_power, quantity
@@ -77,6 +81,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write a self-contained ngspice deck reproducing the switched drive")
     parser.add_argument("--verify", action="store_true",
                         help="run the deck in ngspice and compare the junction peak")
+    parser.add_argument("--circuit", action="store_true",
+                        help="--spice and --verify through the bench circuit (Fig. 3) around the "
+                             "electrothermal heater: the schedule switches the heating current "
+                             "(set to give --power at the ambient); needs a model with a diode "
+                             "law")
+    parser.add_argument("--dialect", choices=DIALECTS, default="ngspice",
+                        help="with --circuit: the .lib dialect (default ngspice)")
     add_engine_options(parser, NAMES, "engine of --verify: ngspice (ngspice -b, pieces in "
                        "parallel; auto) or pyspice; the drive itself is computed in closed form")
     add_drive_arguments(parser)
@@ -104,10 +115,15 @@ def run(args: argparse.Namespace) -> int:
                             keep_warm_duty=args.keep_warm, duty_step=args.duty_step)
     written = []
     if args.spice:
-        written.append(str(atomic_write_text(args.spice, result.spice_bench())))
+        deck = circuit_deck(result, args.dialect) if args.circuit else result.spice_bench()
+        written.append(str(atomic_write_text(args.spice, deck)))
     if args.plot:
         written.append(str(fig_drive(result, args.plot)))
-    check = verify(result, quiet=args.quiet, engine=spice) if args.verify else None
+    check = None
+    if args.verify and args.circuit:
+        check = verify_circuit(result, spice, args.dialect)
+    elif args.verify:
+        check = verify(result, quiet=args.quiet, engine=spice)
     if args.json:
         doc = result.to_dict()
         if check is not None:
@@ -117,7 +133,12 @@ def run(args: argparse.Namespace) -> int:
     print(result)
     print()
     print(result.table())
-    if check is not None:
+    if check is not None and args.circuit:
+        print(f"{check['engine']} bench circuit ({check['dialect']}, from cold, first "
+              f"{check['window_s']:.4g} s; heating current {check['heating_current_a']:.4g} A): "
+              f"junction peak {check['circuit_peak_junction_c']:.4f} °C at "
+              f"{check['circuit_peak_at_s']:.4g} s, {check['margin_k']:.3f} K under t_max")
+    elif check is not None:
         runs = "one run" if check["pieces"] == 1 else f"{check['pieces']} parallel runs"
         line = (f"{check['engine']} (switched, first {check['window_s']:.4g} s in {runs}): "
                 f"junction peak "

@@ -1,4 +1,7 @@
-"""``spicethermal export``: write a model as a SPICE subcircuit library."""
+"""``spicethermal export``: write a model as a SPICE subcircuit library: the thermal network
+(``.SUBCKT NAME TJ TREF``), or with ``--electrothermal`` the heater as an electrothermal part
+(``.SUBCKT NAME A K TJ TREF``: the diode's current follows its fitted Vf(I, T), its I·V heats
+the ladder, :mod:`spicethermal.spice.electrothermal`)."""
 
 from __future__ import annotations
 
@@ -6,6 +9,7 @@ import argparse
 
 from ...core.errors import DataFormatError
 from ...model import ThermalModel
+from ...spice.electrothermal import export_electrothermal, missing_law
 from ...spice.lib import (
     DIALECTS,
     TEMPERATURES,
@@ -19,13 +23,14 @@ from ...spice.lib import (
 from ._array import is_array_document, run_export
 
 NAME = "export"
-HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, pins and temperature "
-        "convention as you choose) for ngspice, PSPICE or LTspice")
+HELP = ("write MODEL.json as a .lib subcircuit (.SUBCKT NAME TJ TREF, or NAME A K TJ TREF with "
+        "--electrothermal; pins and temperature convention as you choose) for ngspice, PSPICE "
+        "or LTspice")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json",
-                        help="spicethermal-model/3 (/2, /1) file, or an array model "
+                        help="spicethermal-model/4 (/3, /2, /1) file, or an array model "
                              "(spicethermal-array-model/1: .SUBCKT NAME TJ1 ... TJN TREF)")
     parser.add_argument("--dialect", choices=DIALECTS, default="ngspice",
                         help="the simulator's syntax: ngspice (default), pspice or ltspice")
@@ -39,7 +44,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pins", default="TJ,TREF", metavar="J,REF[,AMB]",
                         help="pin names in .SUBCKT order: junction, reference (case or "
                              "ambient)[, ambient = thermal ground of a Cauer ladder]; or "
-                             "role=NAME items, e.g. case=TC,junction=TJ (default TJ,TREF)")
+                             "role=NAME items, e.g. case=TC,junction=TJ (default TJ,TREF); with "
+                             "--electrothermal anode and cathode first (A,K,TJ,TREF; roles "
+                             "anode, cathode), A and K when not named")
+    parser.add_argument("--electrothermal", action="store_true",
+                        help="the heater as an electrothermal part: the diode's current follows "
+                             "the model's fitted Vf(I, T) at the junction temperature and its "
+                             "I*V heats the ladder (needs a model with a diode law, "
+                             "spicethermal-model/4)")
     parser.add_argument("--temperature", choices=TEMPERATURES, default="absolute",
                         help="absolute (default): node voltages are temperatures in degC, you "
                              "drive the reference pin; rise: rises in K over node 0 = ambient")
@@ -52,19 +64,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if is_array_document(args.model):  # an N-port array model: TJ1 ... TJN TREF
+        if args.electrothermal:
+            raise DataFormatError("--electrothermal: for a single heater's model with a diode "
+                                  "law (an array model is thermal only)")
         return run_export(args)
     if args.verify:
         raise DataFormatError("--verify: for an array model (a single model's .lib is checked "
                               "by the tests and by compare)")
-    pins = Pins.parse(args.pins)  # before reading anything: bad options write nothing
+    # before reading anything: bad options write nothing
+    pins = Pins.parse(args.pins, electrical=args.electrothermal)
     if args.name is not None:
         check_name(args.name)
     model = ThermalModel.load(args.model)
+    if args.electrothermal and missing_law(model, args.model):
+        raise DataFormatError(missing_law(model, args.model))
     name = args.name if args.name is not None else default_name(model, args.output)
-    path = export(model, args.output, args.dialect, args.topology, name, pins=pins,
-                  temperature=args.temperature)
+    write = export_electrothermal if args.electrothermal else export
+    path = write(model, args.output, args.dialect, args.topology, name, pins=pins,
+                 temperature=args.temperature)
     ladder = model.with_topology(written_topology(model, args.topology)).ladder
-    print(f"wrote {path}: .SUBCKT {name} {' '.join(pins.names)}, {ladder.topology} ladder of "
-          f"{ladder.order} stages, Rth = {model.rth:.6g} K/W ({model.reference}), "
+    what = "electrothermal part: diode law Vf(I, T) and a " if args.electrothermal else ""
+    print(f"wrote {path}: .SUBCKT {name} {' '.join(pins.names)}, {what}{ladder.topology} "
+          f"ladder of {ladder.order} stages, Rth = {model.rth:.6g} K/W ({model.reference}), "
           f"{args.dialect} dialect, {args.temperature} temperatures")
     return 0

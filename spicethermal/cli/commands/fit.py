@@ -7,10 +7,14 @@ first ``zth`` table; ``--curve`` picks another), a Zth or datasheet points CSV (
 (with ``--calibration`` or ``--k-factor`` where the file has none). ΣR = Rth is held whenever
 Rth is known: measured by a cooling curve (eq. 1), given in the bundle or by ``--rth``. The
 fit's report (order, criterion, R ± u, τ ± u) goes into the model's provenance and its table to
-stdout. A bundle whose only curves are an array's ``coupling`` section (heat one, read all)
-gets the array's N-port network instead (``docs/array-model-format.md``): ``--order`` and
-``--max-order`` count the nodes of each cell's chain, and the error of every element is
-printed.
+stdout. A bundle with forward-voltage points (``spicethermal-bundle/3``) also gets its
+heater's diode law Vf(I, T), fitted to them and the TSP calibration with the ladder's
+self-heating (:func:`spicethermal.fit.diode.fit_electrical`): its parameters ± u and residuals
+are printed, and the model (``spicethermal-model/4``) keeps it for ``export --electrothermal``.
+A bundle whose only curves are an array's ``coupling`` section (heat one, read all,
+``spicethermal-bundle/4``) gets the array's N-port network instead
+(``docs/array-model-format.md``): ``--order`` and ``--max-order`` count the nodes of each
+cell's chain, and the error of every element is printed.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from ...analysis.diagnose import fit_with_effects
 from ...core.errors import DataFormatError
 from ...effects import plugin
 from ...fit.bootstrap import fit_bootstrap
+from ...fit.diode import fit_electrical
 from ...fit.ladder import check_rth, fit_model
 from ...identify.readings import cooling_tj_c
 from ...identify.sources import early_time_json
@@ -57,7 +62,8 @@ def _order(text: str) -> int | str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("source", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("-o", "--output", metavar="MODEL.json", required=True,
-                        help="model file to write (spicethermal-model/3)")
+                        help="model file to write (spicethermal-model/3; /4 with the heater's "
+                             "diode law when the bundle has forward-voltage points)")
     parser.add_argument("--order", type=_order, default="auto", metavar="N|auto",
                         help="number of RC stages, or auto (default: chosen by BIC)")
     parser.add_argument("--max-order", type=_count, default=10, metavar="N",
@@ -94,17 +100,27 @@ def _run_with_effects(args: argparse.Namespace, source: Path) -> int:
     if not source.is_dir():
         raise DataFormatError(f"{source}: --effect needs a bundle directory (the effects are "
                               f"fitted to its cooling curves, PWM grid and calibration)")
-    model = fit_with_effects(Bundle.read(source), args.effect,
+    bundle = Bundle.read(source)
+    model = fit_with_effects(bundle, args.effect,
                              provenance={"tool": f"spicethermal {__version__} fit",
                                          "source": str(source)})
     if args.topology != model.ladder.topology:
         model = model.with_topology(args.topology)
+    model, electrical = _with_electrical(model, bundle)
     out = model.save(args.output)
     if not args.quiet:
         print(f"{model.ladder.order}-stage ladder, Rth = {model.rth:.5g} K/W; effects: "
               + "; ".join(f"{e.name} ({e.form}): {e.describe()}" for e in model.effects))
+        if electrical is not None:
+            print(electrical)
         print(f"wrote {out}")
     return 0
+
+
+def _with_electrical(model, bundle: Bundle):
+    """``model`` with the diode law of the bundle's forward points (and the fit), or as it is."""
+    fit = fit_electrical(bundle, model)
+    return (model, None) if fit is None else (replace(model, electrical=fit.law), fit)
 
 
 def _early_plot(src, args: argparse.Namespace, curve) -> Path:
@@ -146,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
     t = [float(x) for x in curve.t_s if x > 0]
     if t:  # the data's time range, where the ladder holds: the .lib header states it
         model = replace(model, provenance={**model.provenance, "valid_t_s": [min(t), max(t)]})
+    model, electrical = _with_electrical(model, src.bundle)
     out = model.save(args.output)
     written = [str(out)]
     if args.plot and fb is not None:
@@ -165,6 +182,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"early time: {curve.early}")
         print(result)
         print(f"weighting: {result.weighting}")
+        if electrical is not None:
+            print(electrical)
         if fb is not None:
             print(f"bootstrap ({fb.n} resamples): u(R) = "
                   + ", ".join(f"{u:.3g}" for u in fb.u_r_k_per_w) + " K/W; u(tau) = "

@@ -11,6 +11,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ...core.plausible import implausible_rise
+from ...io.bundle import format_columns
+from ...io.files import atomic_write_text
+from ...model import ThermalModel
 from ...predict import (
     DEFAULT_POINTS,
     ENGINES,
@@ -19,10 +23,6 @@ from ...predict import (
     plot_prediction,
     predict,
 )
-from ...core.plausible import implausible_rise
-from ...io.bundle import format_columns
-from ...io.files import atomic_write_text
-from ...model import ThermalModel
 from ._types import add_engine_options, add_option, count, number, positive_duration
 
 NAME = "predict"
