@@ -1,10 +1,11 @@
 """Speed and accuracy of the temperature-coefficient forms' cooling model (issue 14).
 
 One cooling curve (200 points, 1 µs to the bench's last time) of each validation device with
-a strong ``local`` and ``power-law`` form: the CPU time of
-:func:`spicethermal.fit.tcforward.local_cooling_rise` (BDF, analytic Jacobian) and its largest
-difference from the independent validation network (:mod:`spicethermal.validation.network`,
-integrated at tight tolerance).
+a strong ``local`` and ``power-law`` form: the CPU time of the network simulator's cooling
+curve as the fits evaluate it (:meth:`spicethermal.engines.network.NetworkBatch.cooling`:
+exponential steps on the network frozen at each step's temperatures) and its largest difference
+from the independent validation network (:mod:`spicethermal.validation.network`, integrated at
+tight tolerance).
 
 Run: ``.venv/bin/python bench/bench_tc_forms.py``
 """
@@ -14,10 +15,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from spicethermal.fit.tcforward import local_cooling_rise
 
 from spicethermal.core.ladder import Cauer
 from spicethermal.effects import Effect
+from spicethermal.engines.network import NetworkBatch
 from spicethermal.validation.cases import DEVICES
 from spicethermal.validation.network import ResistanceLaw
 
@@ -37,7 +38,7 @@ def measure() -> tuple[float, float]:
         for effect, changes in cases:
             c0 = time.process_time()
             for _ in range(3):
-                fast = local_cooling_rise(cauer, effect, 25.0, power, t)
+                fast = NetworkBatch.of(cauer, (effect,)).cooling(power, 25.0, t)[0]
             times.append((time.process_time() - c0) / 3)
             net = dev.network(**changes)
             _, path = net.integrate(net.steady(power, 25.0), t[-1], 0.0, 25.0, t_eval=t,
