@@ -1,8 +1,8 @@
 """A newcomer's path: README.md top to bottom, in a fresh shell, in a fresh clone.
 
-``tests/test_docs.py`` runs every block with the project's Python on the PATH; here nothing is
-on the PATH but the system's, as in a new terminal after ``make``: the README itself must say
-how to reach ``spicethermal``. The clone is the working tree as it is (HEAD, with the tracked
+This is the one run of the README's commands (``tests/test_docs.py`` runs the other docs' and
+checks the figures the README states). Nothing is on the PATH but the system's, as in a new
+terminal after ``make``: the README itself must say how to reach ``spicethermal``. The clone is the working tree as it is (HEAD, with the tracked
 files' uncommitted changes copied over); ``make`` is not run again: the clone's ``.venv`` is
 the checkout's (what ``make setup`` built), so nothing is installed. The blocks run in order in
 one shell session, as typed: ``sh`` as is, ``python`` through ``python``, a ``spice`` deck saved
