@@ -2,11 +2,12 @@
 
 This is the one run of the README's commands (``tests/test_docs.py`` runs the other docs' and
 checks the figures the README states). Nothing is on the PATH but the system's, as in a new
-terminal after ``make``: the README itself must say how to reach ``spicethermal``. The clone is the working tree as it is (HEAD, with the tracked
-files' uncommitted changes copied over); ``make`` is not run again: the clone's ``.venv`` is
-the checkout's (what ``make setup`` built), so nothing is installed. The blocks run in order in
-one shell session, as typed: ``sh`` as is, ``python`` through ``python``, a ``spice`` deck saved
-to a file and run by ``ngspice -b`` (into a raw file when the README runs it interactively).
+terminal after ``make``: the README itself must say how to reach ``spicethermal``. The clone is
+the working tree as it is (HEAD, with the tracked files' uncommitted changes copied over);
+``make`` is not run again: the clone's ``.venv`` is the checkout's (what ``make setup`` built),
+so nothing is installed. The blocks run in order in one shell session, as typed: ``sh`` as is,
+``python`` through ``python``, a ``spice`` deck saved to a file and run by ``ngspice -b`` (into a
+raw file when the README runs it interactively).
 """
 
 from __future__ import annotations
