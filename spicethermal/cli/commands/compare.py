@@ -25,7 +25,7 @@ HELP = "measured vs model over every data set of a bundle (the paper's Table 2)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/3 (/2, /1) file")
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model file (/1 to /4)")
     parser.add_argument("bundle", metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("--json", action="store_true",
                         help="print the spicethermal-comparison/1 document")

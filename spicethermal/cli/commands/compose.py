@@ -22,7 +22,7 @@ HELP = ("chain thermal models in series (a part's junction-to-case, an interface
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("models", nargs="+", metavar="MODEL.json",
-                        help="spicethermal-model/3 (/2, /1) files, junction first: PART.json "
+                        help="spicethermal-model files (/1 to /4), junction first: PART.json "
                              "[TIM.json ...] HEATSINK.json")
     parser.add_argument("-o", "--output", required=True, metavar="SYSTEM.json",
                         help="model file to write (spicethermal-model/3, Cauer)")

@@ -28,7 +28,7 @@ HELP = "duty-cycle impedance curves r_D(t), eq. 3 and exact (the paper's Fig. 8)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/3 (/2, /1) file")
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model file (/1 to /4)")
     parser.add_argument("--plot", metavar="FIG.png",
                         help="write the figure (eq. 3 dashed, exact solid)")
     parser.add_argument("-o", "--output", metavar="TABLE.csv",

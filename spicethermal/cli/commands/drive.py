@@ -47,7 +47,7 @@ def _duty(text: str) -> float:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL.json",
-                        help="model file (spicethermal-model/3, /2 or /1), or an array model "
+                        help="model file (spicethermal-model/1 to /4), or an array model "
                              "(spicethermal-array-model/1: the options below for arrays)")
     parser.add_argument("--t-max", type=_number, required=True, metavar="C",
                         help="junction limit in °C; applies to the PWM peak")

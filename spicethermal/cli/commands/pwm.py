@@ -31,7 +31,7 @@ HELP = "periodic steady state under PWM: peak, mean, valley and the bench readin
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model/3 (/2, /1) file")
+    parser.add_argument("model", metavar="MODEL.json", help="a spicethermal-model file (/1 to /4)")
     parser.add_argument("--freq", required=True, metavar="HZ[,HZ...]", type=listed(frequency),
                         help="PWM frequency, Hz (several: a grid, e.g. 500,1k,3k,5k,10k,25k)")
     parser.add_argument("--duty", required=True, metavar="D[,D...]", type=listed(duty),
