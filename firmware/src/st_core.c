@@ -116,25 +116,6 @@ static void drain_fifo(st_core_t *c)
     }
 }
 
-void st_record(st_core_t *c, uint8_t kind, uint32_t t_us)
-{
-    st_raw_t *s;
-    if (c->f_count >= ST_FIFO_LEN) {
-        c->f_dropped++;
-        return;
-    }
-    s = &c->fifo[(uint8_t)((c->f_head + c->f_count) % ST_FIFO_LEN)];
-    s->kind = kind;
-    s->port = c->p.proc == ST_PROC_COUPLING && kind == ST_KIND_POWER ? c->p.heater : c->p.port;
-    s->t_us = t_us;
-    memcpy(s->code, c->p.codes, sizeof s->code);
-    if (c->p.n_samples == 0) {
-        c->p.first_index = c->sample_index + c->f_count;
-    }
-    c->f_count++;
-    c->p.n_samples++;
-}
-
 static void flush_wire(st_core_t *c)
 {
     size_t n;
@@ -165,22 +146,6 @@ static void flush_wire(st_core_t *c)
 }
 
 /* ------------------------------------------------------------------ heater and ADC */
-void st_heater_off(void)
-{
-    hal_heater_pwm(0, 0);
-    hal_release();
-    if (hal_board()->ports > 1) { /* an array board: back to its first heater and diode */
-        hal_select_heater(0);
-        hal_select_tsp(0);
-    }
-}
-
-void st_arm(st_core_t *c, uint8_t kind)
-{
-    c->p.adc_armed = 1;
-    c->p.adc_ready = 0;
-    c->p.adc_kind = kind;
-}
 
 static void regulate(st_core_t *c)
 {
@@ -192,18 +157,6 @@ static void regulate(st_core_t *c)
     }
     i_ua = st_current_for_power(c->p.power_uw, (uint32_t)vd);
     hal_heater_dac(st_dac_for_current(i_ua, bd->i_full_ua, bd->dac_max));
-}
-
-void st_finish(st_core_t *c, uint8_t status)
-{
-    if (c->p.proc != ST_PROC_CAL) {
-        st_heater_off();
-    }
-    c->p.status = status;
-    if (c->f_dropped && status == ST_OK) {
-        c->p.status = ST_ERR_OVERFLOW;
-    }
-    c->p.state = S_IDLE;
 }
 
 /* ------------------------------------------------------------------ commands */
@@ -412,20 +365,6 @@ static void handle(st_core_t *c, const st_frame_t *f)
 }
 
 /* ------------------------------------------------------------------ procedures */
-void st_curve_next(st_core_t *c, uint32_t after_us)
-{
-    st_proc_t *p = &c->p;
-    while (p->k < p->total && st_log_time_us(p->t_first_us, p->per_decade, p->k) < after_us) {
-        p->k++;
-    }
-    if (p->k >= p->total) {
-        st_finish(c, ST_OK);
-        return;
-    }
-    hal_adc_at(p->t_cut + st_log_time_us(p->t_first_us, p->per_decade, p->k));
-    st_arm(c, ST_KIND_CURVE);
-    p->state = S_CURVE;
-}
 
 static void next_reading(st_core_t *c, uint32_t now)
 {

@@ -1,5 +1,6 @@
-/* Internals of the core shared by its two files: st_core.c (commands, the five single-heater
- * procedures, FIFO, link) and st_array.c (the coupling procedure of an array board). */
+/* Internals of the core shared by its files: st_core.c (commands, the five single-heater
+ * procedures, FIFO, link), st_array.c (the coupling procedure of an array board) and st_proc.c
+ * (what both do: record, arm, heater off, finish, the cooling curve's next reading). */
 #ifndef ST_CORE_INT_H
 #define ST_CORE_INT_H
 #include <stdint.h>
@@ -20,6 +21,7 @@ enum {
 /* what follows a scan of the ports (st_proc_t.scan_then) */
 enum { SCAN_COLD = 0, SCAN_STEADY, SCAN_CURVE };
 
+/* st_proc.c */
 void st_record(st_core_t *c, uint8_t kind, uint32_t t_us);
 void st_arm(st_core_t *c, uint8_t kind);
 void st_heater_off(void);
