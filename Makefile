@@ -28,8 +28,9 @@ demo: setup firmware
 	$(BIN)/spicethermal demo -o out/demo
 	@echo "the spicethermal command is in $(VENV): in each new shell, run  . $(BIN)/activate"
 
-# every test, two processes (pytest-xdist): the README's and CI's command
+# ruff, the firmware tests and every test, two processes (pytest-xdist): the README's and CI's command
 test: setup firmware
+	$(BIN)/ruff check -q spicethermal tests bench
 	$(MAKE) -C firmware test
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -368,3 +369,41 @@ def test_no_effect_is_named_outside_the_effects_package() -> None:
                 if hits:
                     found.append((name, node.lineno, hits))
     assert not found, found
+
+
+FIRMWARE = Path(__file__).resolve().parent.parent / "firmware"
+C_DEFINITION = re.compile(r"^(?!static\b)[A-Za-z_][\w \t\*]*?\b([A-Za-z_]\w*)\s*\([^;{}]*\)\s*\{",
+                          re.M)
+C_CALL = re.compile(r"\b([A-Za-z_]\w*)\s*\(")
+
+
+def c_calls(sources: dict[str, str], interface: frozenset[str] = frozenset()
+            ) -> dict[str, set[str]]:
+    """File -> the files whose external functions it calls (comments and strings ignored);
+    the ``interface``'s functions, which each hardware layer defines, belong to no file."""
+    text = {name: re.sub(r'/\*.*?\*/|//[^\n]*|"(?:\\.|[^"\\])*"', " ", body, flags=re.S)
+            for name, body in sources.items()}
+    owner = {fn: name for name, body in text.items() for fn in C_DEFINITION.findall(body)
+             if fn not in interface}
+    return {name: {owner[fn] for fn in C_CALL.findall(body) if owner.get(fn, name) != name}
+            for name, body in text.items()}
+
+
+def test_the_c_call_graph_sees_definitions_and_calls() -> None:
+    graph = c_calls({"a.c": "/* b_f() */\nvoid a_f(int x)\n{\n    b_f();\n}\n",
+                     "b.c": "uint8_t b_f(void)\n{\n    return a_f(1);\n}\n"
+                            "static void b_g(void)\n{\n}\n"})
+    assert graph == {"a.c": {"b.c"}, "b.c": {"a.c"}} and cycles(graph) == [["a.c", "b.c"]]
+
+
+def test_no_circle_between_the_firmwares_files() -> None:
+    """The portable core's files call down, never round (a procedure split over two files
+    shares what both use through a third below them, st_proc.c); the hardware layers call the
+    core, which reaches them only through the interface of ``st_hal.h``."""
+    sources = {str(p.relative_to(FIRMWARE)): p.read_text(encoding="utf-8")
+               for p in sorted([*FIRMWARE.glob("src/*.c"), *FIRMWARE.glob("hal/*/*.c")])}
+    hal = (FIRMWARE / "src" / "st_hal.h").read_text(encoding="utf-8")
+    interface = frozenset(re.findall(r"\b(hal_\w+)\s*\(", hal))
+    graph = c_calls(sources, interface)
+    assert "src/st_proc.c" in graph["src/st_array.c"], "the call graph reads no call"
+    assert not cycles(graph), f"circles between firmware files: {cycles(graph)}"
