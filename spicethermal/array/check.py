@@ -179,7 +179,7 @@ def verify_drive(cd: CellDrive, which: str = "ours", engine: str = "ngspice") ->
         the switched runs' peaks), ``runs``.
     """
     schedule = {"ours": cd.schedule, "naive": cd.naive}[which]
-    ev = {"ours": cd.ours, "naive": cd.naive_eval}[which]
+    ev = cd.evaluation(which)
     lim = cd.limits
     dyn = ArrayDynamics(cd.model, lim.p_max_w, lim.f_pwm_hz)
     windows = _windows(cd, ev)

@@ -78,6 +78,21 @@ class CellDrive:
     naive_eval: Evaluation = field(repr=False)
     constant_eval: Evaluation = field(repr=False)
 
+    def evaluation(self, which: str) -> Evaluation:
+        """How the drive ``ours``, ``naive`` or ``constant`` does on the coupled network.
+
+        Parameters
+        ----------
+        which : str
+            ``ours``, ``naive`` or ``constant``.
+
+        Returns
+        -------
+        Evaluation
+        """
+        return {"ours": self.ours, "naive": self.naive_eval,
+                "constant": self.constant_eval}[which]
+
 
 def patterns_of_dots(dots: Sequence[Sequence[int]], model: ArrayModel) -> list[tuple[bool, ...]]:
     """Braille dot numbers (1-8) as raised cells of ``model`` (ports named ``D1`` ...).
@@ -325,8 +340,7 @@ class LineDrive:
         -------
         int
         """
-        attr = {"ours": "ours", "naive": "naive_eval", "constant": "constant_eval"}[which]
-        return sum(getattr(self.drives[c], attr).count(kind) for c in self.columns)
+        return sum(self.drives[c].evaluation(which).count(kind) for c in self.columns)
 
     def refresh(self, which: str) -> tuple[float, ...]:
         """Each line's refresh time (the slowest cell) under a drive, s.
@@ -340,8 +354,7 @@ class LineDrive:
         -------
         tuple of float
         """
-        attr = {"ours": "ours", "naive": "naive_eval", "constant": "constant_eval"}[which]
-        return tuple(max(getattr(self.drives[c], attr).refresh_s[k] for c in self.columns)
+        return tuple(max(self.drives[c].evaluation(which).refresh_s[k] for c in self.columns)
                      for k in range(len(self.lines)))
 
     def raised(self, which: str) -> tuple[float, ...]:
@@ -356,8 +369,7 @@ class LineDrive:
         -------
         tuple of float
         """
-        attr = {"ours": "ours", "naive": "naive_eval", "constant": "constant_eval"}[which]
-        return tuple(max(getattr(self.drives[c], attr).raised_s[k] for c in self.columns)
+        return tuple(max(self.drives[c].evaluation(which).raised_s[k] for c in self.columns)
                      for k in range(len(self.lines)))
 
 

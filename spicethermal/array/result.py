@@ -16,8 +16,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .evaluate import Evaluation
-
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
@@ -29,10 +27,6 @@ DRIVE_FORMAT = "spicethermal-array-drive/1"
 DRIVES = ("ours", "naive", "constant")
 #: The heat map's longest window, s (long enough for the substrate to warm).
 HEAT_MAP_S = 120.0
-
-
-def _evaluations(cd: CellDrive) -> dict[str, Evaluation]:
-    return {"ours": cd.ours, "naive": cd.naive_eval, "constant": cd.constant_eval}
 
 
 def _limits(cd: CellDrive) -> dict[str, float]:
@@ -62,7 +56,7 @@ def cell_document(cd: CellDrive, checks: dict[str, dict] | None = None) -> dict[
         JSON-ready; ``null`` refresh times never complete.
     """
     names = [p.name for p in cd.model.ports]
-    evs = _evaluations(cd)
+    evs = {k: cd.evaluation(k) for k in DRIVES}
     patterns = [{"t_s": t, "up": [n for n, u in zip(names, up, strict=True) if u],
                  "refresh_s": {k: _seconds(ev.refresh_s[i]) for k, ev in evs.items()},
                  "raised_s": {k: _seconds(ev.raised_s[i]) for k, ev in evs.items()},
@@ -103,7 +97,7 @@ def line_document(ld: LineDrive, checks: dict[str, dict] | None = None) -> dict[
             "distinct_columns": len(ld.drives),
             "violations": {k: {"t_max": ld.count(k, "t_max"),
                                "actuation": ld.count(k, "actuation")} for k in DRIVES},
-            "peak_c": {k: max(float(np.max(_evaluations(ld.drives[c])[k].peak_c))
+            "peak_c": {k: max(float(np.max(ld.drives[c].evaluation(k).peak_c))
                               for c in ld.columns) for k in DRIVES},
             "ngspice": checks or {}}
 
@@ -198,7 +192,7 @@ def heat_rows(ld: LineDrive, line: int = 0, t_points: int = 300, which: str = "o
     t = np.geomspace(period, stop, t_points)
     rows, labels = [], []
     for c, col in enumerate(ld.columns):
-        ev = _evaluations(ld.drives[col])[which]
+        ev = ld.drives[col].evaluation(which)
         for i, port in enumerate(first.model.ports):
             rows.append(np.interp(start + t, ev.t_s, ev.mean_c[:, i]))
             labels.append(f"c{c + 1} {port.name}")
