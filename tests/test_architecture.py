@@ -9,6 +9,7 @@ import importlib
 import re
 import subprocess
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 
 import pytest
@@ -63,20 +64,16 @@ def module_level(tree: ast.Module):
         yield node
 
 
+def package_imports(name: str, nodes: Iterable[ast.AST]) -> set[str]:
+    """Modules of the package that the import statements among ``nodes`` of module ``name``
+    load (:func:`imported`), itself excluded."""
+    return {dep for node in nodes if isinstance(node, ast.Import | ast.ImportFrom)
+            for dep in imported(name, node) if dep in MODULES} - {name}
+
+
 def imports_on_load(name: str) -> set[str]:
     """Modules of the package that importing ``name`` imports first (module level only)."""
-    out: set[str] = set()
-    for node in module_level(ast.parse(MODULES[name].read_text())):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names if a.name in MODULES)
-        elif isinstance(node, ast.ImportFrom):
-            target = resolve(name, node)
-            subs = {f"{target}.{a.name}" for a in node.names} & MODULES.keys()
-            out.update(subs)
-            if target in MODULES and len(subs) < len(node.names):
-                out.add(target)  # names defined by the module itself (not submodules)
-    out.discard(name)
-    return out
+    return package_imports(name, module_level(ast.parse(MODULES[name].read_text())))
 
 
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
@@ -307,17 +304,7 @@ def test_the_light_command_list_says_what_the_command_modules_say() -> None:
 def all_imports(name: str) -> set[str]:
     """Modules of the package that module ``name`` imports anywhere: at module level, under
     ``TYPE_CHECKING`` and in function bodies (a lazy import is still an arrow)."""
-    out: set[str] = set()
-    for node in ast.walk(ast.parse(MODULES[name].read_text())):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names if a.name in MODULES)
-        elif isinstance(node, ast.ImportFrom):
-            target = resolve(name, node)
-            subs = {f"{target}.{a.name}" for a in node.names} & MODULES.keys()
-            out.update(subs)
-            if target in MODULES and len(subs) < len(node.names):
-                out.add(target)
-    out.discard(name)
+    out = package_imports(name, ast.walk(ast.parse(MODULES[name].read_text())))
     return {m for m in out if not (name.startswith(m + ".") and MODULES[m].name == "__init__.py")}
 
 
