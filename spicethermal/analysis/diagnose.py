@@ -12,9 +12,11 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    Rivals (explanations outside the catalogue) are weighed alike and never named.
 4. **Forward selection**: the candidate with the lowest BIC is added when it is decisive
    (:func:`.rules.decisive`); candidates of other effects within :data:`.rules.DECISIVE_BIC`
-   of it are *tied*. A backward check then drops an earlier effect the model no longer needs
-   (its BIC without it within the margin). Until every data set is at its noise, nothing is
-   decisive, or :data:`.rules.MAX_EFFECTS` effects are named.
+   of it are *tied*. The effects are ranked on the model's ladder; the best, and every one
+   within that margin of it, grow their ladders first while they leave a data set beyond
+   the noise (:func:`~spicethermal.fit.search.grow`). A backward check then drops an earlier
+   effect the model no longer needs (its BIC without it within the margin). Until every data
+   set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are named.
 5. **Verdict** (:func:`verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
@@ -35,12 +37,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError, FitError
-from ..effects.base import CALIBRATION, EffectPlugin
+from ..effects.base import CALIBRATION
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.network import as_cauer
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData
-from ..fit.search import fit_effect, refit, without
+from ..fit.search import FormFit, fit_effect, grow, refit, without
 from ..model import ThermalModel
 from .compare import Comparison, ComparisonPoint
 from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, Candidate, Diagnosis, Step, Verdict
@@ -112,20 +114,46 @@ def _rechi(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
     return replace(fit, chi2=chi2)
 
 
-def _candidate(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
-               p: EffectPlugin, n_points: int, sizes: dict) -> tuple[Candidate, int] | None:
-    fits = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS,
-                      grow=lambda m: any(_beyond(data, m).values()))
-    if not fits:
-        return None
+def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Sequence[ModelFit],
+               best: ModelFit, n_points: int, sizes: dict) -> Candidate:
+    """The candidate of one effect: its best fit ``best`` weighed against ``current``."""
     b0 = bic(current, n_points)
-    best = min(fits, key=lambda m: bic(m, n_points))
     after = comparison_of(data, best.predictions)
-    cand = Candidate(best.effect(p.name), best, after, b0 - bic(best, n_points),
+    name = best.effects[-1].name
+    return Candidate(best.effect(name), best, after, b0 - bic(best, n_points),
                      explained(current.chi2, best.chi2, sizes),
                      cmp.rms_k / max(after.rms_k, 1e-300),
-                     tuple((m.effect(p.name).form, b0 - bic(m, n_points)) for m in fits))
-    return cand, sum(m.work for m in fits)
+                     tuple((m.effect(name).form, b0 - bic(m, n_points)) for m in fits))
+
+
+def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
+           fitted: dict[str, list[FormFit]], n_points: int,
+           sizes: dict) -> tuple[list[Candidate], int]:
+    """Every effect's candidate, best first. The effects are ranked on the model's ladder;
+    the best, and every one within :data:`.rules.DECISIVE_BIC` of it, then grow their
+    ladders while they leave a data set beyond the noise (the model's order was chosen
+    without the effect, whose misfit may have taken or hidden stages), and are weighed
+    grown."""
+    def best_of(forms: list[FormFit]) -> FormFit:
+        return min(forms, key=lambda f: bic(f.fit, n_points))
+
+    work = 0
+    cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], best_of(forms).fit,
+                           n_points, sizes) for n, forms in fitted.items()}
+    if not cands:
+        return [], 0
+    top = max(c.delta_bic for c in cands.values())
+    for name, forms in fitted.items():
+        if top - cands[name].delta_bic >= DECISIVE_BIC:
+            continue
+        lead = best_of(forms)
+        grown, spent = grow(data, noise, lead, REFINE_ROUNDS,
+                            lambda m: any(_beyond(data, m).values()))
+        work += spent
+        if grown is not lead.fit:
+            fits = [grown if f is lead else f.fit for f in forms]
+            cands[name] = _candidate(data, current, cmp, fits, grown, n_points, sizes)
+    return sorted(cands.values(), key=lambda c: -c.delta_bic), work
 
 
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,
@@ -198,16 +226,18 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     work = base.work
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
             and any(_beyond(data, current).values()):
-        cands = []
+        fitted = {}
         for p in plugins:
             if p.name in skipped or current.effect(p.name):
                 continue
             say(f"step {len(steps) + 1}: {p.name}")
-            got = _candidate(data, noise, current, cmp, p, n_points, sizes)
-            if got is not None:
-                cands.append(got[0])
-                work += got[1]
-        cands.sort(key=lambda c: -c.delta_bic)
+            forms = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS)
+            if forms:
+                fitted[p.name] = forms
+                work += sum(f.fit.work for f in forms)
+        say(f"step {len(steps) + 1}: the best on longer ladders")
+        cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes)
+        work += spent
         if not steps:
             first = tuple(cands)
         if not cands or not decisive(0.0, -cands[0].delta_bic, cands[0].explained):
@@ -349,8 +379,8 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
                      provenance: dict | None = None) -> ThermalModel:
     """The linear ladder and the named effects fitted jointly to every data set of
     ``bundle``, as the diagnosis fits them: the baseline and its noise, then each effect in
-    turn (every form; the one with the lowest criterion kept) with the ladder and the effects
-    before it refitted.
+    turn (every form; the one with the lowest criterion kept, its ladder grown as the
+    diagnosis grows it) with the ladder and the effects before it refitted.
 
     Parameters
     ----------
@@ -376,7 +406,9 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
             raise FitError(f"{data.source}: {name} cannot be fitted to these data (none of its "
                            f"data sets, {', '.join(sorted(plugin(name).traits.shown_by))}, "
                            f"shows it)")
-        current = min(fits, key=lambda m: bic(m, n_points))
+        best = min(fits, key=lambda f: bic(f.fit, n_points))
+        current = grow(data, noise, best, REFINE_ROUNDS,
+                       lambda m: any(_beyond(data, m).values()))[0]
     return ThermalModel(current.foster, current.effects, bundle.reference,
                         {**(provenance or {}), "fit": {
                             "effects": list(dict.fromkeys(names)),

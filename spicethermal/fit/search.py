@@ -6,8 +6,8 @@ variants (a node, a subset of layers), the ladder and the model's other effects 
 *screen*, all side by side, on the model's ladder); the best screened point of each form (of
 its two best variants for the first form, which ranks the variants for the forms that share
 them) is then refitted jointly with the ladder and every other effect, every form alike.
-:func:`refit` refits a model's every parameter; :func:`without` drops one effect and refits
-the rest.
+:func:`grow` refits a form's fit on longer ladders; :func:`refit` refits a model's every
+parameter; :func:`without` drops one effect and refits the rest.
 
 The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 """
@@ -15,6 +15,7 @@ The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -39,7 +40,8 @@ from .measurement import BundleData
 if TYPE_CHECKING:  # pragma: no cover
     pass
 
-__all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "evidence", "fit_effect", "refit", "without"]
+__all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect", "grow", "refit",
+           "without"]
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
@@ -47,6 +49,15 @@ SCREEN_TOL_REL = 1e-4
 #: The first form of an effect locates its discrete variants (a node, a subset of layers);
 #: the other forms that take the same variants are screened on this many of the best only.
 VARIANTS_KEPT = 2
+
+
+@dataclass(frozen=True, eq=False)
+class FormFit:
+    """One form of an effect fitted onto a model: the joint ``fit`` and the ``screened``
+    values of the effect it was refitted from (:func:`grow` starts from them too)."""
+
+    fit: ModelFit
+    screened: tuple[Mapping[str, float], ...]
 
 
 def evidence(data: BundleData, model: ModelFit, noise: Mapping[str, float]) -> Evidence:
@@ -147,8 +158,7 @@ def _clip(plugin: EffectPlugin, values: Mapping[str, float]) -> dict[str, float]
 
 def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                plugin: EffectPlugin, screen_rounds: int, refine_rounds: int,
-               forms: Sequence[str] | None = None,
-               grow: Callable[[ModelFit], bool] | None = None) -> list[ModelFit]:
+               forms: Sequence[str] | None = None) -> list[FormFit]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
     docstring); forms whose guess gives no start are left out. Every form is screened on the
     model's ladder from the plugin's starts (for every variant in the first form, for the
@@ -167,18 +177,10 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         Rounds of the screen and of the joint refit.
     forms : sequence of str, optional
         The forms to fit (default: all).
-    grow : callable, optional
-        While ``grow(fit)`` is true of the best form's fit (it leaves a data set beyond its
-        noise), that form is also refitted on a ladder one stage longer, then another
-        (started from the linear ladder of that order), until
-        :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing: the
-        model's order was chosen without the effect, whose misfit may have taken or hidden
-        stages. A longer ladder replaces the form's fit when its criterion (two parameters
-        a stage) is lower.
 
     Returns
     -------
-    list of ModelFit
+    list of FormFit
         One per form fitted, in the plugin's order of forms.
     """
     ev = evidence(data, model, noise)
@@ -251,19 +253,46 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         if lead is None or bic(fit, n_points) < bic(lead, n_points):
             lead = fit
         out.append(fit)
-    if grow and out:
-        k = min(range(len(out)), key=lambda i: bic(out[i], n_points))
-        current, misses = out[k], 0
-        while grow(out[k]) and misses < ORDER_PATIENCE:
-            longer = _longer(data, noise, current, refine_rounds, seeds[k])
-            if longer is None:
-                break
-            current = longer
-            if bic(longer, n_points) < bic(out[k], n_points):
-                out[k], misses = longer, 0
-            else:
-                misses += 1
-    return out
+    return [FormFit(f, tuple(v)) for f, v in zip(out, seeds, strict=True)]
+
+
+def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: int,
+         short: Callable[[ModelFit], bool]) -> tuple[ModelFit, int]:
+    """``form``'s fit on longer ladders while ``short(fit)`` holds of the best (it leaves a
+    data set beyond its noise): one stage more, then another (each started from the linear
+    ladder of that order), until :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a
+    row lower nothing. The model's order was chosen without the effect, whose misfit may
+    have taken or hidden stages. A longer ladder replaces the fit when its criterion (two
+    parameters a stage) is lower.
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to noise (K)
+    form : FormFit
+    rounds : int
+    short : callable
+
+    Returns
+    -------
+    ModelFit
+        ``form.fit`` itself when no longer ladder is better.
+    int
+        The work spent growing.
+    """
+    n_points = sum(data.sizes().values())
+    best = current = form.fit
+    misses = 0
+    while short(best) and misses < ORDER_PATIENCE:
+        longer = _longer(data, noise, current, rounds, form.screened)
+        if longer is None:
+            break
+        current = longer
+        if bic(longer, n_points) < bic(best, n_points):
+            best, misses = longer, 0
+        else:
+            misses += 1
+    return best, current.work - form.fit.work
 
 
 def _evaluated(data: BundleData, noise: Mapping[str, float], ladder: Cauer,
