@@ -45,7 +45,7 @@ __all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
-SCREEN_TOL_REL = 1e-4
+SCREEN_TOL_REL = 3e-4
 #: The first form of an effect locates its discrete variants (a node, a subset of layers);
 #: the other forms that take the same variants are screened on this many of the best only.
 VARIANTS_KEPT = 2
