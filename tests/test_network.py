@@ -88,6 +88,18 @@ def test_a_batch_is_its_members_side_by_side():
         assert together[k] == pytest.approx(alone, abs=2e-3)
 
 
+def test_members_that_repeat_are_simulated_once_and_read_back_in_place():
+    e = Effect.create("phase-change", t_c=50.0, width_k=2.0, latent_j=0.2, node=2)
+    big = NetworkBatch.of(Cauer(R4, C4), [e]).repeat(4)
+    big.r = big.r * np.array([[1.0], [1.1], [1.0], [1.1]])
+    distinct, rows = big.unique()
+    assert distinct.size == 2 and rows.tolist() in ([0, 1, 0, 1], [1, 0, 1, 0])
+    assert distinct.cooling(P, TREF, T)[rows] == pytest.approx(big.cooling(P, TREF, T),
+                                                               abs=2e-3)
+    alone, same = NetworkBatch.of(Cauer(R4, C4), [e]).unique()
+    assert alone.size == 1 and same.tolist() == [0]
+
+
 def test_a_member_in_thermal_runaway_is_nan_and_the_others_stand():
     e = Effect.create("temperature-coefficient", alpha_per_k=1e-2)
     net = NetworkBatch.of(Cauer(R4, C4), [e]).repeat(2)

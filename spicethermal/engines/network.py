@@ -183,6 +183,23 @@ class NetworkBatch:
         return NetworkBatch(np.repeat(self.r, k, axis=0), np.repeat(self.c, k, axis=0),
                             [t.repeat(k) for t in self.terms], self.tol_rel)
 
+    def unique(self) -> tuple[NetworkBatch, NDArray]:
+        """The distinct members (ladder and device parameters alike) and, for each member,
+        its row among them: ``(batch, rows)``, so that ``batch``'s results ``[rows]`` are
+        this batch's. A fit that moves only measurement effects simulates one network."""
+        keys = np.concatenate([self.r, self.c] + [
+            np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1), (self.size, 1))
+            for t in self.terms for v in t.params.values()], axis=1)
+        _, first, rows = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        if first.size == self.size:
+            return self, np.arange(self.size)
+        return NetworkBatch(self.r[first], self.c[first],
+                            [DeviceTerm(t.plugin, t.form, {
+                                n: np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1),
+                                                   (self.size, 1))[first]
+                                for n, v in t.params.items()}) for t in self.terms],
+                            self.tol_rel), rows.ravel()
+
     # -- the effects' terms ---------------------------------------------------------------
     def scale(self, theta: NDArray, tref: NDArray | float) -> NDArray:
         """Factor on every layer's resistance ``(B, n)`` at node rises ``theta``."""

@@ -99,10 +99,13 @@ def _true_cooling(data: BundleData, net: NetworkBatch) -> tuple[dict[str, NDArra
     return curves, steady
 
 
-def _after_off(data: BundleData, net: NetworkBatch) -> Callable[[NDArray | float], NDArray]:
-    """The PWM rows' true junction temperature ``delay`` after an on-phase ends."""
+def _after_off(data: BundleData, net: NetworkBatch,
+               rows: NDArray) -> Callable[[NDArray | float], NDArray]:
+    """The PWM rows' true junction temperature ``delay`` after an on-phase ends, for the
+    members ``net[rows]``."""
     p = data.pwm
     r, tau = net.frozen_foster(p.power_w, p.freq_hz, p.duty, p.tref_c)
+    r, tau = r[rows], tau[rows]
     peaks = p.power_w[None, :, None] * stage_peaks(r, tau, 1.0 / p.freq_hz[None, :, None],
                                                    p.duty[None, :, None])
 
@@ -161,12 +164,15 @@ def predict(data: BundleData, net: NetworkBatch,
         Predictions by data set name.
     """
     true: dict[str, NDArray] = {}
+    distinct, rows = net.unique()  # members that differ only in measurement effects share one
     if data.cooling:
-        curves, steady = _true_cooling(data, net)
-        true.update(curves)
+        curves, steady = _true_cooling(data, distinct)
+        true.update({k: v[rows] for k, v in curves.items()})
         if data.steady_curves:
-            true[STEADY] = np.concatenate([steady[c.name] for c in data.steady_curves], axis=1)
-    after_off = pwm_engine or (_after_off(data, net) if data.pwm is not None else None)
+            true[STEADY] = np.concatenate([steady[c.name][rows] for c in data.steady_curves],
+                                          axis=1)
+    after_off = pwm_engine or (_after_off(data, distinct, rows) if data.pwm is not None
+                               else None)
     if after_off is not None:
         true[PWM] = after_off(data.pwm.window_s)
     if data.calibration is not None:
