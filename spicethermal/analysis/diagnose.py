@@ -15,8 +15,10 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    of it are *tied*. The effects are ranked on the model's ladder; the best, and every one
    within that margin of it, grow their ladders first while they leave a data set beyond
    the noise (:func:`~spicethermal.fit.search.grow`). A backward check then drops an earlier
-   effect the model no longer needs (its BIC without it within the margin). Until every data
-   set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are named.
+   effect the model no longer needs (its BIC without it within the margin). An effect after
+   a catalogued one is added only when it brings every data set to its noise. Until every
+   data set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are
+   named.
 5. **Verdict** (:func:`verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
@@ -243,6 +245,12 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         if not cands or not decisive(0.0, -cands[0].delta_bic, cands[0].explained):
             break
         chosen = cands[0]
+        if chosen.catalogued and any(s.status != RIVAL for s in steps) \
+                and any(_beyond(data, chosen.fit).values()):
+            # a further effect that leaves a structured residual too: the effect before it
+            # is an approximate form, and any flexible effect explains part of what the
+            # approximation leaves, which is no evidence of its physics
+            break
         tied = tuple(c for c in cands[1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained))
         status = _status(chosen, tied, data)
