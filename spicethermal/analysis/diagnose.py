@@ -34,6 +34,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -85,6 +86,11 @@ def _beyond(data: BundleData, fit: ModelFit) -> dict[str, bool]:
                             data.measured(n) - fit.predictions[n]) for n in data.datasets}
 
 
+def _short(data: BundleData, fit: ModelFit) -> bool:
+    """Whether ``fit`` leaves a data set of ``data`` beyond its noise."""
+    return any(_beyond(data, fit).values())
+
+
 def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, dict]:
     """The baseline and the noise, each estimated from the other in turn."""
     noise = {n: 1.0 for n in data.datasets}
@@ -94,7 +100,7 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
     fit = None
     for _ in range(3):
         if model is None:
-            fit = fit_baseline(data, noise, lambda m: not any(_beyond(data, m).values()))
+            fit = fit_baseline(data, noise, lambda m: not _short(data, m))
         else:
             slots = tuple((e.plugin, e.form) for e in model.effects)
             ladder = as_cauer(model.ladder)
@@ -136,11 +142,9 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
     ladders while they leave a data set beyond the noise (the model's order was chosen
     without the effect, whose misfit may have taken or hidden stages), and are weighed
     grown."""
-    def best_of(forms: list[FormFit]) -> FormFit:
-        return min(forms, key=lambda f: bic(f.fit, n_points))
-
     work = 0
-    cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], best_of(forms).fit,
+    leads = {n: min(forms, key=lambda f: bic(f.fit, n_points)) for n, forms in fitted.items()}
+    cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], leads[n].fit,
                            n_points, sizes) for n, forms in fitted.items()}
     if not cands:
         return [], 0
@@ -148,9 +152,8 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
     for name, forms in fitted.items():
         if top - cands[name].delta_bic >= DECISIVE_BIC:
             continue
-        lead = best_of(forms)
-        grown, spent = grow(data, noise, lead, REFINE_ROUNDS,
-                            lambda m: any(_beyond(data, m).values()))
+        lead = leads[name]
+        grown, spent = grow(data, noise, lead, REFINE_ROUNDS, partial(_short, data))
         work += spent
         if grown is not lead.fit:
             fits = [grown if f is lead else f.fit for f in forms]
@@ -227,7 +230,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     current, cmp = base, base_cmp
     work = base.work
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
-            and any(_beyond(data, current).values()):
+            and _short(data, current):
         fitted = {}
         for p in plugins:
             if p.name in skipped or current.effect(p.name):
@@ -246,7 +249,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             break
         chosen = cands[0]
         if chosen.catalogued and any(s.status != RIVAL for s in steps) \
-                and any(_beyond(data, chosen.fit).values()):
+                and _short(data, chosen.fit):
             # a further effect that leaves a structured residual too: the effect before it
             # is an approximate form, and any flexible effect explains part of what the
             # approximation leaves, which is no evidence of its physics
@@ -309,7 +312,7 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     beyond = _beyond(data, final)
     left = tuple(localise(comparison_of(data, final.predictions), noise, beyond))
     share = explained(base.chi2, final.chi2, data.sizes())
-    if not any(_beyond(data, base).values()):
+    if not _short(data, base):
         return Verdict(NONE, (), "the linear ladder fits every data set within its noise: no "
                        "effect is missing")
     if not named:
@@ -415,8 +418,7 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
                            f"data sets, {', '.join(sorted(plugin(name).traits.shown_by))}, "
                            f"shows it)")
         best = min(fits, key=lambda f: bic(f.fit, n_points))
-        current = grow(data, noise, best, REFINE_ROUNDS,
-                       lambda m: any(_beyond(data, m).values()))[0]
+        current = grow(data, noise, best, REFINE_ROUNDS, partial(_short, data))[0]
     return ThermalModel(current.foster, current.effects, bundle.reference,
                         {**(provenance or {}), "fit": {
                             "effects": list(dict.fromkeys(names)),

@@ -354,8 +354,7 @@ class LineDrive:
         -------
         tuple of float
         """
-        return tuple(max(self.drives[c].evaluation(which).refresh_s[k] for c in self.columns)
-                     for k in range(len(self.lines)))
+        return self._slowest(which, lambda e: e.refresh_s)
 
     def raised(self, which: str) -> tuple[float, ...]:
         """Each line's raise time (every raised dot of every cell up at least once), s.
@@ -369,7 +368,12 @@ class LineDrive:
         -------
         tuple of float
         """
-        return tuple(max(self.drives[c].evaluation(which).raised_s[k] for c in self.columns)
+        return self._slowest(which, lambda e: e.raised_s)
+
+    def _slowest(self, which: str,
+                 times: Callable[[Evaluation], Sequence[float]]) -> tuple[float, ...]:
+        """Each line's slowest cell, by ``times`` of each cell's evaluation under a drive, s."""
+        return tuple(max(times(self.drives[c].evaluation(which))[k] for c in self.columns)
                      for k in range(len(self.lines)))
 
 

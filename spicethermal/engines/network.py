@@ -187,17 +187,17 @@ class NetworkBatch:
         """The distinct members (ladder and device parameters alike) and, for each member,
         its row among them: ``(batch, rows)``, so that ``batch``'s results ``[rows]`` are
         this batch's. A fit that moves only measurement effects simulates one network."""
-        keys = np.concatenate([self.r, self.c] + [
-            np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1), (self.size, 1))
-            for t in self.terms for v in t.params.values()], axis=1)
+        params = [{n: np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1),
+                                      (self.size, 1)) for n, v in t.params.items()}
+                  for t in self.terms]
+        keys = np.concatenate([self.r, self.c, *(v for p in params for v in p.values())],
+                              axis=1)
         _, first, rows = np.unique(keys, axis=0, return_index=True, return_inverse=True)
         if first.size == self.size:
             return self, np.arange(self.size)
         return NetworkBatch(self.r[first], self.c[first],
-                            [DeviceTerm(t.plugin, t.form, {
-                                n: np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1),
-                                                   (self.size, 1))[first]
-                                for n, v in t.params.items()}) for t in self.terms],
+                            [DeviceTerm(t.plugin, t.form, {n: v[first] for n, v in p.items()})
+                             for t, p in zip(self.terms, params, strict=True)],
                             self.tol_rel), rows.ravel()
 
     # -- the effects' terms ---------------------------------------------------------------
