@@ -33,6 +33,7 @@ from .forward import MeasurementTerm, line_error, predict
 from .ladder import fit_foster
 from .lm import MAX_ROUNDS, levenberg_marquardt
 from .measurement import BundleData
+from .problem import MIN_TAU_RATIO
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -47,6 +48,21 @@ MAX_ORDER = 12
 ORDER_PATIENCE = 2
 #: Bounds of a ladder's ``log R`` and ``log τ`` in a fit.
 LOG_BOUND = 60.0
+#: Every start of a fit is rounded to this many significant digits. numpy's and BLAS's
+#: vector kernels may round the last bit differently with the memory alignment of their
+#: arrays, which changes from run to run; a fit that chains on such a result (a start from a
+#: nearly degenerate ladder, a refit from a converged model) would otherwise carry a 1e-16
+#: difference into a different local minimum, and the same bundle could get another verdict.
+#: Seven digits leave a start where it was (a fit moves it far more) and absorb any
+#: difference below about 1e-9 of a value.
+START_DIGITS = 7
+
+
+def settled(values: NDArray) -> NDArray:
+    """``values`` rounded to :data:`START_DIGITS` significant digits (correctly rounded
+    decimal conversion, the same on every machine whatever the arrays' alignment)."""
+    a = np.asarray(values, dtype=float)
+    return np.array([float(f"{v:.{START_DIGITS}g}") for v in a.ravel()]).reshape(a.shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,6 +112,12 @@ class Start:
 
     ladder: Cauer
     values: tuple[Mapping[str, float], ...] = ()
+
+    def __post_init__(self) -> None:  # every start settled (see START_DIGITS)
+        object.__setattr__(self, "ladder", Cauer(settled(np.array(self.ladder.r)),
+                                                 settled(np.array(self.ladder.c))))
+        object.__setattr__(self, "values", tuple(
+            {k: float(settled(np.array(v))) for k, v in vals.items()} for vals in self.values))
 
 
 @dataclass(frozen=True, eq=False)
@@ -288,7 +310,7 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
     if not starts:
         return []
     prob = _Problem(data, noise, layout, starts, tol_rel)
-    x0 = np.array([layout.pack(s) for s in starts])
+    x0 = settled(np.array([layout.pack(s) for s in starts]))
     lo, hi, typ = layout.bounds(tau_range(data))
     k_ladder = 2 * layout.n_nodes if n_ladder_params is None else n_ladder_params
     k = k_ladder + sum(len(p.fitted_names(f)) for p, f in layout.slots) \
@@ -347,9 +369,14 @@ def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
     try:
         f = fit_foster(curve.t_s, curve.zth_k_per_w, order=order,
                        rth_k_per_w=curve.rth_k_per_w).foster
-        return as_cauer(f)
     except (FitError, DataFormatError, ValueError, ArithmeticError):
         return None
+    # an order whose fit splits one time constant in two is the order below with a stage
+    # doubled: no start of its own (the order below with a stage more is one), and a Cauer
+    # form of two nearly equal time constants is numerically undetermined
+    if np.any(np.diff(np.log(f.tau)) < math.log(MIN_TAU_RATIO)):
+        return None
+    return as_cauer(f)
 
 
 def _one_stage_more(ladder: Cauer) -> Cauer:
