@@ -77,6 +77,29 @@ def test_cooling_matches_the_independent_network(name):
     assert np.max(np.abs(rise + TREF - rows[:, 0])) < 3e-3
 
 
+@pytest.mark.parametrize("name", ["pc-gaussian-junction", "pc-plateau-2", "tc-local"])
+def test_a_tolerance_in_kelvin_bounds_the_error_and_saves_steps(name):
+    changes, effects = CASES[name]
+    truth = Network(R4, C4, **changes)
+    _, rows = truth.integrate(truth.steady(P, TREF), T[-1], 0.0, TREF, t_eval=T)
+    tight = NetworkBatch.of(Cauer(R4, C4), effects)
+    loose = NetworkBatch(tight.r, tight.c, tight.terms, tol_k=0.02)
+    steps = []
+    for net in (tight, loose):
+        count = [0]
+        modes = net._modes
+
+        def counted(*a, count=count, modes=modes):
+            count[0] += 1
+            return modes(*a)
+
+        net._modes = counted  # type: ignore[method-assign]
+        error = np.max(np.abs(net.cooling(P, TREF, T)[0] + TREF - rows[:, 0]))
+        steps.append(count[0])
+        assert error < max(3e-3, 2 * net.tol_k), (net.tol_k, error)
+    assert steps[1] < steps[0]
+
+
 def test_a_batch_is_its_members_side_by_side():
     e = Effect.create("phase-change", t_c=50.0, width_k=2.0, latent_j=0.2, node=2)
     one = NetworkBatch.of(Cauer(R4, C4), [e])

@@ -144,7 +144,7 @@ def _reverse_cumsum(x: NDArray) -> NDArray:
 
 class NetworkBatch:
     """``B`` Cauer ladders (``r``, ``c``: ``(B, n)``) with their device effects; transients
-    accept a step within ``tol_rel`` of the largest rise.
+    accept a step within ``tol_rel`` of the largest rise (or ``tol_k`` kelvin, if larger).
 
     >>> net = NetworkBatch.of(Foster.from_tau([2.0, 3.0], [1e-3, 1.0]))
     >>> r, tau = net.foster()
@@ -153,8 +153,8 @@ class NetworkBatch:
     """
 
     def __init__(self, r: NDArray, c: NDArray, terms: Sequence[DeviceTerm] = (),
-                 tol_rel: float = TOL_REL) -> None:
-        self.tol_rel = tol_rel
+                 tol_rel: float = TOL_REL, tol_k: float = 0.0) -> None:
+        self.tol_rel, self.tol_k = tol_rel, tol_k
         self.r = np.atleast_2d(np.asarray(r, dtype=float))
         self.c = np.atleast_2d(np.asarray(c, dtype=float))
         self.terms = tuple(terms)
@@ -181,7 +181,7 @@ class NetworkBatch:
     def repeat(self, k: int) -> NetworkBatch:
         """Each ladder repeated ``k`` times in a row."""
         return NetworkBatch(np.repeat(self.r, k, axis=0), np.repeat(self.c, k, axis=0),
-                            [t.repeat(k) for t in self.terms], self.tol_rel)
+                            [t.repeat(k) for t in self.terms], self.tol_rel, self.tol_k)
 
     def unique(self) -> tuple[NetworkBatch, NDArray]:
         """The distinct members (ladder and device parameters alike) and, for each member,
@@ -198,7 +198,7 @@ class NetworkBatch:
         return NetworkBatch(self.r[first], self.c[first],
                             [DeviceTerm(t.plugin, t.form, {n: v[first] for n, v in p.items()})
                              for t, p in zip(self.terms, params, strict=True)],
-                            self.tol_rel), rows.ravel()
+                            self.tol_rel, self.tol_k), rows.ravel()
 
     # -- the effects' terms ---------------------------------------------------------------
     def scale(self, theta: NDArray, tref: NDArray | float) -> NDArray:
@@ -348,7 +348,7 @@ class NetworkBatch:
         top = max(float(np.nanmax(np.abs(theta0), initial=0.0)),
                   float(np.nanmax(p * np.sum(self.r, axis=1, keepdims=True), initial=0.0)),
                   1e-12)
-        tol = max(self.tol_rel * top, TOL_ABS_K)
+        tol = max(self.tol_rel * top, TOL_ABS_K, self.tol_k)
         out = np.empty((self.size, t.size, self.n))
         theta, a = np.array(theta0, dtype=float), 0.0
         k = int(np.searchsorted(t, 0.0, side="right"))

@@ -48,6 +48,11 @@ MAX_ORDER = 12
 ORDER_PATIENCE = 2
 #: Bounds of a ladder's ``log R`` and ``log τ`` in a fit.
 LOG_BOUND = 60.0
+#: A fit's transients need be no more exact than its data: a step is accepted within this
+#: fraction of the quietest cooling curve's noise (a model error of a tenth of the noise adds
+#: about 1 % to a curve's χ²), when that is looser than the network's own tolerance (a
+#: screen's, looser, in proportion). The models a fit returns are evaluated at the network's.
+NOISE_FRACTION = 0.1
 #: Every start of a fit is rounded to this many significant digits. numpy's and BLAS's
 #: vector kernels may round the last bit differently with the memory alignment of their
 #: arrays, which changes from run to run; a fit that chains on such a result (a start from a
@@ -190,6 +195,8 @@ class _Problem:
     def __init__(self, data: BundleData, noise: Mapping[str, float], layout: Layout,
                  starts: Sequence[Start], tol_rel: float = TOL_REL) -> None:
         self.data, self.layout, self.tol_rel = data, layout, tol_rel
+        cooling = [noise[c.name] for c in data.cooling]
+        self.tol_k = NOISE_FRACTION * tol_rel / TOL_REL * min(cooling) if cooling else 0.0
         self.names = data.datasets
         self.measured = np.concatenate([data.measured(n) for n in self.names])
         self.weight = np.concatenate([np.full(data.measured(n).size, 1.0 / noise[n])
@@ -232,7 +239,8 @@ class _Problem:
     def residuals(self, x: NDArray, rows: NDArray) -> NDArray:
         r, c, devices, measures = self.network(x, rows)
         with np.errstate(all="ignore"):
-            pred = predict(self.data, NetworkBatch(r, c, devices, self.tol_rel), measures)
+            pred = predict(self.data, NetworkBatch(r, c, devices, self.tol_rel, self.tol_k),
+                           measures)
             out = (self._read(pred) - self.measured) * self.weight
         return np.where(np.isfinite(out), out, np.nan)
 
