@@ -161,8 +161,10 @@ class NetworkBatch:
         self.size, self.n = self.r.shape
         self._scaled = any(t.plugin.resistance_scale.__func__ is not  # type: ignore[attr-defined]
                            DeviceEffect.resistance_scale for t in self.terms)
-        self._stores = any(t.plugin.stored_heat.__func__ is not  # type: ignore[attr-defined]
-                           DeviceEffect.stored_heat for t in self.terms)
+        self._storing = tuple(t for t in self.terms
+                              if t.plugin.stored_heat.__func__  # type: ignore[attr-defined]
+                              is not DeviceEffect.stored_heat)
+        self._stores = bool(self._storing)
 
     @classmethod
     def of(cls, ladder: Foster | Cauer, effects: Sequence[Effect] = ()) -> NetworkBatch:
@@ -217,13 +219,13 @@ class NetworkBatch:
 
     def stored(self, temps: NDArray) -> tuple[NDArray, NDArray]:
         """Heat stored beyond the linear capacities and its derivative, ``(B, n)`` each."""
-        h, dh = np.zeros_like(temps), np.zeros_like(temps)
-        if not self._stores:
-            return h, dh
-        for term in self.terms:
+        h = dh = None
+        for term in self._storing:
             got = term.plugin.stored_heat(term.form, term.params, temps, self.c)
             if got is not None:
-                h, dh = h + got[0], dh + got[1]
+                h, dh = got if h is None else (h + got[0], dh + got[1])
+        if h is None:
+            return np.zeros_like(temps), np.zeros_like(temps)
         return h, dh
 
     def _capacity(self, heat_a: tuple[NDArray, NDArray], heat_b: tuple[NDArray, NDArray],
@@ -252,25 +254,23 @@ class NetworkBatch:
         """``(λ, V, √cap)`` of ``S = cap^{-1/2} G cap^{-1/2}``: ``(B, n)``, ``(B, n, n)``;
         NaN for a member whose resistances or capacities are not positive and finite."""
         g = 1.0 / (self.r * scale)
-        bad = ~(np.all(np.isfinite(g) & (g > 0), axis=1) & np.all(np.isfinite(cap) & (cap > 0),
-                                                                 axis=1))
-        if np.any(bad):
-            g = np.where(bad[:, None], 1.0, g)
-            cap = np.where(bad[:, None], 1.0, cap)
+        ok = ((g > 0) & (g < np.inf)).all(axis=1) & ((cap > 0) & (cap < np.inf)).all(axis=1)
+        if not ok.all():
+            g = np.where(ok[:, None], g, 1.0)
+            cap = np.where(ok[:, None], cap, 1.0)
         diag = g.copy()
         diag[:, 1:] += g[:, :-1]
         root = np.sqrt(cap)
-        s = np.zeros((self.size, self.n, self.n))
-        idx = np.arange(self.n)
-        s[:, idx, idx] = diag / cap
-        if self.n > 1:
-            off = -g[:, :-1] / (root[:, :-1] * root[:, 1:])
-            s[:, idx[:-1], idx[1:]] = off
-            s[:, idx[1:], idx[:-1]] = off
-        lam, v = np.linalg.eigh(s)
-        bad |= ~np.all(lam > 0, axis=1)
-        if np.any(bad):
-            lam = np.where(bad[:, None], np.nan, lam)
+        # eigh reads the lower triangle only: the diagonal and the band below it
+        n = self.n
+        s = np.zeros((self.size, n * n))
+        s[:, ::n + 1] = diag / cap
+        if n > 1:
+            s[:, n::n + 1] = -g[:, :-1] / (root[:, :-1] * root[:, 1:])
+        lam, v = np.linalg.eigh(s.reshape(self.size, n, n))
+        ok &= (lam > 0).all(axis=1)
+        if not ok.all():
+            lam = np.where(ok[:, None], lam, np.nan)
         return lam, v, root
 
     def foster(self, scale: NDArray | None = None,
@@ -288,11 +288,10 @@ class NetworkBatch:
         """The frozen network's (``modes``, :meth:`_modes`) exact states ``(B, m, n)`` at the
         delays ``dt`` ``(m,)`` from ``theta`` at ``power`` ``(B, 1)``."""
         lam, v, root = modes
-        z = np.einsum("bji,bj->bi", v, root * theta)
-        src = (v[:, 0, :] / root[:, :1]) * power / lam
-        zz = src[:, None, :] + (z - src)[:, None, :] * np.exp(-lam[:, None, :]
-                                                              * dt[None, :, None])
-        return np.einsum("bij,bmj->bmi", v, zz) / root[:, None, :]
+        z = np.matmul((root * theta)[:, None, :], v)  # (B, 1, n): the state in the modes
+        src = (v[:, :1, :] / root[:, :1, None]) * (power / lam)[:, None, :]
+        zz = src + (z - src) * np.exp(-lam[:, None, :] * dt[None, :, None])
+        return np.matmul(zz, np.swapaxes(v, 1, 2)) / root[:, None, :]
 
     # -- steady state ----------------------------------------------------------------------
     def steady(self, power: NDArray | float, tref: NDArray | float) -> NDArray:
@@ -369,8 +368,9 @@ class NetworkBatch:
                                 self._capacity(heat_a, heat_b, pred - theta))
             inside = int(np.searchsorted(t, b, side="right"))
             states = self._frozen(modes, theta, np.append(t[k:inside] - a, b - a), p)
-            err = np.max(np.abs(states[:, -1] - pred), axis=1)
-            err_max = float(np.nanmax(err)) if np.any(np.isfinite(err)) else 0.0
+            err = np.abs(states[:, -1] - pred).max(axis=1)
+            err_max = float(np.fmax.reduce(err))  # NaN members aside; all NaN: 0
+            err_max = 0.0 if math.isnan(err_max) else err_max
             steps += 1
             if steps > MAX_STEPS:  # what is left does not resolve: those members fail
                 out[:, k:] = np.nan
