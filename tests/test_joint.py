@@ -9,7 +9,15 @@ import numpy as np
 from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.engines.network import NetworkBatch
 from spicethermal.fit.forward import predict_model
-from spicethermal.fit.joint import START_DIGITS, Layout, Start, fit_starts, settled, start_ladders
+from spicethermal.fit.joint import (
+    START_DIGITS,
+    Layout,
+    Start,
+    fit_starts,
+    settled,
+    stage_more,
+    start_ladders,
+)
 from spicethermal.fit.measurement import BundleData
 from spicethermal.fit.problem import MIN_TAU_RATIO
 from spicethermal.io.bundle import Bundle, CoolingTable
@@ -54,3 +62,21 @@ def test_no_reference_ladder_splits_a_time_constant_in_two():
         _, tau = NetworkBatch(np.array([ladder.r]), np.array([ladder.c])).foster()
         ratios = np.diff(np.log(np.sort(tau[0])))
         assert np.all(ratios >= np.log(MIN_TAU_RATIO)), m
+
+
+def test_a_stage_more_goes_in_every_gap_and_beyond_each_end_changing_nothing_yet():
+    ladder = Cauer([1.5, 5.5], [4e-4, 0.05])
+    _, tau0 = NetworkBatch(np.array([ladder.r]), np.array([ladder.c])).foster()
+    t = np.geomspace(1e-6, 100.0, 50)
+    before = Foster.from_tau(*NetworkBatch(np.array([ladder.r]),
+                                           np.array([ladder.c])).foster()).zth(t)
+    news = []
+    for more in stage_more(ladder):
+        r, tau = NetworkBatch(np.array([more.r]), np.array([more.c])).foster()
+        assert more.order == 3
+        new = [x for x in tau[0] if not np.any(np.isclose(x, tau0[0], rtol=1e-6))]
+        assert len(new) == 1
+        news.append(new[0])
+        assert np.allclose(Foster.from_tau(r[0], tau[0]).zth(t), before, rtol=0, atol=2e-6 * 7.0)
+    lo, hi = np.log(np.sort(tau0[0]))
+    assert np.allclose(np.log(news), [(lo + hi) / 2, lo - 1.0, hi + 1.0])  # widest gap first

@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
 __all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts",
-           "reference_order", "start_ladders", "tau_range"]
+           "reference_order", "stage_more", "start_ladders", "tau_range"]
 
 #: The baseline's order is searched up to this many stages (a distributed line or a continuous
 #: spectrum, read quietly, needs ten or more) ...
@@ -387,18 +387,19 @@ def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
     return as_cauer(f)
 
 
-def _one_stage_more(ladder: Cauer) -> Cauer:
-    """``ladder`` with a stage more that changes nothing yet: a Foster stage of a millionth
-    of its resistance, its time constant in the widest gap between the others."""
+def stage_more(ladder: Cauer, share: float = 1e-6) -> list[Cauer]:
+    """``ladder`` with a stage more, one ladder for each place it may go: between each two
+    time constants (at their geometric mean) and beyond the fastest and the slowest (a
+    factor ``e²``), the widest gap first; the new Foster stage carries ``share`` of the
+    resistance (at a millionth it changes nothing yet, so a stage more never fits worse)."""
     r, tau = NetworkBatch(np.array([ladder.r]), np.array([ladder.c])).foster()
     r, tau = np.maximum(r[0], 1e-9 * np.sum(r[0])), tau[0]
     logs = np.sort(np.log(tau))
-    gaps = np.diff(np.concatenate([[logs[0] - 2.0], logs, [logs[-1] + 2.0]]))
-    k = int(np.argmax(gaps))
     edges = np.concatenate([[logs[0] - 2.0], logs, [logs[-1] + 2.0]])
-    new_tau = math.exp(0.5 * (edges[k] + edges[k + 1]))
-    foster = Foster.from_tau(np.append(r, 1e-6 * r.sum()), np.append(tau, new_tau))
-    return as_cauer(foster)
+    order = np.argsort(-np.diff(edges), kind="stable")
+    return [as_cauer(Foster.from_tau(np.append(r, share * r.sum()),
+                                     np.append(tau, math.exp(0.5 * (edges[k] + edges[k + 1])))))
+            for k in order]
 
 
 def fit_baseline(data: BundleData, noise: Mapping[str, float],
@@ -436,7 +437,7 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
         tries = [Start(starts[m])] if m in starts else []
         if previous is not None:
             try:
-                tries.append(Start(_one_stage_more(previous.ladder)))
+                tries.append(Start(stage_more(previous.ladder)[0]))
             except (DataFormatError, ValueError, ArithmeticError, np.linalg.LinAlgError):
                 pass
         tries = [t for t in tries if t.ladder.order == m]

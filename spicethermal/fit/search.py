@@ -33,6 +33,7 @@ from .joint import (
     bic,
     fit_starts,
     reference_order,
+    stage_more,
     start_ladders,
 )
 from .measurement import BundleData
@@ -332,17 +333,21 @@ def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds:
 
 def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
             rounds: int, seeds: Sequence[Mapping[str, float]]) -> ModelFit | None:
-    """``fit`` refitted on a ladder one stage longer: the linear ladder of that order as the
-    start, the last effect's values as they are and as each of ``seeds`` (its screened
-    values: a short ladder may have pulled the effect far from them); the best."""
+    """``fit`` refitted on a ladder one stage longer, side by side from: the linear ladder of
+    that order, with the last effect's values as they are and as each of ``seeds`` (its
+    screened values: a short ladder may have pulled the effect far from them); and the fit's
+    own ladder with a stage more in each place it may go (:func:`~.joint.stage_more`: a
+    stage the effect's misfit hid is often outside the linear ladder's span, as a fast
+    stage under a masked electrical transient). The best."""
     n = fit.ladder.order + 1
     if n > MAX_ORDER:
         return None
-    ladder = start_ladders(data, [n]).get(n)
-    if ladder is None:
-        return None
     values = tuple(dict(e.params) for e in fit.effects)
-    starts = [Start(ladder, values)] + [Start(ladder, (*values[:-1], dict(s))) for s in seeds]
+    starts = [Start(more, values) for more in stage_more(fit.ladder)]
+    ladder = start_ladders(data, [n]).get(n)
+    if ladder is not None:
+        starts += [Start(ladder, values)] + [Start(ladder, (*values[:-1], dict(s)))
+                                             for s in seeds]
     got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds)
            if m is not None]
     if not got:
