@@ -343,7 +343,7 @@ def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
     if n > MAX_ORDER:
         return None
     values = tuple(dict(e.params) for e in fit.effects)
-    starts = [Start(more, values) for more in stage_more(fit.ladder)]
+    starts = [Start(more, values) for more in stage_more(fit.ladder) if more.order == n]
     ladder = start_ladders(data, [n]).get(n)
     if ladder is not None:
         starts += [Start(ladder, values)] + [Start(ladder, (*values[:-1], dict(s)))
