@@ -82,3 +82,26 @@ def test_a_further_effect_that_brings_every_data_set_to_its_noise_is_added(scrip
 def test_a_first_effect_is_added_even_when_it_leaves_a_residual(scripted):
     d = scripted((_fit((FIRST,), 8.0), 5000.0))
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+
+
+def test_a_rival_chosen_stops_the_steps_and_nothing_is_named(scripted):
+    rival = Effect.create("power-error", gamma_per_w=0.1)
+    d = scripted((_fit((rival,), 8.0), 5000.0), (_fit((rival, FIRST), 0.0), 900.0))
+    assert [s.chosen.name for s in d.steps] == [rival.name]
+    assert d.verdict.cls == "none" and not d.effects
+
+
+def test_a_candidate_grows_two_stages_at_most(monkeypatch):
+    from spicethermal.fit import search
+    from spicethermal.fit.search import MAX_GROWTH, FormFit, grow
+
+    def longer(data, noise, fit, rounds, seeds):  # every stage more lowers χ² a lot
+        n = fit.ladder.order + 1
+        return ModelFit(Cauer([20.0 / n] * n, [1e-2] * n), fit.effects, fit.predictions,
+                        {k: v / 2 for k, v in fit.chi2.items()}, fit.n_params + 2, fit.work + 1,
+                        True)
+
+    monkeypatch.setattr(search, "_longer", longer)
+    start = _fit((FIRST,), 40.0)
+    grown, _ = grow(DATA, NOISE, FormFit(start, ()), 30, lambda fit: True)
+    assert grown.ladder.order == start.ladder.order + MAX_GROWTH
