@@ -43,17 +43,20 @@ def _candidate(current: ModelFit, fit: ModelFit, delta_bic: float) -> Candidate:
 
 @pytest.fixture
 def scripted(monkeypatch):
-    """Runs the procedure with the candidates of each step given in order."""
-    def run(*steps: tuple[ModelFit, float]):
+    """Runs the procedure with the candidates of each step given in order (and ``lighter``
+    as the model without each earlier effect, when given)."""
+    def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None):
         base = _fit((), 40.0)
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: [])
         monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: fit)
 
-        def no_lighter(*a, **k):
-            raise FitError("scripted")
+        def without(*a, **k):  # the model without an earlier effect: none, or ``lighter``
+            if lighter is None:
+                raise FitError("scripted")
+            return lighter
 
-        monkeypatch.setattr(procedure, "without", no_lighter)
+        monkeypatch.setattr(procedure, "without", without)
         script = list(steps)
 
         def weigh(data, noise, model, cmp, fitted, n_points, sizes):
@@ -84,24 +87,17 @@ def test_a_first_effect_is_added_even_when_it_leaves_a_residual(scripted):
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
 
 
-def test_a_rival_chosen_stops_the_steps_and_nothing_is_named(scripted):
-    rival = Effect.create("power-error", gamma_per_w=0.1)
-    d = scripted((_fit((rival,), 8.0), 5000.0), (_fit((rival, FIRST), 0.0), 900.0))
-    assert [s.chosen.name for s in d.steps] == [rival.name]
+RIVAL = Effect.create("power-error", gamma_per_w=0.1)
+
+
+def test_a_rival_left_in_the_model_makes_the_verdict_none(scripted):
+    d = scripted((_fit((RIVAL,), 8.0), 5000.0), (_fit((RIVAL, FIRST), 0.0), 900.0))
+    assert [s.chosen.name for s in d.steps] == [RIVAL.name, FIRST.name]
     assert d.verdict.cls == "none" and not d.effects
 
 
-def test_a_candidate_grows_two_stages_at_most(monkeypatch):
-    from spicethermal.fit import search
-    from spicethermal.fit.search import MAX_GROWTH, FormFit, grow
-
-    def longer(data, noise, fit, rounds, seeds):  # every stage more lowers χ² a lot
-        n = fit.ladder.order + 1
-        return ModelFit(Cauer([20.0 / n] * n, [1e-2] * n), fit.effects, fit.predictions,
-                        {k: v / 2 for k, v in fit.chi2.items()}, fit.n_params + 2, fit.work + 1,
-                        True)
-
-    monkeypatch.setattr(search, "_longer", longer)
-    start = _fit((FIRST,), 40.0)
-    grown, _ = grow(DATA, NOISE, FormFit(start, ()), 30, lambda fit: True)
-    assert grown.ladder.order == start.ladder.order + MAX_GROWTH
+def test_a_rival_the_backward_check_drops_leaves_the_effects_named(scripted):
+    d = scripted((_fit((RIVAL,), 8.0), 5000.0), (_fit((RIVAL, FIRST), 0.0), 900.0),
+                 lighter=_fit((FIRST,), 0.0))
+    assert d.steps[-1].dropped == (RIVAL.name,)
+    assert d.effects == [FIRST.name] and d.verdict.cls == "named"

@@ -17,8 +17,9 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    the noise (:func:`~spicethermal.fit.search.grow`). A backward check then drops an earlier
    effect the model no longer needs (its BIC without it within the margin). An effect after
    a catalogued one is added only when it brings every data set to its noise. Until every
-   data set is at its noise, nothing is decisive, a rival is chosen, or
-   :data:`.rules.MAX_EFFECTS` effects are named.
+   data set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are
+   named. A rival chosen stays in the model like any effect (a later backward check may drop
+   it); one left in the final model makes the verdict *none*.
 5. **Verdict** (:func:`verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
@@ -229,7 +230,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     first: tuple[Candidate, ...] = ()
     current, cmp = base, base_cmp
     work = base.work
-    while len(steps) < MAX_EFFECTS and _short(data, current):
+    while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
+            and _short(data, current):
         fitted = {}
         for p in plugins:
             if p.name in skipped or current.effect(p.name):
@@ -247,7 +249,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         if not cands or not decisive(0.0, -cands[0].delta_bic, cands[0].explained):
             break
         chosen = cands[0]
-        if chosen.catalogued and steps and _short(data, chosen.fit):
+        if chosen.catalogued and any(s.status != RIVAL for s in steps) \
+                and _short(data, chosen.fit):
             # a further effect that leaves a structured residual too: the effect before it
             # is an approximate form, and any flexible effect explains part of what the
             # approximation leaves, which is no evidence of its physics
@@ -270,10 +273,6 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
                 current, _ = lighter, dropped.append(e.name)
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped)))
-        if status == RIVAL:
-            # the data are explained better outside the catalogue: what the model then lacks
-            # is no catalogued effect's evidence
-            break
     result = verdict(data, base, steps, noise)
     where = tuple(localise(base_cmp, noise, _beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(steps), result,

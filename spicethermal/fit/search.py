@@ -47,11 +47,6 @@ __all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
 SCREEN_TOL_REL = 3e-4
-#: A candidate's ladder grows by this many stages at most: an effect's misfit hides the
-#: stages of its own region (a band's node, a transient's span), a stage or two; a candidate
-#: that keeps gaining from more is absorbing in them what its form does not explain, which is
-#: the ladder's share of the misfit, not the effect's.
-MAX_GROWTH = 2
 #: The first form of an effect locates its discrete variants (a node, a subset of layers);
 #: the other forms that take the same variants are screened on this many of the best only.
 VARIANTS_KEPT = 2
@@ -266,10 +261,9 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
          short: Callable[[ModelFit], bool]) -> tuple[ModelFit, int]:
     """``form``'s fit on longer ladders while ``short(fit)`` holds of the best (it leaves a
     data set beyond its noise): one stage more, then another (:func:`_longer`), until
-    :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing, and
-    :data:`MAX_GROWTH` stages at most. The model's order was chosen without the effect, whose
-    misfit may have taken or hidden stages. A longer ladder replaces the fit when its
-    criterion (two parameters a stage) is lower.
+    :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing. The model's
+    order was chosen without the effect, whose misfit may have taken or hidden stages. A
+    longer ladder replaces the fit when its criterion (two parameters a stage) is lower.
 
     Parameters
     ----------
@@ -289,8 +283,7 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
     n_points = sum(data.sizes().values())
     best = current = form.fit
     misses = 0
-    while short(best) and misses < ORDER_PATIENCE \
-            and current.ladder.order < form.fit.ladder.order + MAX_GROWTH:
+    while short(best) and misses < ORDER_PATIENCE:
         longer = _longer(data, noise, current, rounds, form.screened)
         if longer is None:
             break
