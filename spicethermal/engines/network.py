@@ -164,7 +164,6 @@ class NetworkBatch:
         self._storing = tuple(t for t in self.terms
                               if t.plugin.stored_heat.__func__  # type: ignore[attr-defined]
                               is not DeviceEffect.stored_heat)
-        self._stores = bool(self._storing)
 
     @classmethod
     def of(cls, ladder: Foster | Cauer, effects: Sequence[Effect] = ()) -> NetworkBatch:
@@ -234,7 +233,7 @@ class NetworkBatch:
         between its ends (``heat_a``, ``heat_b``: :meth:`stored` there; ``dtheta`` the change
         of temperature); NaN for a member whose capacity falls to zero or below (a capacity
         slope too steep for the temperatures reached)."""
-        if not self._stores:
+        if not self._storing:
             return self.c
         (h_a, dh_a), (h_b, dh_b) = heat_a, heat_b
         d = np.broadcast_to(dtheta, self.c.shape)
@@ -245,7 +244,7 @@ class NetworkBatch:
 
     def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
         """:meth:`_capacity` between the temperatures ``t_a`` and ``t_b``."""
-        if not self._stores:
+        if not self._storing:
             return self.c
         return self._capacity(self.stored(t_a), self.stored(t_b), t_b - t_a)
 
@@ -422,7 +421,7 @@ class NetworkBatch:
         theta = big.steady(p_mean, tr)
         scale = big.scale(theta, tr)
         cap = big._secant(tr + theta, tr + theta)
-        if big._stores:
+        if big._storing:
             # the ripple of every node in the network frozen at its mean: each mode swings
             # by its peak minus valley, seen at every node through the mode's shape
             lam, v, root = big._modes(scale, cap)

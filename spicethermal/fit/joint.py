@@ -16,7 +16,7 @@ Bayesian information criterion.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING
@@ -387,19 +387,20 @@ def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
     return as_cauer(f)
 
 
-def stage_more(ladder: Cauer, share: float = 1e-6) -> list[Cauer]:
+def stage_more(ladder: Cauer, share: float = 1e-6) -> Iterator[Cauer]:
     """``ladder`` with a stage more, one ladder for each place it may go: between each two
     time constants (at their geometric mean) and beyond the fastest and the slowest (a
     factor ``e²``), the widest gap first; the new Foster stage carries ``share`` of the
-    resistance (at a millionth it changes nothing yet, so a stage more never fits worse)."""
+    resistance (at a millionth it changes nothing yet, so a stage more never fits worse).
+    Each ladder is converted when it is drawn (the exact Cauer form of a long ladder takes
+    tens of ms)."""
     r, tau = NetworkBatch(np.array([ladder.r]), np.array([ladder.c])).foster()
     r, tau = np.maximum(r[0], 1e-9 * np.sum(r[0])), tau[0]
     logs = np.sort(np.log(tau))
     edges = np.concatenate([[logs[0] - 2.0], logs, [logs[-1] + 2.0]])
-    order = np.argsort(-np.diff(edges), kind="stable")
-    return [as_cauer(Foster.from_tau(np.append(r, share * r.sum()),
-                                     np.append(tau, math.exp(0.5 * (edges[k] + edges[k + 1])))))
-            for k in order]
+    for k in np.argsort(-np.diff(edges), kind="stable"):
+        yield as_cauer(Foster.from_tau(np.append(r, share * r.sum()),
+                                       np.append(tau, math.exp(0.5 * (edges[k] + edges[k + 1])))))
 
 
 def fit_baseline(data: BundleData, noise: Mapping[str, float],
@@ -437,7 +438,7 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
         tries = [Start(starts[m])] if m in starts else []
         if previous is not None:
             try:
-                tries.append(Start(stage_more(previous.ladder)[0]))
+                tries.append(Start(next(stage_more(previous.ladder))))
             except (DataFormatError, ValueError, ArithmeticError, np.linalg.LinAlgError):
                 pass
         tries = [t for t in tries if t.ladder.order == m]
