@@ -24,7 +24,8 @@ from .core.errors import DataFormatError, SimulationError
 from .core.ladder import Cauer, Foster
 from .core.network import Network, Schedule, Trajectory, linear_response
 from .effects import DEVICE, Effect
-from .engines.network import TOL_REL, NetworkBatch, as_cauer
+from .engines.cauer import as_cauer
+from .engines.network import TOL_REL, NetworkBatch
 from .engines.pwm import PwmState, check_drive, steady_state
 from .io.files import atomic_write_text, dumps_json, read_json
 

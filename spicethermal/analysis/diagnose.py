@@ -43,7 +43,7 @@ import numpy as np
 from ..core.errors import DataFormatError, FitError
 from ..effects.base import CALIBRATION
 from ..effects.registry import CATALOGUE, plugin
-from ..engines.network import as_cauer
+from ..engines.cauer import as_cauer
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData
 from ..fit.search import FormFit, fit_effect, grow, refit, without

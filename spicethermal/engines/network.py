@@ -18,12 +18,19 @@ The network, node rises ``θ`` over the reference at ``tref``, temperatures ``T 
   capacity at the *secant* of its stored heat between the step's ends (so the heat a band
   absorbs is conserved whatever the step), solved exactly in its modes; a predictor (the
   network at the start) and a corrector (at the mean of both ends) give the step's error,
-  and a step whose error exceeds :data:`TOL_REL` of the largest rise is halved. A linear
-  network is one exact step;
-* **PWM** (:meth:`NetworkBatch.frozen_foster`): the periodic steady state of the network
-  frozen at the mean temperatures under the mean power (resistances there, capacities at the
-  secant over each node's ripple), in closed form; exact for a linear ladder, quasi-static
-  (first order in the ripple) otherwise.
+  and a step whose error exceeds :data:`TOL_REL` of the largest rise is halved. Under power
+  the state the frozen network tends to moves with its resistances; it is taken as moving
+  linearly across the step, so the fast nodes, which follow it, end where it ends (held at
+  the step's middle, they lag by half a step: an error of the first order, which made a
+  heating transient take hundreds of steps). A linear network is one exact step;
+* **PWM** (:meth:`NetworkBatch.pwm_decay`): the periodic steady state, in closed form for a
+  linear ladder; with device effects by shooting, every row of every member side by side: a
+  chord-Newton iteration on the one-period map (the transients above, each member over its
+  own on- and off-phase), whose Jacobian is the period map of the network frozen at the mean
+  temperatures, from that frozen network's own periodic state (exact to first order in the
+  ripple), for the rows where that state may be off by more than the tolerance. The network
+  frozen at the mean is not enough: at a low frequency the junction swings by tens of
+  kelvin, its resistances with it, and the peak is off by tens of noises.
 
 A linear network's Foster form (:meth:`NetworkBatch.foster`) comes from the same modes:
 ``τ_k = 1/λ_k``, ``R_k = v_{0k}² / (c_0 λ_k)``.
@@ -40,13 +47,15 @@ import numpy as np
 
 from ..core.ladder import Cauer, Foster
 from ..effects.base import DeviceEffect, scalar_params
+from .cauer import as_cauer
+from .pwm import stage_peaks
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
     from ..effects import Effect
 
-__all__ = ["TOL_REL", "DeviceTerm", "NetworkBatch", "as_cauer", "cauer_of_foster"]
+__all__ = ["TOL_REL", "DeviceTerm", "NetworkBatch"]
 
 #: A transient step is accepted when its predictor and corrector agree within this fraction
 #: of the largest node rise (and :data:`TOL_ABS_K`).
@@ -58,6 +67,10 @@ STEADY_ITER, STEADY_TOL = 40, 1e-12
 #: grow, and the rejections in a row (a step 5^-25 shorter) after which the members that
 #: still exceed the tolerance fail and the others go on.
 MAX_STEPS, GROWTH, MAX_REJECTED = 20000, 4.0, 25
+#: Shooting iterations of a PWM periodic state (the chord-Newton iteration gains about a
+#: digit or more each; a member still beyond the tolerance keeps its last period).
+PWM_ITER = 8
+ONE = np.array([1.0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,69 +86,11 @@ class DeviceTerm:
         return DeviceTerm(self.plugin, self.form,
                           {n: np.repeat(v, k, axis=0) for n, v in self.params.items()})
 
-
-def as_cauer(ladder: Foster | Cauer) -> Cauer:
-    """``ladder`` as a Cauer ladder with a heat capacity at every node (exact).
-
-    Parameters
-    ----------
-    ladder : Foster or Cauer
-
-    Returns
-    -------
-    Cauer
-    """
-    return (ladder if isinstance(ladder, Cauer) else ladder.to_cauer()).with_capacitances()
-
-
-def cauer_of_foster(r: NDArray, tau: NDArray) -> tuple[NDArray, NDArray]:
-    """The Cauer ladders ``(R, C)``, ``(B, n)`` each, of the Foster ladders ``r``, ``tau``
-    ``(B, n)``: Lanczos on the modes (``λ = 1/τ``, weights ``r/τ``) with full
-    reorthogonalisation, in double precision, side by side. A fit's parameterisation: smooth
-    in ``r`` and ``τ``, accurate to about 1e-10 relative for the ladders a fit meets (the
-    exact conversions of :mod:`spicethermal.core.ladder` are for model files).
-
-    >>> from spicethermal.core.ladder import Foster
-    >>> f = Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0])
-    >>> r, c = cauer_of_foster(np.array([f.r]), np.array([f.tau]))
-    >>> exact = f.to_cauer()
-    >>> bool(np.allclose(r[0], exact.r, rtol=1e-8) and np.allclose(c[0], exact.c, rtol=1e-8))
-    True
-    """
-    with np.errstate(all="ignore"):  # a degenerate trial ladder gives NaN, never a warning
-        return _lanczos(np.atleast_2d(np.asarray(r, dtype=float)),
-                        np.atleast_2d(np.asarray(tau, dtype=float)))
-
-
-def _lanczos(r: NDArray, tau: NDArray) -> tuple[NDArray, NDArray]:
-    size, n = r.shape
-    lam = 1.0 / tau
-    w = r / tau
-    q = np.sqrt(w / w.sum(axis=1, keepdims=True))
-    basis = np.zeros((size, n, n))
-    alpha, beta = np.zeros((size, n)), np.zeros((size, n))
-    basis[:, 0] = q
-    for k in range(n):
-        v = basis[:, k]
-        av = lam * v
-        alpha[:, k] = np.sum(v * av, axis=1)
-        if k == n - 1:
-            break
-        res = av - alpha[:, k:k + 1] * v - (beta[:, k - 1:k] * basis[:, k - 1] if k else 0.0)
-        for _ in range(2):  # full reorthogonalisation, twice
-            res = res - np.einsum("bj,bji->bi", np.einsum("bji,bi->bj", basis[:, :k + 1], res),
-                                  basis[:, :k + 1])
-        beta[:, k] = np.linalg.norm(res, axis=1)
-        basis[:, k + 1] = res / np.where(beta[:, k:k + 1] > 0, beta[:, k:k + 1], np.nan)
-    cap = np.empty((size, n))
-    g = np.empty((size, n))
-    cap[:, 0] = 1.0 / w.sum(axis=1)
-    g[:, 0] = alpha[:, 0] * cap[:, 0]
-    for k in range(1, n):
-        cap[:, k] = g[:, k - 1] ** 2 / (beta[:, k - 1] ** 2 * cap[:, k - 1])
-        g[:, k] = alpha[:, k] * cap[:, k] - g[:, k - 1]
-    res_r = 1.0 / g
-    return np.where(res_r > 0, res_r, np.nan), cap
+    def take(self, rows: NDArray) -> DeviceTerm:
+        """The parameter sets ``rows``."""
+        return DeviceTerm(self.plugin, self.form, {
+            n: np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1), (len(v), 1))[rows]
+            for n, v in self.params.items()})
 
 
 def _reverse_cumsum(x: NDArray) -> NDArray:
@@ -153,8 +108,11 @@ class NetworkBatch:
     """
 
     def __init__(self, r: NDArray, c: NDArray, terms: Sequence[DeviceTerm] = (),
-                 tol_rel: float = TOL_REL, tol_k: float = 0.0) -> None:
+                 tol_rel: float = TOL_REL, tol_k: float = 0.0,
+                 unit_s: NDArray | None = None) -> None:
         self.tol_rel, self.tol_k = tol_rel, tol_k
+        # each member's unit of time (s, (B, 1)): its capacities and stored heat over it
+        self.unit_s = unit_s
         self.r = np.atleast_2d(np.asarray(r, dtype=float))
         self.c = np.atleast_2d(np.asarray(c, dtype=float))
         self.terms = tuple(terms)
@@ -183,6 +141,18 @@ class NetworkBatch:
         """Each ladder repeated ``k`` times in a row."""
         return NetworkBatch(np.repeat(self.r, k, axis=0), np.repeat(self.c, k, axis=0),
                             [t.repeat(k) for t in self.terms], self.tol_rel, self.tol_k)
+
+    def take(self, rows: NDArray) -> NetworkBatch:
+        """The members ``rows``."""
+        return NetworkBatch(self.r[rows], self.c[rows], [t.take(rows) for t in self.terms],
+                            self.tol_rel, self.tol_k,
+                            None if self.unit_s is None else self.unit_s[rows])
+
+    def timed(self, unit_s: NDArray) -> NetworkBatch:
+        """The same members with time counted in ``unit_s`` seconds ``(B, 1)`` each: one
+        call of :meth:`response` then runs every member over its own span."""
+        return NetworkBatch(self.r, self.c, self.terms, self.tol_rel, self.tol_k,
+                            np.broadcast_to(np.asarray(unit_s, dtype=float), (self.size, 1)))
 
     def unique(self) -> tuple[NetworkBatch, NDArray]:
         """The distinct members (ladder and device parameters alike) and, for each member,
@@ -234,13 +204,14 @@ class NetworkBatch:
         of temperature); NaN for a member whose capacity falls to zero or below (a capacity
         slope too steep for the temperatures reached)."""
         if not self._storing:
-            return self.c
+            return self.c if self.unit_s is None else self.c / self.unit_s
         (h_a, dh_a), (h_b, dh_b) = heat_a, heat_b
         d = np.broadcast_to(dtheta, self.c.shape)
         small = np.abs(d) < 1e-9
         sec = np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
         cap = self.c + sec
-        return np.where(cap > 0, cap, np.nan)
+        cap = np.where(cap > 0, cap, np.nan)
+        return cap if self.unit_s is None else cap / self.unit_s
 
     def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
         """:meth:`_capacity` between the temperatures ``t_a`` and ``t_b``."""
@@ -291,6 +262,28 @@ class NetworkBatch:
         src = (v[:, :1, :] / root[:, :1, None]) * (power / lam)[:, None, :]
         zz = src + (z - src) * np.exp(-lam[:, None, :] * dt[None, :, None])
         return np.matmul(zz, np.swapaxes(v, 1, 2)) / root[:, None, :]
+
+    @staticmethod
+    def _held(modes: tuple[NDArray, NDArray, NDArray], theta: NDArray, dt: NDArray,
+              q_a: NDArray, q_b: NDArray, h: float) -> NDArray:
+        """The frozen network's (``modes``) states ``(B, m, n)`` at the delays ``dt``
+        ``(m,)`` from ``theta`` when the state it tends to moves linearly from ``q_a`` to
+        ``q_b`` ``(B, n)`` over ``h``: ``q(t) + e^{−St}(θ − q_a) − (1 − e^{−St})/(S h)
+        (q_b − q_a)`` in the modes. With ``q_a = q_b`` the steady state under a constant
+        power, it is :meth:`_frozen`."""
+        lam, v, root = modes
+        z = np.matmul((root * (theta - q_a))[:, None, :], v)  # (B, 1, n)
+        dz = np.matmul((root * (q_b - q_a))[:, None, :], v)
+        e = np.exp(-lam[:, None, :] * dt[None, :, None])
+        zz = e * z + np.expm1(-lam[:, None, :] * dt[None, :, None]) / (lam[:, None, :] * h) * dz
+        frac = (dt / h)[None, :, None]
+        return (q_a[:, None, :] + frac * (q_b - q_a)[:, None, :]
+                + np.matmul(zz, np.swapaxes(v, 1, 2)) / root[:, None, :])
+
+    def _tends(self, theta: NDArray, tref: NDArray | float, power: NDArray) -> NDArray:
+        """The state the network at ``theta`` tends to under ``power`` ``(B, 1)``: its
+        resistances held there, ``θ_i = Σ_{j ≥ i} P R_j s_j`` (capacities play no part)."""
+        return _reverse_cumsum(power * self.r * self.scale(theta, tref))
 
     # -- steady state ----------------------------------------------------------------------
     def steady(self, power: NDArray | float, tref: NDArray | float) -> NDArray:
@@ -356,17 +349,29 @@ class NetworkBatch:
         # the predictor runs on the last accepted corrector's network (at the start: the
         # network at the start state)
         guess = self._modes(self.scale(theta, tref), self._capacity(heat_a, heat_a, 0.0))
+        # under power, the state the network tends to moves with its resistances: it is
+        # taken as moving linearly over a step (from where it is at the start to where it is
+        # at the predicted end), so that the fast nodes, which follow it, end where it ends
+        # (held at the step's middle, they would lag by half a step, an error of the first
+        # order); the predictor extrapolates its last step's motion
+        powered = bool(np.any(p != 0)) and self._scaled
+        if powered:
+            q_a, slope = self._tends(theta, tref, p), np.zeros_like(theta)
         steps = rejected = 0
         while k < t.size:
             b = min(a + h, float(t[-1]))
             if b >= t[-1] * (1 - 1e-12):
                 b = float(t[-1])
-            pred = self._frozen(guess, theta, np.array([b - a]), p)[:, 0]
+            span = np.array([b - a])
+            pred = (self._held(guess, theta, span, q_a, q_a + slope * (b - a), b - a)
+                    if powered else self._frozen(guess, theta, span, p))[:, 0]
             heat_b = self.stored(tref + pred)
             modes = self._modes(self.scale(0.5 * (theta + pred), tref),
                                 self._capacity(heat_a, heat_b, pred - theta))
             inside = int(np.searchsorted(t, b, side="right"))
-            states = self._frozen(modes, theta, np.append(t[k:inside] - a, b - a), p)
+            at = np.append(t[k:inside] - a, b - a)
+            states = (self._held(modes, theta, at, q_a, self._tends(pred, tref, p), b - a)
+                      if powered else self._frozen(modes, theta, at, p))
             err = np.abs(states[:, -1] - pred).max(axis=1)
             err_max = float(np.fmax.reduce(err))  # NaN members aside; all NaN: 0
             err_max = 0.0 if math.isnan(err_max) else err_max
@@ -383,6 +388,9 @@ class NetworkBatch:
             if err_max <= tol:
                 out[:, k:inside] = states[:, :-1]
                 h = (b - a) * min(GROWTH, 0.9 * ratio)
+                if powered:
+                    q_b = self._tends(states[:, -1], tref, p)
+                    q_a, slope = q_b, (q_b - q_a) / (b - a)
                 theta, a, k, guess = states[:, -1], b, inside, modes
                 heat_a = self.stored(tref + theta)
                 rejected = 0
@@ -405,33 +413,83 @@ class NetworkBatch:
         return self.response(theta0, t_s, 0.0, tref)[:, :, 0]
 
     # -- PWM -------------------------------------------------------------------------------
-    def frozen_foster(self, power: NDArray, freq_hz: NDArray, duty: NDArray,
-                      tref: NDArray) -> tuple[NDArray, NDArray]:
-        """Foster stages ``(R, τ)``, ``(B, N, n)``, of the network frozen at each of ``N``
-        PWM rows (power, frequency, duty, reference): resistances at the steady state under
-        the mean power, capacities at the secant over each node's ripple."""
+    def pwm_decay(self, power: NDArray, freq_hz: NDArray, duty: NDArray,
+                  tref: NDArray) -> tuple[NDArray, NDArray]:
+        """The junction's rise after an on-phase ends, in the periodic steady state of each
+        of ``N`` PWM rows (power, frequency, duty, reference ``(N,)``), as stages ``(a, τ)``
+        ``(B, N, n)`` each: ``Σ_k a_k e^{−t/τ_k}`` at ``t`` after the end (the network frozen
+        there; a reading is taken within microseconds of it). Closed form for a linear
+        ladder; with device effects, shooting (module docstring).
+        """
         rows = len(power)
+        p, f, d = (np.asarray(x, dtype=float) for x in (power, freq_hz, duty))
         if self.linear:
             r, tau = self.foster()
-            return (np.broadcast_to(r[:, None, :], (self.size, rows, self.n)),
-                    np.broadcast_to(tau[:, None, :], (self.size, rows, self.n)))
+            a = p[None, :, None] * stage_peaks(r[:, None, :], tau[:, None, :],
+                                               1.0 / f[None, :, None], d[None, :, None])
+            return a, np.broadcast_to(tau[:, None, :], a.shape)
         big = self.repeat(rows)
-        p_mean = np.tile(np.asarray(power * duty, float), self.size)[:, None]
-        tr = np.tile(np.asarray(tref, float), self.size)[:, None]
-        theta = big.steady(p_mean, tr)
-        scale = big.scale(theta, tr)
+        pw, period, dd = (np.tile(x, self.size)[:, None] for x in (p, 1.0 / f, d))
+        tr = np.tile(np.asarray(tref, dtype=float), self.size)[:, None]
+        # the network frozen at the mean temperatures under the mean power (capacities at
+        # the secant over each node's ripple), its periodic state, and its period map
+        theta = big.steady(pw * dd, tr)
         cap = big._secant(tr + theta, tr + theta)
+        lam, v, root = big._modes(big.scale(theta, tr), cap)
         if big._storing:
-            # the ripple of every node in the network frozen at its mean: each mode swings
-            # by its peak minus valley, seen at every node through the mode's shape
-            lam, v, root = big._modes(scale, cap)
-            period = np.tile(1.0 / np.asarray(freq_hz, float), self.size)[:, None]
-            d = np.tile(np.asarray(duty, float), self.size)[:, None]
-            pw = np.tile(np.asarray(power, float), self.size)[:, None]
             amp = pw * (v[:, 0, :] / root[:, :1]) / lam
-            on, off = -np.expm1(-lam * d * period), -np.expm1(-lam * (1 - d) * period)
-            swing = amp * on * off / -np.expm1(-lam * period)
+            swing = amp * -np.expm1(-lam * dd * period) * -np.expm1(-lam * (1 - dd) * period) \
+                / -np.expm1(-lam * period)
             half = 0.5 * np.einsum("bij,bj->bi", np.abs(v), np.abs(swing)) / root
             cap = big._secant(tr + theta - half, tr + theta + half)
-        r, tau = big.foster(scale, cap)
-        return r.reshape(self.size, rows, self.n), tau.reshape(self.size, rows, self.n)
+            lam, v, root = big._modes(big.scale(theta, tr), cap)
+        src = (v[:, 0, :] / root[:, :1]) * pw / lam
+        z = src * -np.expm1(-lam * dd * period) / -np.expm1(-lam * period)
+        frozen = np.einsum("bk,bik->bi", z, v) / root  # at the end of an on-phase
+        start = np.einsum("bk,bik->bi", np.exp(-lam * (1 - dd) * period) * z, v) / root
+        # a row is shot where the frozen network may be off by more than the tolerance:
+        # over the ripple its resistances change by ds and a node's capacity by dc
+        # (relative), which move the peak by about ds times the ripple, and dc times the
+        # node's ripple, at most (the frozen network is exact to first order in it)
+        ripple = np.abs(frozen - start)
+        off_by = np.max(np.abs(big.scale(frozen, tr) - big.scale(start, tr)), axis=1) \
+            * np.max(ripple, axis=1)
+        if big._storing:  # a node's capacity changes its own ripple
+            caps = np.stack([big._secant(tr + start, tr + start),
+                             big._secant(tr + frozen, tr + frozen), cap])
+            off_by = off_by + np.max(np.ptp(caps, axis=0) / caps.min(axis=0) * ripple, axis=1)
+
+        def chord(res: NDArray, idx: NDArray) -> NDArray:
+            zr = np.einsum("bi,bik->bk", root[idx] * res, v[idx]) \
+                / -np.expm1(-lam[idx] * period[idx])
+            return np.einsum("bk,bik->bi", zr, v[idx]) / root[idx]
+
+        # one period, each member over its own phases (a phase of no length lasts 1e-12 of
+        # the period, which changes nothing)
+        unit_on = np.maximum(dd * period, 1e-12 * period)
+        unit_off = np.maximum((1 - dd) * period, 1e-12 * period)
+        top = max(float(np.nanmax(np.abs(start), initial=0.0)), 1e-12)
+        tol = max(self.tol_rel * top, TOL_ABS_K, self.tol_k)
+        peak = frozen.copy()
+        shoot = ~(off_by <= tol) & np.all(np.isfinite(start), axis=1)
+        live = np.flatnonzero(shoot)
+        x = start[live]
+        for _ in range(PWM_ITER):
+            if live.size == 0:
+                break
+            part = big.take(live)
+            end_on = part.timed(unit_on[live]).response(x, ONE, pw[live], tr[live])[:, -1]
+            end = part.timed(unit_off[live]).response(end_on, ONE, 0.0, tr[live])[:, -1]
+            res = end - x
+            peak[live] = end_on
+            err = np.max(np.abs(res), axis=1)
+            x = x + chord(np.where(np.isfinite(res), res, 0.0), live)
+            go = err > tol
+            live, x = live[go], x[go]
+        # the decay from the peak, on the network frozen there
+        lam_e, v_e, root_e = big._modes(big.scale(peak, tr),
+                                        big._secant(tr + peak, tr + peak))
+        ze = np.einsum("bi,bik->bk", root_e * peak, v_e)
+        a = ze * v_e[:, 0, :] / root_e[:, :1]
+        return (a.reshape(self.size, rows, self.n),
+                (1.0 / lam_e).reshape(self.size, rows, self.n))

@@ -47,7 +47,6 @@ from ..effects.base import (
     scalar_params,
 )
 from ..engines.network import NetworkBatch
-from ..engines.pwm import stage_peaks
 from .measurement import BundleData, CurveData
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -104,10 +103,8 @@ def _after_off(data: BundleData, net: NetworkBatch,
     """The PWM rows' true junction temperature ``delay`` after an on-phase ends, for the
     members ``net[rows]``."""
     p = data.pwm
-    r, tau = net.frozen_foster(p.power_w, p.freq_hz, p.duty, p.tref_c)
-    r, tau = r[rows], tau[rows]
-    peaks = p.power_w[None, :, None] * stage_peaks(r, tau, 1.0 / p.freq_hz[None, :, None],
-                                                   p.duty[None, :, None])
+    peaks, tau = net.pwm_decay(p.power_w, p.freq_hz, p.duty, p.tref_c)
+    peaks, tau = peaks[rows], tau[rows]
 
     def after_off(delay: NDArray | float) -> NDArray:
         d = np.asarray(delay, dtype=float)

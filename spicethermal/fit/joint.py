@@ -27,7 +27,8 @@ from ..core.errors import DataFormatError, FitError
 from ..core.ladder import Cauer, Foster
 from ..effects.base import DeviceEffect, EffectPlugin
 from ..effects.registry import Effect
-from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch, as_cauer, cauer_of_foster
+from ..engines.cauer import as_cauer, cauer_of_foster
+from ..engines.network import TOL_REL, DeviceTerm, NetworkBatch
 from ..identify.curves import ZthCurve
 from .forward import MeasurementTerm, line_error, predict
 from .ladder import fit_foster
