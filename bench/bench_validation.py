@@ -42,7 +42,9 @@ The verdict is read from ``spicethermal-diagnosis/2`` (``verdict.effects``, name
   acceptable set, and where ``none`` is not acceptable and the case is detectable, a first
   name from the set (*near-catalogue named*);
 * crashes, killed diagnoses and those over the CPU limit are failures; a failure is never
-  right.
+  right;
+* a case the independent simulator cannot simulate (its own shooting finds no periodic PWM
+  state) has no bundle: it is counted apart as *not simulated* and not scored.
 """
 
 from __future__ import annotations
@@ -461,12 +463,17 @@ def main(argv: list[str] | None = None) -> int:
     (out / "bundles").mkdir(parents=True, exist_ok=True)
     cases = cases_of(args)
     t0 = time.perf_counter()
-    meta = {}
+    meta, unmade = {}, {}
     for k, c in enumerate(cases):
-        meta[c.name] = generate(c, out, args.fresh)
+        try:
+            meta[c.name] = generate(c, out, args.fresh)
+        except ArithmeticError as err:  # the independent simulator's own shooting failed
+            unmade[c.name] = str(err)
         print(f"\r  bundles {k + 1}/{len(cases)}", end="", flush=True)
-    print(f"\n{len(cases)} bundles ({args.set}) ready in {time.perf_counter() - t0:.0f} s",
-          flush=True)
+    cases = [c for c in cases if c.name in meta]
+    print(f"\n{len(cases)} bundles ({args.set}) ready in {time.perf_counter() - t0:.0f} s"
+          + (f"; {len(unmade)} not simulated (the independent simulator found no periodic "
+             f"state), not scored" if unmade else ""), flush=True)
     if args.generate_only:
         return 0
     store = out / "results.json"  # kept per bundle and engine: a run resumes where it stopped
@@ -484,7 +491,9 @@ def main(argv: list[str] | None = None) -> int:
 
         done = run_diagnoses({c.name: folder_of(out, c) for c in cases}, args, done, save)
     summary = score(meta, done, args.limit)
-    print("\n" + report(summary, args.limit))
+    summary["not_simulated"] = unmade
+    print("\n" + report(summary, args.limit)
+          + (f"\nnot simulated, not scored: {len(unmade)}" if unmade else ""))
     summary.update({"set": args.set, "seed": args.seed, "only": args.only,
                     "engine": args.engine, "entry": args.entry, "limit_s": args.limit,
                     "kill_s": args.kill, "load_average": os.getloadavg()})
