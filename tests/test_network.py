@@ -155,44 +155,16 @@ def test_a_member_in_thermal_runaway_is_nan_and_the_others_stand():
     assert np.all(np.isfinite(theta[0])) and np.all(np.isnan(theta[1]))
 
 
-def test_pwm_of_a_linear_ladder_is_the_closed_form(actuator):
+def test_pwm_frozen_at_the_mean_is_exact_for_a_linear_ladder(actuator):
     from spicethermal.engines.pwm import stage_peaks
 
     net = NetworkBatch.of(actuator)
     f, d = np.array([1e3, 25e3]), np.array([0.5, 0.2])
-    a, tau = net.pwm_decay(np.array([0.1, 0.1]), f, d, np.array([25.0, 25.0]))
+    r, tau = net.frozen_foster(np.array([0.1, 0.1]), f, d, np.array([25.0, 25.0]))
+    peaks = (0.1 * stage_peaks(r[0], tau[0], 1 / f[:, None], d[:, None])).sum(axis=1)
     exact = [0.1 * stage_peaks(np.array(actuator.r), np.array(actuator.tau), 1 / fi,
                                di).sum() for fi, di in zip(f, d, strict=True)]
-    assert a[0].sum(axis=1) == pytest.approx(exact, rel=1e-9)
-    assert tau[0, 0] == pytest.approx(sorted(actuator.tau), rel=1e-9)
-
-
-@pytest.mark.parametrize("name, form, params", [
-    ("temperature-coefficient", "local", {"alpha_per_k": 6e-3, "c_slope_per_k": 2e-3}),
-    ("temperature-coefficient", "power-law", {"exponent": 1.5, "first_layer": 2.0}),
-    ("phase-change", "plateau", {"t_c": 50.0, "width_k": 4.0, "latent_j": 0.02, "node": 1}),
-])
-def test_pwm_with_device_effects_is_the_periodic_state_of_the_model(name, form, params):
-    """The batched shooting against the model's own (an ODE integrator's periods), at
-    frequencies where the network frozen at the mean temperatures is tens of mK off."""
-    from spicethermal.model import ThermalModel
-
-    e = Effect.create(name, form, **params)
-    ladder = Cauer(R4, C4)
-    f, d = np.array([0.2, 2.0, 50.0, 5e3]), np.array([0.2, 0.5, 0.8, 0.5])
-    power = np.full(4, 0.4)
-    one = NetworkBatch.of(ladder, [e])
-    net = NetworkBatch(one.r, one.c, one.terms, tol_rel=3e-6)
-    a, tau = net.pwm_decay(power, f, d, np.full(4, TREF))
-    model = ThermalModel(Foster.from_cauer(ladder), (e,))
-    for i in range(4):
-        want = model.pwm(power[i], f[i], d[i], 50e-6, TREF, tol_k=1e-7)
-        assert a[0, i].sum() == pytest.approx(want.peak_k, rel=5e-5)
-        assert (a[0, i] * np.exp(-50e-6 / tau[0, i])).sum() == pytest.approx(
-            want.reading_k, rel=5e-5)
-    # the effect is strong: the linear ladder's peak is far from it at the slowest row
-    lin = NetworkBatch.of(ladder).pwm_decay(power[:1], f[:1], d[:1], np.full(1, TREF))[0]
-    assert abs(lin[0, 0].sum() - a[0, 0].sum()) > 0.1
+    assert peaks == pytest.approx(exact, rel=1e-9)
 
 
 def test_model_simulation_is_the_network_simulator():

@@ -23,14 +23,13 @@ The network, node rises ``θ`` over the reference at ``tref``, temperatures ``T 
   linearly across the step, so the fast nodes, which follow it, end where it ends (held at
   the step's middle, they lag by half a step: an error of the first order, which made a
   heating transient take hundreds of steps). A linear network is one exact step;
-* **PWM** (:meth:`NetworkBatch.pwm_decay`): the periodic steady state, in closed form for a
-  linear ladder; with device effects by shooting, every row of every member side by side: a
-  chord-Newton iteration on the one-period map (the transients above, each member over its
-  own on- and off-phase), whose Jacobian is the period map of the network frozen at the mean
-  temperatures, from that frozen network's own periodic state (exact to first order in the
-  ripple), for the rows where that state may be off by more than the tolerance. The network
-  frozen at the mean is not enough: at a low frequency the junction swings by tens of
-  kelvin, its resistances with it, and the peak is off by tens of noises.
+* **PWM** (:meth:`NetworkBatch.frozen_foster`): the periodic steady state of the network
+  frozen at the mean temperatures under the mean power (resistances there, capacities at the
+  secant over each node's ripple), in closed form; exact for a linear ladder, quasi-static
+  (first order in the ripple) otherwise. Where the junction swings by tens of kelvin (a
+  strong temperature coefficient or a band crossed at a few hertz) the frozen peak is off
+  by tenths of a kelvin; :class:`~spicethermal.model.ThermalModel` shoots the true periodic
+  state.
 
 A linear network's Foster form (:meth:`NetworkBatch.foster`) comes from the same modes:
 ``τ_k = 1/λ_k``, ``R_k = v_{0k}² / (c_0 λ_k)``.
@@ -48,7 +47,6 @@ import numpy as np
 from ..core.ladder import Cauer, Foster
 from ..effects.base import DeviceEffect, scalar_params
 from .cauer import as_cauer
-from .pwm import stage_peaks
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
@@ -67,10 +65,6 @@ STEADY_ITER, STEADY_TOL = 40, 1e-12
 #: grow, and the rejections in a row (a step 5^-25 shorter) after which the members that
 #: still exceed the tolerance fail and the others go on.
 MAX_STEPS, GROWTH, MAX_REJECTED = 20000, 4.0, 25
-#: Shooting iterations of a PWM periodic state (the chord-Newton iteration gains about a
-#: digit or more each; a member still beyond the tolerance keeps its last period).
-PWM_ITER = 8
-ONE = np.array([1.0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,12 +79,6 @@ class DeviceTerm:
         """Each parameter set repeated ``k`` times in a row (a batch ``k`` times longer)."""
         return DeviceTerm(self.plugin, self.form,
                           {n: np.repeat(v, k, axis=0) for n, v in self.params.items()})
-
-    def take(self, rows: NDArray) -> DeviceTerm:
-        """The parameter sets ``rows``."""
-        return DeviceTerm(self.plugin, self.form, {
-            n: np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1), (len(v), 1))[rows]
-            for n, v in self.params.items()})
 
 
 def _reverse_cumsum(x: NDArray) -> NDArray:
@@ -108,11 +96,8 @@ class NetworkBatch:
     """
 
     def __init__(self, r: NDArray, c: NDArray, terms: Sequence[DeviceTerm] = (),
-                 tol_rel: float = TOL_REL, tol_k: float = 0.0,
-                 unit_s: NDArray | None = None) -> None:
+                 tol_rel: float = TOL_REL, tol_k: float = 0.0) -> None:
         self.tol_rel, self.tol_k = tol_rel, tol_k
-        # each member's unit of time (s, (B, 1)): its capacities and stored heat over it
-        self.unit_s = unit_s
         self.r = np.atleast_2d(np.asarray(r, dtype=float))
         self.c = np.atleast_2d(np.asarray(c, dtype=float))
         self.terms = tuple(terms)
@@ -141,18 +126,6 @@ class NetworkBatch:
         """Each ladder repeated ``k`` times in a row."""
         return NetworkBatch(np.repeat(self.r, k, axis=0), np.repeat(self.c, k, axis=0),
                             [t.repeat(k) for t in self.terms], self.tol_rel, self.tol_k)
-
-    def take(self, rows: NDArray) -> NetworkBatch:
-        """The members ``rows``."""
-        return NetworkBatch(self.r[rows], self.c[rows], [t.take(rows) for t in self.terms],
-                            self.tol_rel, self.tol_k,
-                            None if self.unit_s is None else self.unit_s[rows])
-
-    def timed(self, unit_s: NDArray) -> NetworkBatch:
-        """The same members with time counted in ``unit_s`` seconds ``(B, 1)`` each: one
-        call of :meth:`response` then runs every member over its own span."""
-        return NetworkBatch(self.r, self.c, self.terms, self.tol_rel, self.tol_k,
-                            np.broadcast_to(np.asarray(unit_s, dtype=float), (self.size, 1)))
 
     def unique(self) -> tuple[NetworkBatch, NDArray]:
         """The distinct members (ladder and device parameters alike) and, for each member,
@@ -204,14 +177,13 @@ class NetworkBatch:
         of temperature); NaN for a member whose capacity falls to zero or below (a capacity
         slope too steep for the temperatures reached)."""
         if not self._storing:
-            return self.c if self.unit_s is None else self.c / self.unit_s
+            return self.c
         (h_a, dh_a), (h_b, dh_b) = heat_a, heat_b
         d = np.broadcast_to(dtheta, self.c.shape)
         small = np.abs(d) < 1e-9
         sec = np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
         cap = self.c + sec
-        cap = np.where(cap > 0, cap, np.nan)
-        return cap if self.unit_s is None else cap / self.unit_s
+        return np.where(cap > 0, cap, np.nan)
 
     def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
         """:meth:`_capacity` between the temperatures ``t_a`` and ``t_b``."""
@@ -413,83 +385,33 @@ class NetworkBatch:
         return self.response(theta0, t_s, 0.0, tref)[:, :, 0]
 
     # -- PWM -------------------------------------------------------------------------------
-    def pwm_decay(self, power: NDArray, freq_hz: NDArray, duty: NDArray,
-                  tref: NDArray) -> tuple[NDArray, NDArray]:
-        """The junction's rise after an on-phase ends, in the periodic steady state of each
-        of ``N`` PWM rows (power, frequency, duty, reference ``(N,)``), as stages ``(a, τ)``
-        ``(B, N, n)`` each: ``Σ_k a_k e^{−t/τ_k}`` at ``t`` after the end (the network frozen
-        there; a reading is taken within microseconds of it). Closed form for a linear
-        ladder; with device effects, shooting (module docstring).
-        """
+    def frozen_foster(self, power: NDArray, freq_hz: NDArray, duty: NDArray,
+                      tref: NDArray) -> tuple[NDArray, NDArray]:
+        """Foster stages ``(R, τ)``, ``(B, N, n)``, of the network frozen at each of ``N``
+        PWM rows (power, frequency, duty, reference): resistances at the steady state under
+        the mean power, capacities at the secant over each node's ripple."""
         rows = len(power)
-        p, f, d = (np.asarray(x, dtype=float) for x in (power, freq_hz, duty))
         if self.linear:
             r, tau = self.foster()
-            a = p[None, :, None] * stage_peaks(r[:, None, :], tau[:, None, :],
-                                               1.0 / f[None, :, None], d[None, :, None])
-            return a, np.broadcast_to(tau[:, None, :], a.shape)
+            return (np.broadcast_to(r[:, None, :], (self.size, rows, self.n)),
+                    np.broadcast_to(tau[:, None, :], (self.size, rows, self.n)))
         big = self.repeat(rows)
-        pw, period, dd = (np.tile(x, self.size)[:, None] for x in (p, 1.0 / f, d))
-        tr = np.tile(np.asarray(tref, dtype=float), self.size)[:, None]
-        # the network frozen at the mean temperatures under the mean power (capacities at
-        # the secant over each node's ripple), its periodic state, and its period map
-        theta = big.steady(pw * dd, tr)
+        p_mean = np.tile(np.asarray(power * duty, float), self.size)[:, None]
+        tr = np.tile(np.asarray(tref, float), self.size)[:, None]
+        theta = big.steady(p_mean, tr)
+        scale = big.scale(theta, tr)
         cap = big._secant(tr + theta, tr + theta)
-        lam, v, root = big._modes(big.scale(theta, tr), cap)
         if big._storing:
+            # the ripple of every node in the network frozen at its mean: each mode swings
+            # by its peak minus valley, seen at every node through the mode's shape
+            lam, v, root = big._modes(scale, cap)
+            period = np.tile(1.0 / np.asarray(freq_hz, float), self.size)[:, None]
+            d = np.tile(np.asarray(duty, float), self.size)[:, None]
+            pw = np.tile(np.asarray(power, float), self.size)[:, None]
             amp = pw * (v[:, 0, :] / root[:, :1]) / lam
-            swing = amp * -np.expm1(-lam * dd * period) * -np.expm1(-lam * (1 - dd) * period) \
-                / -np.expm1(-lam * period)
+            on, off = -np.expm1(-lam * d * period), -np.expm1(-lam * (1 - d) * period)
+            swing = amp * on * off / -np.expm1(-lam * period)
             half = 0.5 * np.einsum("bij,bj->bi", np.abs(v), np.abs(swing)) / root
             cap = big._secant(tr + theta - half, tr + theta + half)
-            lam, v, root = big._modes(big.scale(theta, tr), cap)
-        src = (v[:, 0, :] / root[:, :1]) * pw / lam
-        z = src * -np.expm1(-lam * dd * period) / -np.expm1(-lam * period)
-        frozen = np.einsum("bk,bik->bi", z, v) / root  # at the end of an on-phase
-        start = np.einsum("bk,bik->bi", np.exp(-lam * (1 - dd) * period) * z, v) / root
-        # a row is shot where the frozen network may be off by more than the tolerance:
-        # over the ripple its resistances change by ds and a node's capacity by dc
-        # (relative), which move the peak by about ds times the ripple, and dc times the
-        # node's ripple, at most (the frozen network is exact to first order in it)
-        ripple = np.abs(frozen - start)
-        off_by = np.max(np.abs(big.scale(frozen, tr) - big.scale(start, tr)), axis=1) \
-            * np.max(ripple, axis=1)
-        if big._storing:  # a node's capacity changes its own ripple
-            caps = np.stack([big._secant(tr + start, tr + start),
-                             big._secant(tr + frozen, tr + frozen), cap])
-            off_by = off_by + np.max(np.ptp(caps, axis=0) / caps.min(axis=0) * ripple, axis=1)
-
-        def chord(res: NDArray, idx: NDArray) -> NDArray:
-            zr = np.einsum("bi,bik->bk", root[idx] * res, v[idx]) \
-                / -np.expm1(-lam[idx] * period[idx])
-            return np.einsum("bk,bik->bi", zr, v[idx]) / root[idx]
-
-        # one period, each member over its own phases (a phase of no length lasts 1e-12 of
-        # the period, which changes nothing)
-        unit_on = np.maximum(dd * period, 1e-12 * period)
-        unit_off = np.maximum((1 - dd) * period, 1e-12 * period)
-        top = max(float(np.nanmax(np.abs(start), initial=0.0)), 1e-12)
-        tol = max(self.tol_rel * top, TOL_ABS_K, self.tol_k)
-        peak = frozen.copy()
-        shoot = ~(off_by <= tol) & np.all(np.isfinite(start), axis=1)
-        live = np.flatnonzero(shoot)
-        x = start[live]
-        for _ in range(PWM_ITER):
-            if live.size == 0:
-                break
-            part = big.take(live)
-            end_on = part.timed(unit_on[live]).response(x, ONE, pw[live], tr[live])[:, -1]
-            end = part.timed(unit_off[live]).response(end_on, ONE, 0.0, tr[live])[:, -1]
-            res = end - x
-            peak[live] = end_on
-            err = np.max(np.abs(res), axis=1)
-            x = x + chord(np.where(np.isfinite(res), res, 0.0), live)
-            go = err > tol
-            live, x = live[go], x[go]
-        # the decay from the peak, on the network frozen there
-        lam_e, v_e, root_e = big._modes(big.scale(peak, tr),
-                                        big._secant(tr + peak, tr + peak))
-        ze = np.einsum("bi,bik->bk", root_e * peak, v_e)
-        a = ze * v_e[:, 0, :] / root_e[:, :1]
-        return (a.reshape(self.size, rows, self.n),
-                (1.0 / lam_e).reshape(self.size, rows, self.n))
+        r, tau = big.foster(scale, cap)
+        return r.reshape(self.size, rows, self.n), tau.reshape(self.size, rows, self.n)

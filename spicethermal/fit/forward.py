@@ -47,6 +47,7 @@ from ..effects.base import (
     scalar_params,
 )
 from ..engines.network import NetworkBatch
+from ..engines.pwm import stage_peaks
 from .measurement import BundleData, CurveData
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -103,8 +104,10 @@ def _after_off(data: BundleData, net: NetworkBatch,
     """The PWM rows' true junction temperature ``delay`` after an on-phase ends, for the
     members ``net[rows]``."""
     p = data.pwm
-    peaks, tau = net.pwm_decay(p.power_w, p.freq_hz, p.duty, p.tref_c)
-    peaks, tau = peaks[rows], tau[rows]
+    r, tau = net.frozen_foster(p.power_w, p.freq_hz, p.duty, p.tref_c)
+    r, tau = r[rows], tau[rows]
+    peaks = p.power_w[None, :, None] * stage_peaks(r, tau, 1.0 / p.freq_hz[None, :, None],
+                                                   p.duty[None, :, None])
 
     def after_off(delay: NDArray | float) -> NDArray:
         d = np.asarray(delay, dtype=float)
