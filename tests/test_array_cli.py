@@ -165,3 +165,10 @@ def test_the_single_device_flow_is_unchanged(tmp_path, capsys) -> None:
                      "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert not str(doc.get("format", "")).startswith("spicethermal-array")
+
+
+def test_an_order_the_records_do_not_determine_is_refused_with_the_reason(
+        square_bundle, tmp_path, capsys) -> None:
+    code = cli.main(["fit", str(square_bundle), "--order", "99", "-o", str(tmp_path / "x")])
+    _one_line_error(capsys, code, "order-99", "do not determine 99 levels per cell", "'auto'")
+    assert not (tmp_path / "x").exists()

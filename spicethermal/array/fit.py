@@ -302,6 +302,13 @@ def fit_array(data: CouplingData, order: int | str = "auto",
     if not isinstance(max_order, int) or max_order < 1:
         raise DataFormatError(f"max_order {max_order!r}: a positive integer")
     orders = [order] if isinstance(order, int) else list(range(1, max_order + 1))
+    if isinstance(order, int):
+        layout = Layout.of(data.ports, order, air)
+        k = len(layout.conductances) + len(layout.capacitor_nodes)
+        n = _Problem(data, layout).n
+        if k > n - 1:
+            raise FitError(f"{data.source}: order {order} has {k} free parameters but only "
+                           f"{n} readings; use a lower order or 'auto'")
     best = None
     trials: list[OrderTrial] = []
     worse = 0
@@ -310,8 +317,10 @@ def fit_array(data: CouplingData, order: int | str = "auto",
             model, trial, errors = _fit_order(data, lv, air)
         except (np.linalg.LinAlgError, DataFormatError, FloatingPointError) as exc:
             if len(orders) == 1:
-                raise FitError(f"{data.source}: the order-{lv} network did not fit ({exc})"
-                               ) from None
+                raise FitError(f"{data.source}: the order-{lv} network did not fit: it came out "
+                               f"singular ({exc}), so these records do not determine {lv} "
+                               f"levels per cell; use a lower order or 'auto' (the order by "
+                               f"the BIC)") from None
             worse += 1  # an order that does not fit counts as one that does not improve
             if worse >= 2 and best is not None:
                 break
