@@ -145,6 +145,21 @@ def generate(case: Case, out: Path, fresh: bool = False) -> dict:
     return doc
 
 
+def generate_all(cases: list[Case], out: Path, fresh: bool = False
+                 ) -> tuple[dict[str, dict], dict[str, str]]:
+    """Every case's bundle (:func:`generate`), and apart, by name, why the independent
+    simulator could not simulate a case (its shooting found no periodic PWM state): such a
+    case has no bundle and is not scored, and the others go on."""
+    meta, unmade = {}, {}
+    for k, c in enumerate(cases):
+        try:
+            meta[c.name] = generate(c, out, fresh)
+        except ArithmeticError as err:
+            unmade[c.name] = str(err)
+        print(f"\r  bundles {k + 1}/{len(cases)}", end="", flush=True)
+    return meta, unmade
+
+
 # -- phase 2: the diagnoses ----------------------------------------------------------------------
 def _python_child(entry: str, folder: str, conn) -> None:
     try:
@@ -463,13 +478,7 @@ def main(argv: list[str] | None = None) -> int:
     (out / "bundles").mkdir(parents=True, exist_ok=True)
     cases = cases_of(args)
     t0 = time.perf_counter()
-    meta, unmade = {}, {}
-    for k, c in enumerate(cases):
-        try:
-            meta[c.name] = generate(c, out, args.fresh)
-        except ArithmeticError as err:  # the independent simulator's own shooting failed
-            unmade[c.name] = str(err)
-        print(f"\r  bundles {k + 1}/{len(cases)}", end="", flush=True)
+    meta, unmade = generate_all(cases, out, args.fresh)
     cases = [c for c in cases if c.name in meta]
     print(f"\n{len(cases)} bundles ({args.set}) ready in {time.perf_counter() - t0:.0f} s"
           + (f"; {len(unmade)} not simulated (the independent simulator found no periodic "

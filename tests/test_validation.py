@@ -450,3 +450,23 @@ def test_the_scorer_reads_both_formats_and_counts_as_the_issue_says():
     assert (s["near_named"], s["near_n"]) == (0, 1)
     assert s["other_wrong_bundles"] == 1  # the ambiguous single names another effect
     assert "a" not in bench.report(s, 60.0).split("\n")[0]
+
+
+def test_a_case_the_independent_simulator_cannot_simulate_is_counted_apart(tmp_path,
+                                                                           monkeypatch):
+    from types import SimpleNamespace
+
+    from conftest import bench_script
+
+    bench = bench_script("bench_validation")
+
+    def generate(case, out, fresh=False):
+        if case.name == "b":
+            raise ArithmeticError("shooting at 2000 Hz, duty 0.8: no periodic state")
+        return {"case": case.name}
+
+    monkeypatch.setattr(bench, "generate", generate)
+    cases = [SimpleNamespace(name=n) for n in "abc"]
+    meta, unmade = bench.generate_all(cases, tmp_path)
+    assert sorted(meta) == ["a", "c"] and list(unmade) == ["b"]
+    assert "no periodic state" in unmade["b"]
