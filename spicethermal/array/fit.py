@@ -305,7 +305,7 @@ def fit_array(data: CouplingData, order: int | str = "auto",
     if isinstance(order, int):
         layout = Layout.of(data.ports, order, air)
         k = len(layout.conductances) + len(layout.capacitor_nodes)
-        n = _Problem(data, layout).n
+        n = sum(e.z_k_per_w.size for e in data.elements)
         if k > n - 1:
             raise FitError(f"{data.source}: order {order} has {k} free parameters but only "
                            f"{n} readings; use a lower order or 'auto'")
