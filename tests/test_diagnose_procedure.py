@@ -3,6 +3,8 @@ residuals are either at the noise or structured): which effects it adds and when
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -15,29 +17,36 @@ from spicethermal.effects import Effect
 from spicethermal.fit.joint import ModelFit
 from spicethermal.fit.measurement import BundleData
 from spicethermal.io.bundle import Bundle, CoolingTable
+from spicethermal.io.datasets import CalibrationTable
 
 T = np.geomspace(1e-4, 10.0, 40)
 BUNDLE = Bundle(ambient_c=25.0, cooling=(CoolingTable(
     T, 0.5, tj_c=25.0 + 10.0 * np.exp(-T), tj_steady_c=35.0, tref_steady_c=25.0),))
 DATA = BundleData.from_bundle(BUNDLE)
-NOISE = {n: 0.01 for n in DATA.datasets}
+CALIBRATED = replace(BUNDLE, calibration=CalibrationTable(
+    np.arange(20.0, 80.1, 10.0), 0.65 - 2e-3 * (np.arange(20.0, 80.1, 10.0) - 25.0)))
+WITH_CAL = BundleData.from_bundle(CALIBRATED)
+NOISE = {n: 0.01 for n in WITH_CAL.datasets}
 FIRST = Effect.create("temperature-coefficient", alpha_per_k=-3e-3)
 SECOND = Effect.create("phase-change", t_c=30.0, width_k=2.0, latent_j=1e-3)
 
 
-def _fit(effects: tuple, structured: float) -> ModelFit:
-    """A model whose residual on every data set is the noise alternating in sign plus, when
-    ``structured`` > 0, a trend of that many noises (a misfit the data set shows)."""
+def _fit(effects: tuple, structured: float, data: BundleData = DATA,
+         **per_set: float) -> ModelFit:
+    """A model whose residual on every data set of ``data`` is the noise alternating in sign
+    plus, when ``structured`` (or ``per_set[name]``) > 0, a trend of that many noises (a
+    misfit the data set shows)."""
     preds, chi2 = {}, {}
-    for n in DATA.datasets:
-        size = DATA.measured(n).size
-        res = NOISE[n] * ((-1.0) ** np.arange(size) + structured * np.linspace(-1, 1, size))
-        preds[n], chi2[n] = DATA.measured(n) - res, float(np.sum((res / NOISE[n]) ** 2))
+    for n in data.datasets:
+        size, trend = data.measured(n).size, per_set.get(n, structured)
+        res = NOISE[n] * ((-1.0) ** np.arange(size) + trend * np.linspace(-1, 1, size))
+        preds[n], chi2[n] = data.measured(n) - res, float(np.sum((res / NOISE[n]) ** 2))
     return ModelFit(Cauer([20.0], [1e-2]), effects, preds, chi2, 2 + 2 * len(effects), 10, True)
 
 
-def _candidate(current: ModelFit, fit: ModelFit, delta_bic: float) -> Candidate:
-    cmp, after = comparison_of(DATA, current.predictions), comparison_of(DATA, fit.predictions)
+def _candidate(data: BundleData, current: ModelFit, fit: ModelFit,
+               delta_bic: float) -> Candidate:
+    cmp, after = comparison_of(data, current.predictions), comparison_of(data, fit.predictions)
     return Candidate(fit.effects[-1], fit, after, delta_bic, 0.9, cmp.rms_k / after.rms_k)
 
 
@@ -45,8 +54,9 @@ def _candidate(current: ModelFit, fit: ModelFit, delta_bic: float) -> Candidate:
 def scripted(monkeypatch):
     """Runs the procedure with the candidates of each step given in order (and ``lighter``
     as the model without each earlier effect, when given)."""
-    def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None):
-        base = _fit((), 40.0)
+    def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None,
+            bundle: Bundle = BUNDLE):
+        base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: [])
         monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: fit)
@@ -63,10 +73,10 @@ def scripted(monkeypatch):
             if not script:
                 return [], 0
             fit, gain = script.pop(0)
-            return [_candidate(model, fit, gain)], 0
+            return [_candidate(data, model, fit, gain)], 0
 
         monkeypatch.setattr(procedure, "_weigh", weigh)
-        return diagnose(BUNDLE)
+        return diagnose(bundle)
     return run
 
 
@@ -101,3 +111,22 @@ def test_a_rival_the_backward_check_drops_leaves_the_effects_named(scripted):
                  lighter=_fit((FIRST,), 0.0))
     assert d.steps[-1].dropped == (RIVAL.name,)
     assert d.effects == [FIRST.name] and d.verdict.cls == "named"
+
+
+SENSOR = Effect.create("tsp-nonlinearity", quad_k_per_k2=4e-4)
+
+
+@pytest.mark.parametrize(("calibration", "status"), [(40.0, "unshown"), (0.0, "named")])
+def test_an_effect_is_named_alone_only_when_the_data_it_needs_show_it(scripted, calibration,
+                                                                      status):
+    """A TSP that brings the cooling curves to their noise while its calibration keeps its
+    misfit (the calibration does not show it) is unshown: the verdict names nothing and
+    says why; with the calibration's misfit gone too, it is named."""
+    d = scripted((_fit((SENSOR,), 0.0, WITH_CAL, calibration=calibration), 5000.0),
+                 bundle=CALIBRATED)
+    assert [s.status for s in d.steps] == [status]
+    if status == "unshown":
+        assert d.verdict.cls == "none" and not d.effects
+        assert "the calibration data do not show it themselves" in d.verdict.reason
+    else:
+        assert d.effects == [SENSOR.name] and d.verdict.cls == "named"

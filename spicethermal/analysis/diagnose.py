@@ -24,7 +24,7 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
    *none* otherwise, or when a rival explains the data as well. An effect whose
-   ``traits.needs`` are missing is never named alone.
+   ``traits.needs`` are missing, or do not show it themselves, is never named alone.
 
 The work is counted (model evaluations), never timed: the same bundle gives the same verdict
 on every machine and under any load.
@@ -45,7 +45,7 @@ from ..effects.base import CALIBRATION
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
-from ..fit.measurement import BundleData
+from ..fit.measurement import BundleData, kind_of
 from ..fit.search import FormFit, fit_effect, grow, refit, without
 from ..model import ThermalModel
 from .compare import Comparison, ComparisonPoint
@@ -61,6 +61,7 @@ from .rules import (
     beyond_noise,
     decisive,
     explained,
+    shows,
 )
 from .where import localise
 
@@ -257,7 +258,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             break
         tied = tuple(c for c in cands[1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained))
-        status = _status(chosen, tied, data)
+        status = _status(chosen, tied, data, current)
         # the model the next step starts from is converged: what a further refit would still
         # gain is then no candidate's
         current = refit(data, noise, chosen.fit, REFINE_ROUNDS)
@@ -279,14 +280,23 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
                      first, skipped, n_points, work, time.perf_counter() - t_start, where)
 
 
-def _status(chosen: Candidate, tied: Sequence[Candidate], data: BundleData) -> str:
-    """A step's status (see :class:`~.diagnosis.Step`)."""
+def _status(chosen: Candidate, tied: Sequence[Candidate], data: BundleData,
+            before: ModelFit) -> str:
+    """A step's status (see :class:`~.diagnosis.Step`): an effect whose needed data sets
+    (``traits.needs``) are missing, or do not show it themselves (:func:`.rules.shows`), is
+    unshown."""
     if not chosen.catalogued:
         return RIVAL
     named_too = any(t.catalogued for t in tied)
-    if not chosen.effect.plugin.traits.needs <= data.kinds:
+    if not _shown(chosen, data, before):
         return AMBIGUOUS if named_too else UNSHOWN
     return AMBIGUOUS if named_too else NAMED
+
+
+def _shown(chosen: Candidate, data: BundleData, before: ModelFit) -> bool:
+    needs = chosen.effect.plugin.traits.needs
+    return needs <= data.kinds and shows(
+        before.chi2, chosen.fit.chi2, [n for n in data.datasets if kind_of(n) in needs])
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict) -> Verdict:
@@ -319,7 +329,12 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     if not named:
         unshown = [s for s in live if s.status == UNSHOWN]
         why = ("no catalogued effect lowers the criterion decisively" if not live else
-               _unshown_reason(unshown) if unshown else _rival_reason(rivals, live))
+               _unshown_reason(unshown, data.kinds) if unshown else _rival_reason(rivals, live))
+        if unshown:  # the error is what is left without the effects the data do not show
+            first = steps.index(unshown[0])
+            before = steps[first - 1].model if first else base
+            left = tuple(localise(comparison_of(data, before.predictions), noise,
+                                  _beyond(data, before)))
         return Verdict(NONE, (), f"{why}; not in the catalogue: the error sits in "
                        + ("; and in ".join(left[:2]) or "no data set beyond its noise"),
                        alternatives, _separate(live), left)
@@ -365,10 +380,15 @@ def _rival_reason(rivals: Sequence[Step], live: Sequence[Step]) -> str:
             + "; ".join(dict.fromkeys(texts))) if texts else "nothing decisive"
 
 
-def _unshown_reason(steps: Sequence[Step]) -> str:
-    parts = [f"{s.chosen.name} would explain it ({s.chosen.evidence}), but without "
-             f"{' and '.join(sorted(s.chosen.effect.plugin.traits.needs))} data the bundle "
-             f"cannot tell it from a device effect" for s in steps]
+def _unshown_reason(steps: Sequence[Step], kinds: frozenset[str]) -> str:
+    parts = []
+    for s in steps:
+        needs = s.chosen.effect.plugin.traits.needs
+        what = " and ".join(sorted(needs))
+        why = (f"the {what} data do not show it themselves" if needs <= kinds else
+               f"without {what} data")
+        parts.append(f"{s.chosen.name} would explain it ({s.chosen.evidence}), but {why}: "
+                     f"the bundle cannot tell it from a device effect")
     return "; ".join(parts)
 
 

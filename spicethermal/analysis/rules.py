@@ -9,7 +9,7 @@ least :data:`MIN_EXPLAINED` of the misfit beyond the noise. Nothing here refers 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,7 +21,7 @@ __all__ = ["AT_NOISE_Z", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS", "MIN_APP
            "MIN_EXPLAINED", "NOISE_EFFICIENCY", "NOISE_FLOOR_K", "NOISE_KEPT", "POLY_MAX_DEGREE",
            "POLY_P", "REFINE_ROUNDS",
            "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "decisive",
-           "excess", "explained", "runs_z"]
+           "excess", "explained", "runs_z", "shows"]
 
 # -- noise ------------------------------------------------------------------------------------
 #: No bench reads better than this (K): a floor on every noise estimate.
@@ -156,3 +156,22 @@ def decisive(bic_before: float, bic_after: float, fraction: float) -> bool:
     (True, False)
     """
     return bic_before - bic_after >= DECISIVE_BIC and fraction >= MIN_EXPLAINED
+
+
+def shows(before: Mapping[str, float], after: Mapping[str, float], sets: Sequence[str]) -> bool:
+    """Whether the data sets ``sets`` that an effect needs (its ``traits.needs``: those that
+    tell it from the other effects) show it themselves: the model with it (``after``) lowers
+    their χ² by :data:`DECISIVE_BIC`, a likelihood ratio above e⁵ on those data alone. The
+    rest of the bundle cannot tell the effect from the others, so it is no evidence of its
+    physics (a TSP's curvature that its calibration does not show is a device's misfit
+    taken for the sensor's). Nothing is needed: shown.
+
+    >>> shows({"calibration": 40.0}, {"calibration": 12.0}, ["calibration"])
+    True
+    >>> shows({"calibration": 15.2, "pwm": 27.0}, {"calibration": 15.6, "pwm": 15.0},
+    ...       ["calibration"])
+    False
+    """
+    if not sets:
+        return True
+    return sum(before[n] - after[n] for n in sets) >= DECISIVE_BIC

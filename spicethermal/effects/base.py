@@ -104,7 +104,9 @@ class Traits:
         not tried without one of them).
     needs : frozenset of str
         Kinds without which the effect cannot be told from others (a TSP's curvature without
-        a calibration reads like a device effect): without them it is never named alone.
+        a calibration reads like a device effect): without them, or when they do not show it
+        themselves (the effect does not lower their χ² decisively), it is never named
+        alone.
     cost : float
         Relative work of one forward evaluation (1: closed form; an integrated device effect
         more).

@@ -35,7 +35,14 @@ class SampleWindow(MeasurementEffect):
     params = {"window_s": Param("s", 1e-4, 0.0, 1.0, "length of the power-off sample window",
                                 log=True)}
     traits = Traits(frozenset({PWM}), cost=1.0,
-                    confusable_with={"temperature-coefficient": "a PWM grid at two powers"})
+                    confusable_with={
+                        "temperature-coefficient": "a PWM grid at two powers",
+                        # a transient decays like a fast stage: a ladder whose fast stages
+                        # fit the PWM readings, with a transient hiding them in the cooling
+                        # curves, reads like a wrong window
+                        "electrical-transient": "the PWM sample window measured at the bench "
+                        "(the power-off strobe on an oscilloscope): a wrong window moves the "
+                        "PWM readings, a transient only the first cooling readings"})
     stage = 0
 
     def read(self, form: str, p: Mapping[str, NDArray], obs: Observation,
