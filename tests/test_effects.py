@@ -125,3 +125,21 @@ def test_a_device_effect_renders_spice_for_every_layer_it_touches():
     band = Effect.create("phase-change", t_c=60.0, width_k=1.0, latent_j=2.0, node=1)
     assert band.plugin.spice_stored_heat(band, 0, "V(TJ)", 1.0) is None
     assert "EXP" in band.plugin.spice_stored_heat(band, 1, "V(N1)", 1.0)
+
+
+def test_a_ringing_is_started_at_its_frequency_from_sparse_first_readings():
+    """A transient ringing through a dozen cycles before it dies, read at ten readings a
+    decade (a few per cycle at best): the first start has its frequency and span."""
+    t = np.geomspace(1e-6, 1e-1, 51)
+    ring_hz, masked = 8e5, 1.5e-5
+    rng = np.random.default_rng(0)
+    curves = []
+    for power in (0.1, 0.3):
+        model = 25.0 + 100 * power * np.exp(-t / 1e-3)
+        error = -2.0 * np.exp(-5 * t / masked) * np.cos(2 * math.pi * ring_hz * t)
+        curves.append(CurveEvidence(t, model + error + rng.normal(0, 0.02, t.size), model,
+                                    power, 25.0, np.array([model[0], 25.0])))
+    start = CATALOGUE["electrical-transient"].guess("ringing", {}, Evidence(cooling=tuple(
+        curves)))[0]
+    assert start["ring_hz"] == pytest.approx(ring_hz, rel=0.05)
+    assert 0.5 < start["masked_s"] / masked < 2 and start["amplitude_k"] < 0

@@ -38,6 +38,16 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: The error decays as ``exp(−RATE · t / masked_s)``: 1 % is left after ``masked_s``.
 RATE = 5.0
+#: A ringing's starts come from a scan of the first readings' residual: masked spans on a
+#: log grid of this many points a decade ...
+SCAN_PER_DECADE = 8
+#: ... and frequencies of these many cycles over the masked span (a ringing may go through
+#: many cycles before it dies; fewer than a quarter is no ringing) ...
+SCAN_CYCLES = (0.25, 50.0)
+#: ... on a log grid this fine (a thirtieth of a cycle of phase at the span's end at the top);
+SCAN_STEP = 1.03
+#: the best few distinct frequencies are the starts.
+SCAN_STARTS = 3
 
 
 class ElectricalTransient(MeasurementEffect):
@@ -84,14 +94,13 @@ class ElectricalTransient(MeasurementEffect):
         below = np.nonzero(np.abs(r) < abs(r0) / math.e)[0]
         t_e = float(t[below[0]]) if below.size else float(t[min(3, t.size - 1)])
         masked = float(np.clip(RATE * t_e, 2 * t[0], 0.3 * t[-1]))
+        if form == "ringing":
+            return _ringing_starts(curves, 2 * float(t[0]), 0.3 * float(t[-1]))
         starts = []
         for m in (masked, 3 * masked):
             amp = r0 * math.exp(min(RATE * float(t[0]) / m, 50.0))
             if form == "power":
                 starts.append({"masked_s": m, "k_per_w": amp / max(worst.power_w, 1e-30)})
-            elif form == "ringing":
-                starts += [{"masked_s": m, "amplitude_k": amp, "ring_hz": k / m}
-                           for k in (0.5, 2.0)]
             else:
                 starts.append({"masked_s": m, "amplitude_k": amp})
         return starts
@@ -103,3 +112,50 @@ class ElectricalTransient(MeasurementEffect):
         ring = f", ringing at {p['ring_hz']:.3g} Hz" if effect.form == "ringing" else ""
         return (f"cooling readings off by {size}{ring}, gone after "
                 f"{p['masked_s'] * 1e6:.3g} µs")
+
+
+def _ringing_starts(curves: Sequence, lo: float, hi: float) -> list[dict[str, float]]:
+    """Starts of a ringing: every masked span (log grid from ``lo`` to ``hi``) and frequency
+    (:data:`SCAN_CYCLES` over the span) scanned at once, the amplitude of each by least
+    squares on every curve's readings within its span; the best point of each of the
+    :data:`SCAN_STARTS` best frequencies (at least a tenth apart) is a start. The first
+    readings of a ringing are far too sparse for a guess from zero crossings.
+
+    Parameters
+    ----------
+    curves : sequence of CurveEvidence
+    lo, hi : float
+        The range of masked spans (s).
+
+    Returns
+    -------
+    list of dict
+    """
+    t = np.concatenate([c.t_s for c in curves])
+    r = np.concatenate([c.residual_k for c in curves])
+    if hi <= lo:
+        hi = 2.0 * lo
+    spans = np.geomspace(lo, hi, max(2, int(SCAN_PER_DECADE * math.log10(hi / lo)) + 1))
+    cycles = np.exp(np.arange(math.log(SCAN_CYCLES[0]), math.log(SCAN_CYCLES[1]),
+                              math.log(SCAN_STEP)))
+    best: list[tuple[float, float, float, float]] = []  # gain, span, frequency, amplitude
+    for m in spans:
+        near = t <= m
+        if np.count_nonzero(near) < 3:
+            continue
+        tt, rr = t[near], r[near]
+        f = cycles[:, None] / m
+        basis = np.exp(-RATE * tt / m)[None, :] * np.cos(2 * math.pi * f * tt[None, :])
+        bb = np.einsum("ij,ij->i", basis, basis)
+        rb = basis @ rr
+        gain = np.where(bb > 0, rb * rb / np.maximum(bb, 1e-300), 0.0)
+        best += [(float(g), float(m), float(fi), float(a)) for g, fi, a in
+                 zip(gain, f[:, 0], rb / np.maximum(bb, 1e-300), strict=True)]
+    starts: list[dict[str, float]] = []
+    for _g, m, f, a in sorted(best, key=lambda x: -x[0]):
+        if any(abs(f / s["ring_hz"] - 1.0) < 0.1 for s in starts):
+            continue
+        starts.append({"masked_s": m, "amplitude_k": a, "ring_hz": f})
+        if len(starts) == SCAN_STARTS:
+            break
+    return starts

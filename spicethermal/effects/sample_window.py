@@ -40,9 +40,9 @@ class SampleWindow(MeasurementEffect):
                         # a transient decays like a fast stage: a ladder whose fast stages
                         # fit the PWM readings, with a transient hiding them in the cooling
                         # curves, reads like a wrong window
-                        "electrical-transient": "the PWM sample window measured at the bench "
-                        "(the power-off strobe on an oscilloscope): a wrong window moves the "
-                        "PWM readings, a transient only the first cooling readings"})
+                        "electrical-transient": "the steady reading just before each cut "
+                        "(a transient makes the first cooling readings jump from it, a window "
+                        "does not), or the PWM sample window measured at the bench"})
     stage = 0
 
     def read(self, form: str, p: Mapping[str, NDArray], obs: Observation,
