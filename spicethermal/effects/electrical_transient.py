@@ -38,15 +38,21 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: The error decays as ``exp(−RATE · t / masked_s)``: 1 % is left after ``masked_s``.
 RATE = 5.0
-#: A ringing's starts come from a scan of the first readings' residual: masked spans on a
-#: log grid of this many points a decade ...
+#: Starts come from a scan of the first readings' residual: masked spans on a log grid of
+#: this many points a decade ...
 SCAN_PER_DECADE = 8
-#: ... and frequencies of these many cycles over the masked span (a ringing may go through
-#: many cycles before it dies; fewer than a quarter is no ringing) ...
+#: ... each fitted over the readings up to twice the span, and at least this many of each
+#: curve, beside an offset of its own (what the ladder so far misses there, about level
+#: over a transient's span) ...
+SCAN_READINGS = 6
+#: ... and for a ringing, frequencies of these many cycles over the masked span (a ringing
+#: may go through many cycles before it dies; fewer than a quarter is no ringing) ...
 SCAN_CYCLES = (0.25, 50.0)
-#: ... on a log grid this fine (a thirtieth of a cycle of phase at the span's end at the top);
+#: ... on a log grid this fine (a thirtieth of a cycle of phase at the span's end at the top).
 SCAN_STEP = 1.03
-#: the best few distinct frequencies are the starts.
+#: The best few distinct points are the starts: spans at least this factor apart ...
+SCAN_APART = 2.0
+#: ... or for a ringing, frequencies a tenth apart.
 SCAN_STARTS = 3
 
 
@@ -88,21 +94,23 @@ class ElectricalTransient(MeasurementEffect):
         curves = [c for c in evidence.cooling if c.t_s.size >= 3]
         if not curves:
             return ()
-        worst = max(curves, key=lambda c: abs(float(c.residual_k[0])))
-        r, t = worst.residual_k, worst.t_s
-        r0 = float(r[0])
-        below = np.nonzero(np.abs(r) < abs(r0) / math.e)[0]
-        t_e = float(t[below[0]]) if below.size else float(t[min(3, t.size - 1)])
-        masked = float(np.clip(RATE * t_e, 2 * t[0], 0.3 * t[-1]))
-        if form == "ringing":
-            return _ringing_starts(curves, 2 * float(t[0]), 0.3 * float(t[-1]))
-        starts = []
-        for m in (masked, 3 * masked):
-            amp = r0 * math.exp(min(RATE * float(t[0]) / m, 50.0))
-            if form == "power":
-                starts.append({"masked_s": m, "k_per_w": amp / max(worst.power_w, 1e-30)})
-            else:
-                starts.append({"masked_s": m, "amplitude_k": amp})
+        t0 = min(float(c.t_s[0]) for c in curves)
+        t1 = max(float(c.t_s[-1]) for c in curves)
+        ringing = form == "ringing"
+        cycles = (np.exp(np.arange(math.log(SCAN_CYCLES[0]), math.log(SCAN_CYCLES[1]),
+                                   math.log(SCAN_STEP))) if ringing else np.zeros(1))
+        weights = [c.power_w if form == "power" else 1.0 for c in curves]
+        starts: list[dict[str, float]] = []
+        for _gain, m, f, a in _scan(curves, weights, 2.0 * t0, 0.3 * t1, cycles):
+            if ringing and any(abs(f / s["ring_hz"] - 1.0) < 0.1 for s in starts):
+                continue
+            if not ringing and any(max(m / s["masked_s"], s["masked_s"] / m) < SCAN_APART
+                                   for s in starts):
+                continue
+            key = "k_per_w" if form == "power" else "amplitude_k"
+            starts.append({"masked_s": m, key: a, **({"ring_hz": f} if ringing else {})})
+            if len(starts) == (SCAN_STARTS if ringing else 2):
+                break
         return starts
 
     def describe(self, effect: Effect) -> str:
@@ -114,48 +122,45 @@ class ElectricalTransient(MeasurementEffect):
                 f"{p['masked_s'] * 1e6:.3g} µs")
 
 
-def _ringing_starts(curves: Sequence, lo: float, hi: float) -> list[dict[str, float]]:
-    """Starts of a ringing: every masked span (log grid from ``lo`` to ``hi``) and frequency
-    (:data:`SCAN_CYCLES` over the span) scanned at once, the amplitude of each by least
-    squares on every curve's readings within its span; the best point of each of the
-    :data:`SCAN_STARTS` best frequencies (at least a tenth apart) is a start. The first
-    readings of a ringing are far too sparse for a guess from zero crossings.
-
-    Parameters
-    ----------
-    curves : sequence of CurveEvidence
-    lo, hi : float
-        The range of masked spans (s).
+def _scan(curves: Sequence, weights: Sequence[float], lo: float, hi: float,
+          cycles: NDArray) -> list[tuple[float, float, float, float]]:
+    """Every masked span ``m`` (log grid from ``lo`` to ``hi``) and frequency (``cycles``
+    over the span; 0: no ringing) scanned at once: on each curve's readings up to
+    ``2 m`` (at least :data:`SCAN_READINGS`), the error ``w_c · a · exp(−5t/m) cos(2πft)``
+    (``w_c`` the curve's weight: 1, or its power for an error per watt) fitted by least squares
+    beside an offset of each curve's own. Points are ranked by the t² of the amplitude (its
+    fall of the sum of squares over what is left per degree of freedom): a long span that takes
+    some of what the ladder misses over many readings is not a transient that leaves the
+    readings after it at their noise.
 
     Returns
     -------
-    list of dict
+    list of (score, span, frequency, amplitude)
+        Best first.
     """
-    t = np.concatenate([c.t_s for c in curves])
-    r = np.concatenate([c.residual_k for c in curves])
     if hi <= lo:
         hi = 2.0 * lo
     spans = np.geomspace(lo, hi, max(2, int(SCAN_PER_DECADE * math.log10(hi / lo)) + 1))
-    cycles = np.exp(np.arange(math.log(SCAN_CYCLES[0]), math.log(SCAN_CYCLES[1]),
-                              math.log(SCAN_STEP)))
-    best: list[tuple[float, float, float, float]] = []  # gain, span, frequency, amplitude
+    out: list[tuple[float, float, float, float]] = []
     for m in spans:
-        near = t <= m
-        if np.count_nonzero(near) < 3:
+        freq = cycles / m
+        num, den = np.zeros(freq.size), np.zeros(freq.size)
+        sse, dof = 0.0, -1
+        for c, w in zip(curves, weights, strict=True):
+            n = max(int(np.searchsorted(c.t_s, 2.0 * m, side="right")), SCAN_READINGS)
+            t, r = c.t_s[:n], c.residual_k[:n]
+            g = np.exp(-RATE * t / m)[None, :] * np.cos(2 * math.pi * freq[:, None] * t)
+            g = g - g.mean(axis=1, keepdims=True)  # what the offset cannot take
+            r = r - r.mean()
+            num += w * (g @ r)
+            den += w * w * np.einsum("ij,ij->i", g, g)
+            sse, dof = sse + float(r @ r), dof + t.size - 1
+        if dof < 1:
             continue
-        tt, rr = t[near], r[near]
-        f = cycles[:, None] / m
-        basis = np.exp(-RATE * tt / m)[None, :] * np.cos(2 * math.pi * f * tt[None, :])
-        bb = np.einsum("ij,ij->i", basis, basis)
-        rb = basis @ rr
-        gain = np.where(bb > 0, rb * rb / np.maximum(bb, 1e-300), 0.0)
-        best += [(float(g), float(m), float(fi), float(a)) for g, fi, a in
-                 zip(gain, f[:, 0], rb / np.maximum(bb, 1e-300), strict=True)]
-    starts: list[dict[str, float]] = []
-    for _g, m, f, a in sorted(best, key=lambda x: -x[0]):
-        if any(abs(f / s["ring_hz"] - 1.0) < 0.1 for s in starts):
-            continue
-        starts.append({"masked_s": m, "amplitude_k": a, "ring_hz": f})
-        if len(starts) == SCAN_STARTS:
-            break
-    return starts
+        ok = den > 0
+        gain = np.where(ok, num * num / np.where(ok, den, 1.0), 0.0)
+        score = gain / np.maximum((sse - gain) / dof, 1e-12 * max(sse, 1e-300) / dof)
+        amp = np.where(ok, num / np.where(ok, den, 1.0), 0.0)
+        out += [(float(x), float(m), float(f), float(a)) for x, a, f
+                in zip(score, amp, freq, strict=True)]
+    return sorted(out, key=lambda x: -x[0])
