@@ -130,3 +130,19 @@ def test_an_effect_is_named_alone_only_when_the_data_it_needs_show_it(scripted, 
         assert "the calibration data do not show it themselves" in d.verdict.reason
     else:
         assert d.effects == [SENSOR.name] and d.verdict.cls == "named"
+
+
+OUTSIDE = Effect.create("phase-change", t_c=80.0, width_k=2.0, latent_j=1e-3)
+
+
+def test_a_further_effect_the_data_do_not_show_is_not_added(scripted):
+    """A band centred at 80 °C on curves that cool from 35 °C: only its tail would show."""
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, OUTSIDE), 0.0), 200.0))
+    assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+
+
+def test_a_first_effect_the_data_do_not_show_is_not_named(scripted):
+    d = scripted((_fit((OUTSIDE,), 0.0), 5000.0))
+    assert [s.status for s in d.steps] == ["unshown"]
+    assert d.verdict.cls == "none" and not d.effects
+    assert "outside the 25–35 °C that the junction reaches" in d.verdict.reason

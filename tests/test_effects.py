@@ -143,3 +143,14 @@ def test_a_ringing_is_started_at_its_frequency_from_sparse_first_readings():
         curves)))[0]
     assert start["ring_hz"] == pytest.approx(ring_hz, rel=0.05)
     assert 0.5 < start["masked_s"] / masked < 2 and start["amplitude_k"] < 0
+
+
+def test_a_band_is_shown_only_where_the_temperatures_reached_cross_its_centre():
+    """The evidence's node 1 reaches 31 and 45 °C before the cuts from 25 °C: a band centred
+    there is shown; one centred below the reference or above the hottest is only a tail."""
+    ev = _evidence()
+    for t_c, shown in ((40.0, True), (-5.0, False), (52.0, False), (26.0, True)):
+        band = Effect.create("phase-change", t_c=t_c, width_k=5.0, latent_j=0.1, node=1)
+        why = band.plugin.unshown(band, ev)
+        assert (why == "") is shown, why
+        assert shown or "outside the 25–45 °C that node 1 reaches" in why

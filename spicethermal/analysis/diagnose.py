@@ -46,7 +46,7 @@ from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
-from ..fit.search import FormFit, fit_effect, grow, refit, without
+from ..fit.search import FormFit, evidence, fit_effect, grow, refit, without
 from ..model import ThermalModel
 from .compare import Comparison, ComparisonPoint
 from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, Candidate, Diagnosis, Step, Verdict
@@ -256,9 +256,12 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             # is an approximate form, and any flexible effect explains part of what the
             # approximation leaves, which is no evidence of its physics
             break
+        why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
+        if why and any(s.status != RIVAL for s in steps):
+            break  # a further effect the data do not show is no evidence of its physics
         tied = tuple(c for c in cands[1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained))
-        status = _status(chosen, tied, data, current)
+        status = _status(chosen, tied, why)
         # the model the next step starts from is converged: what a further refit would still
         # gain is then no candidate's
         current = refit(data, noise, chosen.fit, REFINE_ROUNDS)
@@ -273,30 +276,37 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             if bic(lighter, n_points) - bic(current, n_points) < DECISIVE_BIC:
                 current, _ = lighter, dropped.append(e.name)
         cmp = comparison_of(data, current.predictions)
-        steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped)))
+        steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
+                          why))
     result = verdict(data, base, steps, noise)
     where = tuple(localise(base_cmp, noise, _beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(steps), result,
                      first, skipped, n_points, work, time.perf_counter() - t_start, where)
 
 
-def _status(chosen: Candidate, tied: Sequence[Candidate], data: BundleData,
-            before: ModelFit) -> str:
-    """A step's status (see :class:`~.diagnosis.Step`): an effect whose needed data sets
-    (``traits.needs``) are missing, or do not show it themselves (:func:`.rules.shows`), is
-    unshown."""
+def _status(chosen: Candidate, tied: Sequence[Candidate], why: str) -> str:
+    """A step's status (see :class:`~.diagnosis.Step`): ``why`` says why the data do not
+    show the chosen effect (:func:`_unshown`)."""
     if not chosen.catalogued:
         return RIVAL
     named_too = any(t.catalogued for t in tied)
-    if not _shown(chosen, data, before):
-        return AMBIGUOUS if named_too else UNSHOWN
-    return AMBIGUOUS if named_too else NAMED
+    return AMBIGUOUS if named_too else UNSHOWN if why else NAMED
 
 
-def _shown(chosen: Candidate, data: BundleData, before: ModelFit) -> bool:
+def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict) -> str:
+    """Why the data do not show the chosen effect, or "": the data sets it needs
+    (``traits.needs``) are missing or do not show it themselves (:func:`.rules.shows`), or its
+    plugin says the data cannot show it as fitted (``unshown``: a band outside the
+    temperatures reached)."""
     needs = chosen.effect.plugin.traits.needs
-    return needs <= data.kinds and shows(
-        before.chi2, chosen.fit.chi2, [n for n in data.datasets if kind_of(n) in needs])
+    what = " and ".join(sorted(needs))
+    if not needs <= data.kinds:
+        return f"without {what} data the bundle cannot tell it from a device effect"
+    if not shows(before.chi2, chosen.fit.chi2,
+                 [n for n in data.datasets if kind_of(n) in needs]):
+        return (f"the {what} data do not show it themselves: the bundle cannot tell it from "
+                f"a device effect")
+    return chosen.effect.plugin.unshown(chosen.effect, evidence(data, chosen.fit, noise))
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict) -> Verdict:
@@ -329,7 +339,7 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     if not named:
         unshown = [s for s in live if s.status == UNSHOWN]
         why = ("no catalogued effect lowers the criterion decisively" if not live else
-               _unshown_reason(unshown, data.kinds) if unshown else _rival_reason(rivals, live))
+               _unshown_reason(unshown) if unshown else _rival_reason(rivals, live))
         if unshown:  # the error is what is left without the effects the data do not show
             first = steps.index(unshown[0])
             before = steps[first - 1].model if first else base
@@ -341,6 +351,8 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     effects = tuple(dict.fromkeys(
         n for s in named for n in (s.chosen.name, *(t.name for t in s.tied if t.catalogued))))
     separate = _separate(named)
+    held = [s for s in live if s.status == UNSHOWN]  # in the model, not named: say why
+    unshown_text = f"; in the model also {_unshown_reason(held)}" if held else ""
     if rivals:
         return Verdict(NONE, (), f"{', '.join(effects)} would explain part of it, but "
                        f"{_rival_reason(rivals, live)}; not named: the cause is perhaps not in "
@@ -348,12 +360,13 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     ambiguous = any(s.status == AMBIGUOUS for s in named)
     if not any(beyond.values()):
         return Verdict(AMBIGUOUS if ambiguous else NAMED, effects,
-                       _named_reason(named, share, "every data set is at its noise after it"),
+                       _named_reason(named, share, "every data set is at its noise after it")
+                       + unshown_text,
                        alternatives, separate)
     if share >= MIN_APPROXIMATE:
         return Verdict(AMBIGUOUS if ambiguous else APPROXIMATE, effects,
                        _named_reason(named, share, "its catalogued form is approximate: it "
-                                     "leaves " + "; and ".join(left[:2])),
+                                     "leaves " + "; and ".join(left[:2])) + unshown_text,
                        alternatives, separate, left)
     return Verdict(NONE, (), f"{', '.join(effects)} would remove only {100 * share:.0f} % of "
                    f"the misfit beyond the noise (an approximate name needs "
@@ -380,16 +393,9 @@ def _rival_reason(rivals: Sequence[Step], live: Sequence[Step]) -> str:
             + "; ".join(dict.fromkeys(texts))) if texts else "nothing decisive"
 
 
-def _unshown_reason(steps: Sequence[Step], kinds: frozenset[str]) -> str:
-    parts = []
-    for s in steps:
-        needs = s.chosen.effect.plugin.traits.needs
-        what = " and ".join(sorted(needs))
-        why = (f"the {what} data do not show it themselves" if needs <= kinds else
-               f"without {what} data")
-        parts.append(f"{s.chosen.name} would explain it ({s.chosen.evidence}), but {why}: "
-                     f"the bundle cannot tell it from a device effect")
-    return "; ".join(parts)
+def _unshown_reason(steps: Sequence[Step]) -> str:
+    return "; ".join(f"{s.chosen.name} would explain it ({s.chosen.evidence}), but {s.why}"
+                     for s in steps)
 
 
 def _separate(steps: Sequence[Step]) -> str:
@@ -403,7 +409,9 @@ def _separate(steps: Sequence[Step]) -> str:
                        + (how or "a data set that shows one and not the other"))
         if s.status == UNSHOWN:
             needs = " and ".join(sorted(s.chosen.effect.plugin.traits.needs))
-            out.append(f"{s.chosen.name}: a {needs} over the temperatures reached")
+            out.append(f"{s.chosen.name}: " + (f"a {needs} over the temperatures reached"
+                                               if needs else "readings over the "
+                                               "temperatures where it would act"))
     return "; ".join(out)
 
 

@@ -78,8 +78,8 @@ class Step:
     """One step of the forward selection: the effect added (``chosen``), the candidates
     weighed, best first, its ``status`` (``named``, ``ambiguous``: ``tied`` explain the data
     as well; ``rival``: an explanation outside the catalogue, weighed and never named;
-    ``unshown``: an effect the data cannot show alone), the effects the backward check
-    dropped after it, and the model after it."""
+    ``unshown``: an effect the data cannot show alone, ``why`` not), the effects the backward
+    check dropped after it, and the model after it."""
 
     chosen: Candidate
     candidates: tuple[Candidate, ...]
@@ -88,6 +88,7 @@ class Step:
     comparison: Comparison
     tied: tuple[Candidate, ...] = ()
     dropped: tuple[str, ...] = ()
+    why: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         c = self.chosen

@@ -254,6 +254,13 @@ class EffectPlugin(ABC):
         few at most, deterministic) given the discrete choice ``fixed`` and what the model
         so far leaves unexplained."""
 
+    def unshown(self, effect: Effect, evidence: Evidence) -> str:
+        """Why data such as ``evidence`` (what the model with the fitted ``effect`` leaves)
+        cannot show this effect as fitted, or "" when they can (default). A fit may put an
+        effect where the data only see its tail (a band outside the temperatures reached),
+        which another effect explains as well: no evidence of its physics."""
+        return ""
+
     def describe(self, effect: Effect) -> str:
         """One sentence on what the fitted effect says physically (numbers included)."""
         shown = ", ".join(f"{k} = {v:.4g}" for k, v in effect.form_params.items())

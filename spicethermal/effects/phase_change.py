@@ -195,6 +195,25 @@ class PhaseChange(DeviceEffect):
     def variants(self, form: str, evidence: Evidence) -> Sequence[Mapping[str, float]]:
         return tuple({"node": float(k)} for k in range(evidence.n_nodes))
 
+    def unshown(self, effect: Effect, evidence: Evidence) -> str:
+        """A band is shown only where the temperatures its node reaches (from the coldest
+        reference to the hottest the node is before a cut, or the PWM grid's hottest reading)
+        cross its centre, where half its heat is absorbed: a band centred outside them shows
+        only its tail, a smooth change of heat capacity, and no transition."""
+        node = int(effect.params["node"])
+        hot = [float(c.nodes_c[node]) for c in evidence.cooling if node < c.nodes_c.size]
+        if evidence.pwm is not None:
+            hot.append(float(np.max(evidence.pwm[4])))
+        if not hot or not evidence.cooling:
+            return ""
+        lo, hi = min(c.tref_c for c in evidence.cooling), max(hot)
+        mid = float(effect.params["t_c"])
+        if lo <= mid <= hi:
+            return ""
+        where = "the junction" if node == 0 else f"node {node}"
+        return (f"its band is centred at {mid:.4g} °C, outside the {lo:.4g}–{hi:.4g} °C "
+                f"that {where} reaches: only its tail shows, a smooth change of heat capacity")
+
     def guess(self, form: str, fixed: Mapping[str, float],
               evidence: Evidence) -> Sequence[Mapping[str, float]]:
         """Starts from what the band would leave in the cooling curves. Heat ``L`` given off
