@@ -204,11 +204,12 @@ class PhaseChange(DeviceEffect):
         hot = [float(c.nodes_c[node]) for c in evidence.cooling if node < c.nodes_c.size]
         if evidence.pwm is not None:
             hot.append(float(np.max(evidence.pwm[4])))
+        hot = [x for x in hot if math.isfinite(x)]
         if not hot or not evidence.cooling:
             return ""
         lo, hi = min(c.tref_c for c in evidence.cooling), max(hot)
         mid = float(effect.params["t_c"])
-        if lo <= mid <= hi:
+        if lo <= mid <= hi or not math.isfinite(mid):
             return ""
         where = "the junction" if node == 0 else f"node {node}"
         return (f"its band is centred at {mid:.4g} °C, outside the {lo:.4g}–{hi:.4g} °C "
