@@ -50,9 +50,10 @@ SCAN_READINGS = 6
 SCAN_CYCLES = (0.25, 50.0)
 #: ... on a log grid this fine (a thirtieth of a cycle of phase at the span's end at the top).
 SCAN_STEP = 1.03
-#: The best few distinct points are the starts: spans at least this factor apart ...
+#: The best distinct points are the starts: two spans at least this factor apart, or for a
+#: ringing ...
 SCAN_APART = 2.0
-#: ... or for a ringing, frequencies a tenth apart.
+#: ... this many frequencies a tenth apart.
 SCAN_STARTS = 3
 
 
