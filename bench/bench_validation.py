@@ -299,7 +299,7 @@ def run_diagnoses(folders: dict[str, Path], args: argparse.Namespace,
 
 # -- scoring -------------------------------------------------------------------------------------
 def verdict_of(doc: dict | None) -> dict:
-    """``{"class", "effects", "first"}`` of a diagnosis document (format 2 or 3).
+    """``{"class", "effects", "first"}`` of a diagnosis document (format 2 to 4).
 
     >>> verdict_of({"format": "spicethermal-diagnosis/2",
     ...             "verdict": {"effect": "phase-change", "effects": ["phase-change"]}})

@@ -1,5 +1,6 @@
 """The diagnosis's procedure on scripted candidates (the fits replaced by fixed models whose
-residuals are either at the noise or structured): which effects it adds and when it stops."""
+residuals are either at the noise or structured, each step spending a given number of network
+solves): which effects it adds and when it stops."""
 
 from __future__ import annotations
 
@@ -9,13 +10,16 @@ import numpy as np
 import pytest
 
 import spicethermal.analysis.diagnose as procedure
-from spicethermal.analysis.diagnose import comparison_of, diagnose
+from spicethermal.analysis.compare import comparison_of
+from spicethermal.analysis.diagnose import diagnose
 from spicethermal.analysis.diagnosis import Candidate
 from spicethermal.core.errors import FitError
 from spicethermal.core.ladder import Cauer
 from spicethermal.effects import Effect
+from spicethermal.engines.network import NetworkBatch
 from spicethermal.fit.joint import ModelFit
 from spicethermal.fit.measurement import BundleData
+from spicethermal.fit.search import FormFit
 from spicethermal.io.bundle import Bundle, CoolingTable
 from spicethermal.io.datasets import CalibrationTable
 
@@ -50,12 +54,19 @@ def _candidate(data: BundleData, current: ModelFit, fit: ModelFit,
     return Candidate(fit.effects[-1], fit, after, delta_bic, 0.9, cmp.rms_k / after.rms_k)
 
 
+def _spend(solves: int) -> None:
+    """Spend ``solves`` network solves (the modes of as many one-node networks)."""
+    if solves:
+        NetworkBatch(np.ones((solves, 1)), np.ones((solves, 1))).foster()
+
+
 @pytest.fixture
 def scripted(monkeypatch):
     """Runs the procedure with the candidates of each step given in order (and ``lighter``
-    as the model without each earlier effect, when given)."""
+    as the model without each earlier effect, when given); each step spends ``cost``
+    network solves."""
     def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None,
-            bundle: Bundle = BUNDLE):
+            bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: [])
@@ -69,14 +80,15 @@ def scripted(monkeypatch):
         monkeypatch.setattr(procedure, "without", without)
         script = list(steps)
 
-        def weigh(data, noise, model, cmp, fitted, n_points, sizes):
+        def weigh(data, noise, model, cmp, fitted, n_points, sizes, work_left):
+            _spend(cost)
             if not script:
                 return [], 0
             fit, gain = script.pop(0)
             return [_candidate(data, model, fit, gain)], 0
 
         monkeypatch.setattr(procedure, "_weigh", weigh)
-        return diagnose(bundle)
+        return diagnose(bundle, budget=budget)
     return run
 
 
@@ -146,3 +158,44 @@ def test_a_first_effect_the_data_do_not_show_is_not_named(scripted):
     assert [s.status for s in d.steps] == ["unshown"]
     assert d.verdict.cls == "none" and not d.effects
     assert "outside the 25–35 °C that the junction reaches" in d.verdict.reason
+
+
+def test_a_step_starts_only_when_the_work_left_covers_the_step_before(scripted):
+    """Each step spends about 1,000 solves: with 1,500 to spend, a second step would overrun
+    it; with 3,000, it is taken."""
+    two = ((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0))
+    d = scripted(*two, cost=1000, budget=1500)
+    assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+    assert 1000 <= d.spent.solves < 1500 and d.spent.budget == 1500
+    assert d.spent.stopped == (f"the work budget (1,500 network solves) left too little for "
+                               f"step 2 (step 1 took {d.spent.solves:,})")
+    assert d.verdict.reason.endswith(d.spent.stopped)
+    assert d.to_dict()["work"] == {"rows": d.work, "solves": d.spent.solves, "budget": 1500,
+                                   "stopped": d.spent.stopped}
+    d = scripted(*two, cost=1000, budget=3000)
+    assert d.effects == [FIRST.name, SECOND.name] and not d.spent.stopped
+
+
+def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):
+    """A candidate that leaves a structured residual grows while work is left, not after."""
+    asked = []
+
+    def grow(data, noise, form, rounds, short):
+        asked.append(short(form.fit))
+        return form.fit, 0
+
+    monkeypatch.setattr(procedure, "grow", grow)
+    base, form = _fit((), 40.0), FormFit(_fit((FIRST,), 8.0), ())
+    for left in (True, False):
+        procedure._weigh(DATA, NOISE, base, comparison_of(DATA, base.predictions),
+                         {FIRST.name: [form]}, sum(DATA.sizes().values()), DATA.sizes(),
+                         lambda left=left: left)
+    assert asked == [True, False]
+
+
+def test_a_step_that_could_not_fit_every_candidate_is_not_taken(scripted):
+    d = scripted((_fit((FIRST,), 0.0), 5000.0), budget=0)
+    assert not d.steps and d.verdict.cls == "none" and not d.effects
+    assert d.spent.stopped.startswith("the work budget (0 network solves) was spent in step 1 "
+                                      "before ")
+    assert d.verdict.reason.startswith(d.spent.stopped + ": nothing is named")

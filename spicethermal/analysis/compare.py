@@ -430,3 +430,13 @@ def _info(data: BundleData) -> dict[str, list[dict[str, float]]]:
         out["pwm"] = [{"power_w": float(w), "tref_c": float(t), "window_s": p.window_s}
                       for w, t in zip(p.power_w, p.tref_c, strict=True)]
     return out
+
+
+def comparison_of(data: BundleData, predictions: dict) -> Comparison:
+    """Measured vs predicted at every point of every data set."""
+    points = []
+    for name in data.datasets:
+        for at, meas, mod in zip(data.coordinates(name), data.measured(name),
+                                 predictions[name], strict=True):
+            points.append(ComparisonPoint(name, at, float(meas), float(mod)))
+    return Comparison(tuple(points))

@@ -20,14 +20,15 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    data set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are
    named. A rival chosen stays in the model like any effect (a later backward check may drop
    it); one left in the final model makes the verdict *none*.
-5. **Verdict** (:func:`verdict`): *named* when the effects bring every data set to its
+5. **Verdict** (:func:`.verdict.verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
    *none* otherwise, or when a rival explains the data as well. An effect whose
    ``traits.needs`` are missing, or do not show it themselves, is never named alone.
 
-The work is counted (model evaluations), never timed: the same bundle gives the same verdict
-on every machine and under any load.
+The work is counted (model evaluations, and network solves against
+:data:`.rules.WORK_BUDGET`), never timed: the same bundle gives the same verdict on every
+machine and under any load.
 """
 
 from __future__ import annotations
@@ -44,53 +45,33 @@ from ..core.errors import DataFormatError, FitError
 from ..effects.base import CALIBRATION
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
+from ..engines.network import Meter, metered
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
 from ..fit.search import FormFit, evidence, fit_effect, grow, refit, without
 from ..model import ThermalModel
-from .compare import Comparison, ComparisonPoint
-from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, Candidate, Diagnosis, Step, Verdict
+from .compare import Comparison, comparison_of
+from .diagnosis import AMBIGUOUS, NAMED, RIVAL, UNSHOWN, Candidate, Diagnosis, Step, WorkSpent
 from .noise import calibration_degree, noise_estimates
 from .rules import (
     DECISIVE_BIC,
     MAX_EFFECTS,
-    MIN_APPROXIMATE,
     NOISE_FLOOR_K,
     REFINE_ROUNDS,
     SCREEN_ROUNDS,
-    beyond_noise,
+    WORK_BUDGET,
     decisive,
     explained,
     shows,
 )
+from .verdict import beyond, short, verdict
 from .where import localise
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..io.bundle import Bundle
 
-__all__ = ["comparison_of", "diagnose", "fit_with_effects", "verdict"]
+__all__ = ["diagnose", "fit_with_effects"]
 
-RIVAL, UNSHOWN = "rival", "unshown"
-
-
-def comparison_of(data: BundleData, predictions: dict) -> Comparison:
-    """Measured vs predicted at every point of every data set."""
-    points = []
-    for name in data.datasets:
-        for at, meas, mod in zip(data.coordinates(name), data.measured(name),
-                                 predictions[name], strict=True):
-            points.append(ComparisonPoint(name, at, float(meas), float(mod)))
-    return Comparison(tuple(points))
-
-
-def _beyond(data: BundleData, fit: ModelFit) -> dict[str, bool]:
-    return {n: beyond_noise(fit.chi2[n], data.measured(n).size,
-                            data.measured(n) - fit.predictions[n]) for n in data.datasets}
-
-
-def _short(data: BundleData, fit: ModelFit) -> bool:
-    """Whether ``fit`` leaves a data set of ``data`` beyond its noise."""
-    return any(_beyond(data, fit).values())
 
 
 def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, dict]:
@@ -102,7 +83,7 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
     fit = None
     for _ in range(3):
         if model is None:
-            fit = fit_baseline(data, noise, lambda m: not _short(data, m))
+            fit = fit_baseline(data, noise, lambda m: not short(data, m))
         else:
             slots = tuple((e.plugin, e.form) for e in model.effects)
             ladder = as_cauer(model.ladder)
@@ -137,13 +118,13 @@ def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Seque
 
 
 def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
-           fitted: dict[str, list[FormFit]], n_points: int,
-           sizes: dict) -> tuple[list[Candidate], int]:
+           fitted: dict[str, list[FormFit]], n_points: int, sizes: dict,
+           left: Callable[[], bool]) -> tuple[list[Candidate], int]:
     """Every effect's candidate, best first. The effects are ranked on the model's ladder;
     the best, and every one within :data:`.rules.DECISIVE_BIC` of it, then grow their
     ladders while they leave a data set beyond the noise (the model's order was chosen
-    without the effect, whose misfit may have taken or hidden stages), and are weighed
-    grown."""
+    without the effect, whose misfit may have taken or hidden stages) and ``left()`` says
+    work is left, and are weighed grown."""
     work = 0
     leads = {n: min(forms, key=lambda f: bic(f.fit, n_points)) for n, forms in fitted.items()}
     cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], leads[n].fit,
@@ -155,7 +136,8 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
         if top - cands[name].delta_bic >= DECISIVE_BIC:
             continue
         lead = leads[name]
-        grown, spent = grow(data, noise, lead, REFINE_ROUNDS, partial(_short, data))
+        grown, spent = grow(data, noise, lead, REFINE_ROUNDS,
+                            lambda m: left() and short(data, m))
         work += spent
         if grown is not lead.fit:
             fits = [grown if f is lead else f.fit for f in forms]
@@ -165,7 +147,8 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
 
 def diagnose(bundle: Bundle, model: ThermalModel | None = None,
              effects: Sequence[str] | None = None,
-             progress: Callable[[str], None] | None = None, quiet: bool = True) -> Diagnosis:
+             progress: Callable[[str], None] | None = None, quiet: bool = True,
+             budget: int = WORK_BUDGET) -> Diagnosis:
     """Compare, localise, fit every candidate effect, add the decisive one, and again
     (the module docstring states the procedure).
 
@@ -182,6 +165,8 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         Called with a short text as each candidate is fitted.
     quiet : bool
         No progress bar on stderr.
+    budget : int
+        Network solves the diagnosis may spend (:data:`.rules.WORK_BUDGET`).
 
     Returns
     -------
@@ -212,10 +197,18 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     if model is not None and model.reference != bundle.reference:
         raise DataFormatError(f"{data.source}: measured against the {bundle.reference} but the "
                               f"model's reference is {model.reference}")
+    with metered() as meter:
+        return _search(data, model, bundle.reference, effects, say, budget, meter, t_start)
+
+
+def _search(data: BundleData, model: ThermalModel | None, reference: str,
+            effects: Sequence[str] | None, say: Callable[[str], None], budget: int,
+            meter: Meter, t_start: float) -> Diagnosis:
+    """The procedure of the module docstring, its network solves counted by ``meter``."""
     say("baseline ladder and noise")
     base, noise = _baseline(data, model)
     if model is None:
-        model = ThermalModel(base.foster, (), bundle.reference,
+        model = ThermalModel(base.foster, (), reference,
                              {"tool": "spicethermal diagnose", "baseline": "linear ladder"})
     sizes = data.sizes()
     n_points = sum(sizes.values())
@@ -230,20 +223,35 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     steps: list[Step] = []
     first: tuple[Candidate, ...] = ()
     current, cmp = base, base_cmp
-    work = base.work
+    work, stopped, step_cost = base.work, "", 0
+    spent_text = f"the work budget ({budget:,} network solves)"
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
-            and _short(data, current):
-        fitted = {}
+            and short(data, current):
+        k = len(steps) + 1
+        if steps and meter.solves + step_cost > budget:
+            stopped = (f"{spent_text} left too little for step {k} (step {k - 1} took "
+                       f"{step_cost:,})")
+            break
+        at_start = meter.solves
+        fitted, unfitted = {}, []
         for p in plugins:
             if p.name in skipped or current.effect(p.name):
                 continue
-            say(f"step {len(steps) + 1}: {p.name}")
+            if meter.solves >= budget:
+                unfitted.append(p.name)
+                continue
+            say(f"step {k}: {p.name}")
             forms = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS)
             if forms:
                 fitted[p.name] = forms
                 work += sum(f.fit.work for f in forms)
-        say(f"step {len(steps) + 1}: the best on longer ladders")
-        cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes)
+        if unfitted:  # a step that did not weigh every candidate is not taken
+            stopped = (f"{spent_text} was spent in step {k} before {', '.join(unfitted)} "
+                       f"{'was' if len(unfitted) == 1 else 'were'} fitted")
+            break
+        say(f"step {k}: the best on longer ladders")
+        cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes,
+                              lambda: meter.solves < budget)
         work += spent
         if not steps:
             first = tuple(cands)
@@ -251,7 +259,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
             break
         chosen = cands[0]
         if chosen.catalogued and any(s.status != RIVAL for s in steps) \
-                and _short(data, chosen.fit):
+                and short(data, chosen.fit):
             # a further effect that leaves a structured residual too: the effect before it
             # is an approximate form, and any flexible effect explains part of what the
             # approximation leaves, which is no evidence of its physics
@@ -278,10 +286,12 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
                           why))
-    result = verdict(data, base, steps, noise)
-    where = tuple(localise(base_cmp, noise, _beyond(data, base)))
+        step_cost = meter.solves - at_start
+    result = verdict(data, base, steps, noise, stopped)
+    where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(steps), result,
-                     first, skipped, n_points, work, time.perf_counter() - t_start, where)
+                     first, skipped, n_points, work, time.perf_counter() - t_start, where,
+                     WorkSpent(meter.solves, budget, stopped))
 
 
 def _status(chosen: Candidate, tied: Sequence[Candidate], why: str) -> str:
@@ -307,112 +317,6 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
         return (f"the {what} data do not show it themselves: the bundle cannot tell it from "
                 f"a device effect")
     return chosen.effect.plugin.unshown(chosen.effect, evidence(data, chosen.fit, noise))
-
-
-def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict) -> Verdict:
-    """The verdict of the steps (the module docstring's point 5).
-
-    Parameters
-    ----------
-    data : BundleData
-    base : ModelFit
-    steps : sequence of Step
-    noise : dict
-
-    Returns
-    -------
-    Verdict
-    """
-    final = steps[-1].model if steps else base
-    kept = {e.name for e in final.effects}
-    live = [s for s in steps if s.chosen.name in kept]
-    named = [s for s in live if s.status in (NAMED, AMBIGUOUS)]
-    rivals = [s for s in live if s.status == RIVAL]
-    alternatives = tuple(dict.fromkeys(
-        c.name for s in live for c in (s.chosen, *s.tied) if not c.catalogued))
-    beyond = _beyond(data, final)
-    left = tuple(localise(comparison_of(data, final.predictions), noise, beyond))
-    share = explained(base.chi2, final.chi2, data.sizes())
-    if not _short(data, base):
-        return Verdict(NONE, (), "the linear ladder fits every data set within its noise: no "
-                       "effect is missing")
-    if not named:
-        unshown = [s for s in live if s.status == UNSHOWN]
-        why = ("no catalogued effect lowers the criterion decisively" if not live else
-               _unshown_reason(unshown) if unshown else _rival_reason(rivals, live))
-        if unshown:  # the error is what is left without the effects the data do not show
-            first = steps.index(unshown[0])
-            before = steps[first - 1].model if first else base
-            left = tuple(localise(comparison_of(data, before.predictions), noise,
-                                  _beyond(data, before)))
-        return Verdict(NONE, (), f"{why}; not in the catalogue: the error sits in "
-                       + ("; and in ".join(left[:2]) or "no data set beyond its noise"),
-                       alternatives, _separate(live), left)
-    effects = tuple(dict.fromkeys(
-        n for s in named for n in (s.chosen.name, *(t.name for t in s.tied if t.catalogued))))
-    separate = _separate(named)
-    held = [s for s in live if s.status == UNSHOWN]  # in the model, not named: say why
-    unshown_text = f"; in the model also {_unshown_reason(held)}" if held else ""
-    if rivals:
-        return Verdict(NONE, (), f"{', '.join(effects)} would explain part of it, but "
-                       f"{_rival_reason(rivals, live)}; not named: the cause is perhaps not in "
-                       "the catalogue", alternatives, separate, left)
-    ambiguous = any(s.status == AMBIGUOUS for s in named)
-    if not any(beyond.values()):
-        return Verdict(AMBIGUOUS if ambiguous else NAMED, effects,
-                       _named_reason(named, share, "every data set is at its noise after it")
-                       + unshown_text,
-                       alternatives, separate)
-    if share >= MIN_APPROXIMATE:
-        return Verdict(AMBIGUOUS if ambiguous else APPROXIMATE, effects,
-                       _named_reason(named, share, "its catalogued form is approximate: it "
-                                     "leaves " + "; and ".join(left[:2])) + unshown_text,
-                       alternatives, separate, left)
-    return Verdict(NONE, (), f"{', '.join(effects)} would remove only {100 * share:.0f} % of "
-                   f"the misfit beyond the noise (an approximate name needs "
-                   f"{100 * MIN_APPROXIMATE:.0f} %) and leave " + "; and ".join(left[:2])
-                   + "; not in the catalogue", alternatives, separate, left)
-
-
-def _named_reason(named: Sequence[Step], share: float, tail: str) -> str:
-    parts = []
-    for s in named:
-        c = s.chosen
-        names = [t.name for t in s.tied if t.catalogued]
-        names += [f"outside the catalogue, {t.evidence}" for t in s.tied if not t.catalogued]
-        also = f" (or {'; or '.join(names)}: as likely)" if names else ""
-        parts.append(f"{c.name}{also} lowers the criterion by {c.delta_bic:.1f} and removes "
-                     f"{100 * max(c.explained, 0):.0f} % of the misfit beyond the noise "
-                     f"({c.evidence})")
-    return f"{'; then '.join(parts)}; together {100 * share:.0f} %; {tail}"
-
-
-def _rival_reason(rivals: Sequence[Step], live: Sequence[Step]) -> str:
-    texts = [t.evidence for s in rivals for t in (s.chosen, *s.tied) if not t.catalogued]
-    return ("an explanation outside the catalogue fits as well or better: "
-            + "; ".join(dict.fromkeys(texts))) if texts else "nothing decisive"
-
-
-def _unshown_reason(steps: Sequence[Step]) -> str:
-    return "; ".join(f"{s.chosen.name} would explain it ({s.chosen.evidence}), but {s.why}"
-                     for s in steps)
-
-
-def _separate(steps: Sequence[Step]) -> str:
-    """What would tell tied explanations apart (their traits say)."""
-    out = []
-    for s in steps:
-        for t in s.tied:
-            a, b = s.chosen.effect.plugin, t.effect.plugin
-            how = a.traits.confusable_with.get(b.name) or b.traits.confusable_with.get(a.name)
-            out.append(f"{a.name} or {b.name}: "
-                       + (how or "a data set that shows one and not the other"))
-        if s.status == UNSHOWN:
-            needs = " and ".join(sorted(s.chosen.effect.plugin.traits.needs))
-            out.append(f"{s.chosen.name}: " + (f"a {needs} over the temperatures reached"
-                                               if needs else "readings over the "
-                                               "temperatures where it would act"))
-    return "; ".join(out)
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str],
@@ -447,7 +351,7 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
                            f"data sets, {', '.join(sorted(plugin(name).traits.shown_by))}, "
                            f"shows it)")
         best = min(fits, key=lambda f: bic(f.fit, n_points))
-        current = grow(data, noise, best, REFINE_ROUNDS, partial(_short, data))[0]
+        current = grow(data, noise, best, REFINE_ROUNDS, partial(short, data))[0]
     return ThermalModel(current.foster, current.effects, bundle.reference,
                         {**(provenance or {}), "fit": {
                             "effects": list(dict.fromkeys(names)),

@@ -1,5 +1,5 @@
 """The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
-verdict; its text report and its ``spicethermal-diagnosis/3`` document
+verdict; its text report and its ``spicethermal-diagnosis/4`` document
 (docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
@@ -20,14 +20,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..fit.joint import ModelFit
     from .compare import Comparison
 
-__all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "Candidate",
-           "Diagnosis", "Step", "Verdict"]
+__all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
+           "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent"]
 
-#: The document's format; version 3 adds the verdict's class, the noise, the criterion's
-#: numbers and the work (docs/diagnosis-json.md), and keeps every key of versions 1 and 2.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/3"
-#: Verdict classes.
+#: The document's format; version 4 adds the network solves to the work, and its budget
+#: (docs/diagnosis-json.md), and keeps every key of versions 1 to 3.
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/4"
+#: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
+RIVAL, UNSHOWN = "rival", "unshown"
 #: Worst points listed.
 WORST_POINTS = 5
 
@@ -123,10 +124,20 @@ class Verdict:
                 "separate_by": self.separate_by, "where": list(self.where)}
 
 
+@dataclass(frozen=True)
+class WorkSpent:
+    """The network solves a diagnosis spent (:func:`spicethermal.engines.network.metered`),
+    its budget, and why the budget stopped the search ("" when it did not)."""
+
+    solves: int = 0
+    budget: int = 0
+    stopped: str = ""
+
+
 @dataclass(frozen=True, eq=False)
 class Diagnosis(JsonDocument):
     """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
-    report, :meth:`to_dict` the ``spicethermal-diagnosis/3`` document, :meth:`plot` the
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/4`` document, :meth:`plot` the
     figures."""
 
     source: str
@@ -142,6 +153,7 @@ class Diagnosis(JsonDocument):
     work: int = 0
     elapsed_s: float = 0.0
     where: tuple[str, ...] = ()
+    spent: WorkSpent = field(default_factory=WorkSpent)
 
     # -- views -------------------------------------------------------------------------------
     @property
@@ -196,7 +208,7 @@ class Diagnosis(JsonDocument):
 
     # -- document -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/3`` document."""
+        """The ``spicethermal-diagnosis/4`` document."""
         worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
                  for p in self.baseline.worst(WORST_POINTS)]
         fit = self.final_fit
@@ -213,7 +225,10 @@ class Diagnosis(JsonDocument):
                           "max_abs_k": _finite(self.final.max_abs_k),
                           "chi2": {k: _finite(v) for k, v in fit.chi2.items()}},
                 "verdict": self.verdict.to_dict(),
-                "skipped": dict(self.skipped), "work": {"rows": self.work}}
+                "skipped": dict(self.skipped), "work": {"rows": self.work,
+                                                  "solves": self.spent.solves,
+                                                  "budget": self.spent.budget,
+                                                  "stopped": self.spent.stopped}}
 
     def __str__(self) -> str:
         b = self.baseline_fit
@@ -260,7 +275,8 @@ class Diagnosis(JsonDocument):
             for name, sub in self.baseline.by_dataset().items():
                 lines.append(f"  {name:12s} {sub.rms_k:8.3f} → "
                              f"{final.dataset(name).rms_k:8.3f} K")
-        lines.append(f"(work: {self.work} model evaluations, {self.elapsed_s:.1f} s)")
+        lines.append(f"(work: {self.work} model evaluations, {self.spent.solves:,} network "
+                     f"solves of a budget of {self.spent.budget:,}, {self.elapsed_s:.1f} s)")
         return "\n".join(lines)
 
 

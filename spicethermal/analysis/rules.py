@@ -74,6 +74,12 @@ MAX_EFFECTS = 3
 SCREEN_ROUNDS = 15
 #: Rounds of a candidate's joint refit with the ladder and every other effect.
 REFINE_ROUNDS = 30
+#: Network solves (:func:`spicethermal.engines.network.metered`) one diagnosis may spend:
+#: about 40 s of CPU at 5 µs a solve on the bench's 2-core machine, where the median bundle
+#: takes under a million. A step starts only when what is left covers what the step before it
+#: took; a ladder stops growing, and the candidates not yet fitted are not fitted, once it is
+#: spent; a bounded fit that has started finishes.
+WORK_BUDGET = 8_000_000
 
 
 def runs_z(residuals: NDArray) -> float:

@@ -48,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="baseline model (default: the linear ladder fitted from the "
                              "bundle's cooling curves)")
     parser.add_argument("--json", action="store_true",
-                        help="print the spicethermal-diagnosis/3 document")
+                        help="print the spicethermal-diagnosis/4 document")
     parser.add_argument("--report", metavar="DIR",
                         help="write an HTML report with the before/after figures into DIR")
     parser.add_argument("--effect", action="append", metavar="NAME",
