@@ -223,16 +223,14 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     steps: list[Step] = []
     first: tuple[Candidate, ...] = ()
     current, cmp = base, base_cmp
-    work, stopped, step_cost = base.work, "", 0
+    work, stopped = base.work, ""
     spent_text = f"the work budget ({budget:,} network solves)"
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
             and short(data, current):
         k = len(steps) + 1
-        if steps and meter.solves + step_cost > budget:
-            stopped = (f"{spent_text} left too little for step {k} (step {k - 1} took "
-                       f"{step_cost:,})")
+        if steps and meter.solves >= budget:
+            stopped = f"{spent_text} was spent after step {k - 1}"
             break
-        at_start = meter.solves
         fitted, unfitted = {}, []
         for p in plugins:
             if p.name in skipped or current.effect(p.name):
@@ -286,7 +284,6 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
                           why))
-        step_cost = meter.solves - at_start
     result = verdict(data, base, steps, noise, stopped)
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(steps), result,

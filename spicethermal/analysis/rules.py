@@ -75,10 +75,11 @@ SCREEN_ROUNDS = 15
 #: Rounds of a candidate's joint refit with the ladder and every other effect.
 REFINE_ROUNDS = 30
 #: Network solves (:func:`spicethermal.engines.network.metered`) one diagnosis may spend:
-#: about 40 s of CPU at 5 µs a solve on the bench's 2-core machine, where the median bundle
-#: takes under a million. A step starts only when what is left covers what the step before it
-#: took; a ladder stops growing, and the candidates not yet fitted are not fitted, once it is
-#: spent; a bounded fit that has started finishes.
+#: 35 to 60 s of CPU at 4 to 7 µs a solve on the bench's 2-core machine, where the median
+#: bundle takes under a million. A step starts while some is left; once it is spent, a ladder
+#: stops growing, the candidates not yet fitted are not, and a step that did not fit every
+#: candidate is not taken; a bounded fit that has started finishes (a diagnosis may overrun
+#: the budget by one candidate's fits).
 WORK_BUDGET = 8_000_000
 
 
