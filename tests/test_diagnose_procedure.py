@@ -66,7 +66,8 @@ def scripted(monkeypatch):
     as the model without each earlier effect, when given); each step spends ``cost``
     network solves."""
     def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None,
-            bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9):
+            bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9,
+            after: dict | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: [])
@@ -82,6 +83,9 @@ def scripted(monkeypatch):
 
         def weigh(data, noise, model, cmp, fitted, n_points, sizes, work_left):
             _spend(cost)
+            if after is not None:  # the candidates after the model's effects, best first
+                got = after.get(tuple(e.name for e in model.effects), ())
+                return [_candidate(data, model, fit, gain) for fit, gain in got], 0
             if not script:
                 return [], 0
             fit, gain = script.pop(0)
@@ -199,3 +203,23 @@ def test_a_step_that_could_not_fit_every_candidate_is_not_taken(scripted):
     assert d.spent.stopped.startswith("the work budget (0 network solves) was spent in step 1 "
                                       "before ")
     assert d.verdict.reason.startswith(d.spent.stopped + ": nothing is named")
+
+
+def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scripted):
+    """The best effect alone (a temperature coefficient) leaves no second effect a way to
+    the noise; with the next best (a phase change) first, a sample window brings every data
+    set to it: those steps are taken, and the verdict says why."""
+    window = Effect.create("sample-window", window_s=1e-4)
+    after = {(): [(_fit((FIRST,), 8.0), 5000.0), (_fit((SECOND,), 9.0), 4000.0)],
+             (FIRST.name,): [(_fit((FIRST, window), 3.0), 300.0)],
+             (SECOND.name,): [(_fit((SECOND, window), 0.0), 900.0)]}
+    d = scripted(after=after)
+    assert d.effects == [SECOND.name, window.name] and d.verdict.cls == "named"
+    assert [c.name for c in d.candidates] == [FIRST.name, SECOND.name]
+    assert not d.steps[0].tied
+    assert (f"{SECOND.name} is added first although {FIRST.name} alone lowers the criterion "
+            f"more (by 1000.0)") in d.verdict.reason
+    # when the next best's steps end beyond the noise too, the best's stand
+    after[(SECOND.name,)] = [(_fit((SECOND, window), 2.0), 900.0)]
+    d = scripted(after=after)
+    assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"

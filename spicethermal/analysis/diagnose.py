@@ -19,7 +19,9 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    a catalogued one is added only when it brings every data set to its noise. Until every
    data set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are
    named. A rival chosen stays in the model like any effect (a later backward check may drop
-   it); one left in the final model makes the verdict *none*.
+   it); one left in the final model makes the verdict *none*. When the steps end beyond the
+   noise, they are run again with the first step's next best catalogued effect added first,
+   and replaced when they bring every data set to its noise at a BIC lower by the margin.
 5. **Verdict** (:func:`.verdict.verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
@@ -35,14 +37,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.errors import DataFormatError, FitError
-from ..effects.base import CALIBRATION
+from ..effects.base import CALIBRATION, EffectPlugin
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
 from ..engines.network import Meter, metered
@@ -201,6 +203,38 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
         return _search(data, model, bundle.reference, effects, say, budget, meter, t_start)
 
 
+@dataclass(frozen=True, eq=False)
+class _Context:
+    """What every step of a diagnosis shares."""
+
+    data: BundleData
+    noise: dict
+    plugins: list[EffectPlugin]
+    skipped: dict[str, str]
+    say: Callable[[str], None]
+    meter: Meter
+    budget: int
+
+    @property
+    def spent(self) -> bool:
+        return self.meter.solves >= self.budget
+
+    @property
+    def budget_text(self) -> str:
+        return f"the work budget ({self.budget:,} network solves)"
+
+
+@dataclass
+class _Path:
+    """The steps of one forward selection, the first step's candidates, the work (model
+    evaluations) and why the work budget stopped it ("" when it did not)."""
+
+    steps: list[Step] = field(default_factory=list)
+    first: tuple[Candidate, ...] = ()
+    work: int = 0
+    stopped: str = ""
+
+
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
             effects: Sequence[str] | None, say: Callable[[str], None], budget: int,
             meter: Meter, t_start: float) -> Diagnosis:
@@ -210,8 +244,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     if model is None:
         model = ThermalModel(base.foster, (), reference,
                              {"tool": "spicethermal diagnose", "baseline": "linear ladder"})
-    sizes = data.sizes()
-    n_points = sum(sizes.values())
+    n_points = sum(data.sizes().values())
     base_cmp = comparison_of(data, base.predictions)
     names = list(effects) if effects is not None else list(CATALOGUE)
     plugins = [plugin(n) for n in names]
@@ -220,42 +253,82 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         if p.name not in skipped and not p.traits.shown_by & data.kinds:
             shown = " or ".join(sorted(p.traits.shown_by))
             skipped[p.name] = f"no data set that can show it ({shown})"
-    steps: list[Step] = []
-    first: tuple[Candidate, ...] = ()
+    ctx = _Context(data, noise, plugins, skipped, say, meter, budget)
+    path = _forward(ctx, base, base_cmp)
+    work, revised = base.work + path.work, ""
+    final = path.steps[-1].model if path.steps else base
+    alt = next((i for i, c in enumerate(path.first) if i and c.catalogued
+                and decisive(0.0, -c.delta_bic, c.explained)), None)
+    if path.steps and path.steps[0].chosen.catalogued and not path.stopped \
+            and short(data, final) and alt is not None and not ctx.spent:
+        # the best effect alone may be the one that leaves no second effect a way to the
+        # noise (its form, or the ladder, took part of the other's misfit): the next best
+        # effect first, when its steps bring every data set to the noise
+        other = _forward(ctx, base, base_cmp, path.first, alt)
+        work += other.work
+        end = other.steps[-1].model if other.steps else base
+        gain = bic(final, n_points) - bic(end, n_points)
+        if not other.stopped and not short(data, end) and gain >= DECISIVE_BIC:
+            lead = path.first[0]
+            revised = (f"{other.steps[0].chosen.name} is added first although "
+                       f"{lead.name} alone lowers the criterion more (by "
+                       f"{lead.delta_bic - path.first[alt].delta_bic:.1f}): after "
+                       f"{lead.name} no further effect brings every data set to its noise, "
+                       f"and the criterion ends {gain:.1f} higher")
+            path = other
+    note = "; ".join(t for t in (revised, path.stopped) if t)
+    result = verdict(data, base, path.steps, noise, note)
+    where = tuple(localise(base_cmp, noise, beyond(data, base)))
+    return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
+                     path.first, skipped, n_points, work, time.perf_counter() - t_start,
+                     where, WorkSpent(meter.solves, budget, path.stopped))
+
+
+def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
+             first: tuple[Candidate, ...] = (), pick: int = 0) -> _Path:
+    """Forward selection from ``base`` (the module docstring's point 4); given the first
+    step's candidates, weighed already, the first step adds the one of rank ``pick``."""
+    data, noise = ctx.data, ctx.noise
+    sizes = data.sizes()
+    n_points = sum(sizes.values())
+    path = _Path(first=first)
+    steps = path.steps
     current, cmp = base, base_cmp
-    work, stopped = base.work, ""
-    spent_text = f"the work budget ({budget:,} network solves)"
-    while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS \
-            and short(data, current):
+    while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS and short(data, current):
         k = len(steps) + 1
-        if steps and meter.solves >= budget:
-            stopped = f"{spent_text} was spent after step {k - 1}"
+        if steps and ctx.spent:
+            path.stopped = f"{ctx.budget_text} was spent after step {k - 1}"
             break
-        fitted, unfitted = {}, []
-        for p in plugins:
-            if p.name in skipped or current.effect(p.name):
-                continue
-            if meter.solves >= budget:
-                unfitted.append(p.name)
-                continue
-            say(f"step {k}: {p.name}")
-            forms = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS)
-            if forms:
-                fitted[p.name] = forms
-                work += sum(f.fit.work for f in forms)
-        if unfitted:  # a step that did not weigh every candidate is not taken
-            stopped = (f"{spent_text} was spent in step {k} before {', '.join(unfitted)} "
-                       f"{'was' if len(unfitted) == 1 else 'were'} fitted")
+        if not steps and path.first:
+            cands, i = list(path.first), pick
+        else:
+            fitted, unfitted = {}, []
+            for p in ctx.plugins:
+                if p.name in ctx.skipped or current.effect(p.name):
+                    continue
+                if ctx.spent:
+                    unfitted.append(p.name)
+                    continue
+                ctx.say(f"step {k}: {p.name}")
+                forms = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS)
+                if forms:
+                    fitted[p.name] = forms
+                    path.work += sum(f.fit.work for f in forms)
+            if unfitted:  # a step that did not weigh every candidate is not taken
+                path.stopped = (f"{ctx.budget_text} was spent in step {k} before "
+                                f"{', '.join(unfitted)} "
+                                f"{'was' if len(unfitted) == 1 else 'were'} fitted")
+                break
+            ctx.say(f"step {k}: the best on longer ladders")
+            cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes,
+                                  lambda: not ctx.spent)
+            path.work += spent
+            i = 0
+            if not steps:
+                path.first = tuple(cands)
+        if not cands or not decisive(0.0, -cands[i].delta_bic, cands[i].explained):
             break
-        say(f"step {k}: the best on longer ladders")
-        cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes,
-                              lambda: meter.solves < budget)
-        work += spent
-        if not steps:
-            first = tuple(cands)
-        if not cands or not decisive(0.0, -cands[0].delta_bic, cands[0].explained):
-            break
-        chosen = cands[0]
+        chosen = cands[i]
         if chosen.catalogued and any(s.status != RIVAL for s in steps) \
                 and short(data, chosen.fit):
             # a further effect that leaves a structured residual too: the effect before it
@@ -265,30 +338,26 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
-        tied = tuple(c for c in cands[1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
+        tied = tuple(c for c in cands[i + 1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained))
         status = _status(chosen, tied, why)
         # the model the next step starts from is converged: what a further refit would still
         # gain is then no candidate's
         current = refit(data, noise, chosen.fit, REFINE_ROUNDS)
-        work += current.work if current is not chosen.fit else 0
+        path.work += current.work if current is not chosen.fit else 0
         dropped = []
         for e in [e for e in current.effects if e.name != chosen.name]:
             try:
                 lighter = without(data, noise, current, e.name, REFINE_ROUNDS)
             except (ValueError, FitError):
                 continue
-            work += lighter.work
+            path.work += lighter.work
             if bic(lighter, n_points) - bic(current, n_points) < DECISIVE_BIC:
                 current, _ = lighter, dropped.append(e.name)
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
                           why))
-    result = verdict(data, base, steps, noise, stopped)
-    where = tuple(localise(base_cmp, noise, beyond(data, base)))
-    return Diagnosis(data.source, noise, base_cmp, base, model, tuple(steps), result,
-                     first, skipped, n_points, work, time.perf_counter() - t_start, where,
-                     WorkSpent(meter.solves, budget, stopped))
+    return path
 
 
 def _status(chosen: Candidate, tied: Sequence[Candidate], why: str) -> str:

@@ -32,7 +32,7 @@ def short(data: BundleData, fit: ModelFit) -> bool:
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
-            stopped: str = "") -> Verdict:
+            note: str = "") -> Verdict:
     """The verdict of the steps (the module docstring's point 5).
 
     Parameters
@@ -41,19 +41,20 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     base : ModelFit
     steps : sequence of Step
     noise : dict
-    stopped : str
-        Why the work budget stopped the search, when it did (ends the reason).
+    note : str
+        What else the search says: why its first step is not the best candidate alone, why
+        the work budget stopped it (ends the reason; with no step, it is the reason).
 
     Returns
     -------
     Verdict
     """
-    found = _judge(data, base, steps, noise, stopped)
-    return replace(found, reason=f"{found.reason}; {stopped}") if stopped and steps else found
+    found = _judge(data, base, steps, noise, note)
+    return replace(found, reason=f"{found.reason}; {note}") if note and steps else found
 
 
 def _judge(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
-           stopped: str) -> Verdict:
+           note: str) -> Verdict:
     final = steps[-1].model if steps else base
     kept = {e.name for e in final.effects}
     live = [s for s in steps if s.chosen.name in kept]
@@ -67,8 +68,8 @@ def _judge(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
     if not short(data, base):
         return Verdict(NONE, (), "the linear ladder fits every data set within its noise: no "
                        "effect is missing")
-    if stopped and not steps:
-        return Verdict(NONE, (), f"{stopped}: nothing is named; the error sits in "
+    if note and not steps:
+        return Verdict(NONE, (), f"{note}: nothing is named; the error sits in "
                        + "; and in ".join(left[:2]), where=left)
     if not named:
         unshown = [s for s in live if s.status == UNSHOWN]
