@@ -255,11 +255,11 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
             skipped[p.name] = f"no data set that can show it ({shown})"
     ctx = _Context(data, noise, plugins, skipped, say, meter, budget)
     path = _forward(ctx, base, base_cmp)
-    work, revised = base.work + path.work, ""
+    work, revised, stopped = base.work + path.work, "", path.stopped
     final = path.steps[-1].model if path.steps else base
     alt = next((i for i, c in enumerate(path.first) if i and c.catalogued
                 and decisive(0.0, -c.delta_bic, c.explained)), None)
-    if path.steps and path.steps[0].chosen.catalogued and not path.stopped \
+    if path.steps and path.steps[0].chosen.catalogued and not stopped \
             and short(data, final) and alt is not None and not ctx.spent:
         # the best effect alone may be the one that leaves no second effect a way to the
         # noise (its form, or the ladder, took part of the other's misfit): the next best
@@ -268,20 +268,21 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         work += other.work
         end = other.steps[-1].model if other.steps else base
         gain = bic(final, n_points) - bic(end, n_points)
-        if not other.stopped and not short(data, end) and gain >= DECISIVE_BIC:
-            lead = path.first[0]
-            revised = (f"{other.steps[0].chosen.name} is added first although "
-                       f"{lead.name} alone lowers the criterion more (by "
-                       f"{lead.delta_bic - path.first[alt].delta_bic:.1f}): after "
-                       f"{lead.name} no further effect brings every data set to its noise, "
-                       f"and the criterion ends {gain:.1f} higher")
+        lead, name = path.first[0], path.first[alt].name
+        if other.stopped:
+            stopped = f"{other.stopped} (with {name} added first instead of {lead.name})"
+        elif not short(data, end) and gain >= DECISIVE_BIC:
+            revised = (f"{name} is added first although {lead.name} alone lowers the "
+                       f"criterion more (by {lead.delta_bic - path.first[alt].delta_bic:.1f}): "
+                       f"after {lead.name} no further effect brings every data set to its "
+                       f"noise, and the criterion ends {gain:.1f} higher")
             path = other
-    note = "; ".join(t for t in (revised, path.stopped) if t)
+    note = "; ".join(t for t in (revised, stopped) if t)
     result = verdict(data, base, path.steps, noise, note)
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
-                     where, WorkSpent(meter.solves, budget, path.stopped))
+                     where, WorkSpent(meter.solves, budget, stopped))
 
 
 def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
