@@ -234,6 +234,10 @@ class _Path:
     work: int = 0
     stopped: str = ""
 
+    def end(self, base: ModelFit) -> ModelFit:
+        """The model after the last step (``base`` before any)."""
+        return self.steps[-1].model if self.steps else base
+
 
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
             effects: Sequence[str] | None, say: Callable[[str], None], budget: int,
@@ -256,7 +260,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     ctx = _Context(data, noise, plugins, skipped, say, meter, budget)
     path = _forward(ctx, base, base_cmp)
     work, revised, stopped = base.work + path.work, "", path.stopped
-    final = path.steps[-1].model if path.steps else base
+    final = path.end(base)
     alt = next((i for i, c in enumerate(path.first) if i and c.catalogued
                 and decisive(0.0, -c.delta_bic, c.explained)), None)
     if path.steps and path.steps[0].chosen.catalogued and not stopped \
@@ -266,7 +270,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         # effect first, when its steps bring every data set to the noise
         other = _forward(ctx, base, base_cmp, path.first, alt)
         work += other.work
-        end = other.steps[-1].model if other.steps else base
+        end = other.end(base)
         gain = bic(final, n_points) - bic(end, n_points)
         lead, name = path.first[0], path.first[alt].name
         if other.stopped:
