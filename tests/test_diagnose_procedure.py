@@ -100,12 +100,28 @@ def test_a_further_effect_that_leaves_a_structured_residual_too_is_not_added(scr
     d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 3.0), 200.0))
     assert d.effects == [FIRST.name]
     assert d.verdict.cls == "approximate"
+    # the verdict says what the refused effect would do, and why it is not named
+    assert (f"{SECOND.name} would lower the criterion by a further 200.0 and remove 90 % of "
+            "the misfit left, but it leaves a structured residual too: not named"
+            in d.verdict.reason)
 
 
 def test_a_further_effect_that_brings_every_data_set_to_its_noise_is_added(scripted):
     d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0))
     assert d.effects == [FIRST.name, SECOND.name]
     assert d.verdict.cls == "named"
+
+
+def test_what_a_model_leaves_is_built_only_for_a_plugin_that_judges_it(scripted, monkeypatch):
+    # the default ``unshown`` needs no evidence (a network simulation of the model); a
+    # plugin that overrides it gets the evidence of the model with its effect
+    built = []
+    real = procedure.evidence
+    monkeypatch.setattr(procedure, "evidence",
+                        lambda data, fit, noise: built.append(fit) or real(data, fit, noise))
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0))
+    assert d.effects == [FIRST.name, SECOND.name]
+    assert [[e.name for e in f.effects] for f in built] == [[FIRST.name, SECOND.name]]
 
 
 def test_a_first_effect_is_added_even_when_it_leaves_a_residual(scripted):

@@ -16,7 +16,8 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    within that margin of it, grow their ladders first while they leave a data set beyond
    the noise (:func:`~spicethermal.fit.search.grow`). A backward check then drops an earlier
    effect the model no longer needs (its BIC without it within the margin). An effect after
-   a catalogued one is added only when it brings every data set to its noise. Until every
+   a catalogued one is added only when it brings every data set to its noise (the verdict
+   says what the best one refused would do). Until every
    data set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are
    named. A rival chosen stays in the model like any effect (a later backward check may drop
    it); one left in the final model makes the verdict *none*. When the steps end beyond the
@@ -53,7 +54,17 @@ from ..fit.measurement import BundleData, kind_of
 from ..fit.search import FormFit, evidence, fit_effect, grow, refit, without
 from ..model import ThermalModel
 from .compare import Comparison, comparison_of
-from .diagnosis import AMBIGUOUS, NAMED, RIVAL, UNSHOWN, Candidate, Diagnosis, Step, WorkSpent
+from .diagnosis import (
+    AMBIGUOUS,
+    NAMED,
+    RIVAL,
+    UNSHOWN,
+    Candidate,
+    Diagnosis,
+    Step,
+    WorkSpent,
+    last_model,
+)
 from .noise import calibration_degree, noise_estimates
 from .rules import (
     DECISIVE_BIC,
@@ -227,16 +238,18 @@ class _Context:
 @dataclass
 class _Path:
     """The steps of one forward selection, the first step's candidates, the work (model
-    evaluations) and why the work budget stopped it ("" when it did not)."""
+    evaluations), why the work budget stopped it ("" when it did not) and the best further
+    candidate it refused because it leaves a structured residual too (None when none)."""
 
     steps: list[Step] = field(default_factory=list)
     first: tuple[Candidate, ...] = ()
     work: int = 0
     stopped: str = ""
+    refused: Candidate | None = None
 
     def end(self, base: ModelFit) -> ModelFit:
         """The model after the last step (``base`` before any)."""
-        return self.steps[-1].model if self.steps else base
+        return last_model(self.steps, base)
 
 
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
@@ -281,7 +294,12 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
                        f"after {lead.name} no further effect brings every data set to its "
                        f"noise, and the criterion ends {gain:.1f} higher")
             path = other
-    note = "; ".join(t for t in (revised, stopped) if t)
+    further = path.refused
+    refused = (f"{further.name} would lower the criterion by a further {further.delta_bic:.1f} "
+               f"and remove {100 * max(further.explained, 0):.0f} % of the misfit left, but it "
+               "leaves a structured residual too: not named, since any flexible effect takes "
+               "part of what an approximate form leaves") if further else ""
+    note = "; ".join(t for t in (refused, revised, stopped) if t)
     result = verdict(data, base, path.steps, noise, note)
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
@@ -339,6 +357,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             # a further effect that leaves a structured residual too: the effect before it
             # is an approximate form, and any flexible effect explains part of what the
             # approximation leaves, which is no evidence of its physics
+            path.refused = chosen
             break
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
@@ -387,7 +406,10 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
                  [n for n in data.datasets if kind_of(n) in needs]):
         return (f"the {what} data do not show it themselves: the bundle cannot tell it from "
                 f"a device effect")
-    return chosen.effect.plugin.unshown(chosen.effect, evidence(data, chosen.fit, noise))
+    judge = chosen.effect.plugin
+    if type(judge).unshown is EffectPlugin.unshown:  # the default: shown (no evidence built)
+        return ""
+    return judge.unshown(chosen.effect, evidence(data, chosen.fit, noise))
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str],

@@ -6,7 +6,7 @@ verdict; its text report and its ``spicethermal-diagnosis/4`` document
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
-           "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent"]
+           "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent", "last_model"]
 
 #: The document's format; version 4 adds the network solves to the work, and its budget
 #: (docs/diagnosis-json.md), and keeps every key of versions 1 to 3.
@@ -100,6 +100,11 @@ class Step:
                 "dropped": list(self.dropped)}
 
 
+def last_model(steps: Sequence[Step], base: ModelFit) -> ModelFit:
+    """The model after the last of ``steps`` (``base`` before any)."""
+    return steps[-1].model if steps else base
+
+
 @dataclass(frozen=True)
 class Verdict:
     """What the diagnosis concludes: a class (:data:`NAMED`, :data:`APPROXIMATE`,
@@ -176,7 +181,7 @@ class Diagnosis(JsonDocument):
 
     @property
     def final_fit(self) -> ModelFit:
-        return self.steps[-1].model if self.steps else self.baseline_fit
+        return last_model(self.steps, self.baseline_fit)
 
     @property
     def best(self) -> Candidate | None:

@@ -9,7 +9,17 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from .compare import comparison_of
-from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, RIVAL, UNSHOWN, Step, Verdict
+from .diagnosis import (
+    AMBIGUOUS,
+    APPROXIMATE,
+    NAMED,
+    NONE,
+    RIVAL,
+    UNSHOWN,
+    Step,
+    Verdict,
+    last_model,
+)
 from .rules import MIN_APPROXIMATE, beyond_noise, explained
 from .where import localise
 
@@ -55,7 +65,7 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
 
 def _judge(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
            note: str) -> Verdict:
-    final = steps[-1].model if steps else base
+    final = last_model(steps, base)
     kept = {e.name for e in final.effects}
     live = [s for s in steps if s.chosen.name in kept]
     named = [s for s in live if s.status in (NAMED, AMBIGUOUS)]
