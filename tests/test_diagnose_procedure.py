@@ -102,7 +102,8 @@ def test_a_further_effect_that_leaves_a_structured_residual_too_is_not_added(scr
     assert d.verdict.cls == "approximate"
     # the verdict says what the refused effect would do, and why it is not named
     assert (f"{SECOND.name} would lower the criterion by a further 200.0 and remove 90 % of "
-            "the misfit left, but it leaves a structured residual too: not named"
+            "the misfit left, but it leaves a structured residual too: not named, since any "
+            f"flexible effect takes part of what the approximate form of {FIRST.name} leaves"
             in d.verdict.reason)
 
 

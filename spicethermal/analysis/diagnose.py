@@ -298,7 +298,8 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     refused = (f"{further.name} would lower the criterion by a further {further.delta_bic:.1f} "
                f"and remove {100 * max(further.explained, 0):.0f} % of the misfit left, but it "
                "leaves a structured residual too: not named, since any flexible effect takes "
-               "part of what an approximate form leaves") if further else ""
+               f"part of what the approximate form of {path.steps[-1].chosen.name} leaves"
+               ) if further else ""
     note = "; ".join(t for t in (refused, revised, stopped) if t)
     result = verdict(data, base, path.steps, noise, note)
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
