@@ -105,12 +105,15 @@ def test_a_further_effect_that_leaves_a_structured_residual_too_is_not_added(scr
             "the misfit left, but it leaves a structured residual too: not named, since any "
             f"flexible effect takes part of what the approximate form of {FIRST.name} leaves"
             in d.verdict.reason)
+    refused = d.to_dict()["refused"]  # and the document holds its numbers
+    assert refused["effect"] == SECOND.name and refused["delta_bic"] == 200.0
 
 
 def test_a_further_effect_that_brings_every_data_set_to_its_noise_is_added(scripted):
     d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0))
     assert d.effects == [FIRST.name, SECOND.name]
     assert d.verdict.cls == "named"
+    assert d.to_dict()["refused"] is None
 
 
 def test_what_a_model_leaves_is_built_only_for_a_plugin_that_judges_it(scripted, monkeypatch):
@@ -179,6 +182,7 @@ def test_a_first_effect_the_data_do_not_show_is_not_named(scripted):
     assert [s.status for s in d.steps] == ["unshown"]
     assert d.verdict.cls == "none" and not d.effects
     assert "outside the 25–35 °C that the junction reaches" in d.verdict.reason
+    assert "outside the 25–35 °C" in d.to_dict()["steps"][0]["why"]  # the document says why
 
 
 def test_a_step_starts_only_while_work_is_left(scripted):

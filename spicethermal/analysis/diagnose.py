@@ -305,7 +305,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
-                     where, WorkSpent(meter.solves, budget, stopped))
+                     where, WorkSpent(meter.solves, budget, stopped), further)
 
 
 def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,

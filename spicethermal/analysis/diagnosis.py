@@ -1,5 +1,5 @@
 """The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
-verdict; its text report and its ``spicethermal-diagnosis/4`` document
+verdict; its text report and its ``spicethermal-diagnosis/5`` document
 (docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
@@ -23,9 +23,9 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
            "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent", "last_model"]
 
-#: The document's format; version 4 adds the network solves to the work, and its budget
-#: (docs/diagnosis-json.md), and keeps every key of versions 1 to 3.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/4"
+#: The document's format; version 5 adds the further effect the search refused and each
+#: step's ``why`` (docs/diagnosis-json.md), and keeps every key of versions 1 to 4.
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/5"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
 RIVAL, UNSHOWN = "rival", "unshown"
@@ -97,7 +97,7 @@ class Step:
                 "status": self.status, "rms_k": _finite(self.comparison.rms_k),
                 "improvement": _finite(c.improvement), "delta_bic": _finite(c.delta_bic),
                 "explained": _finite(c.explained), "tied": [t.name for t in self.tied],
-                "dropped": list(self.dropped)}
+                "dropped": list(self.dropped), "why": self.why}
 
 
 def last_model(steps: Sequence[Step], base: ModelFit) -> ModelFit:
@@ -142,7 +142,7 @@ class WorkSpent:
 @dataclass(frozen=True, eq=False)
 class Diagnosis(JsonDocument):
     """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
-    report, :meth:`to_dict` the ``spicethermal-diagnosis/4`` document, :meth:`plot` the
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/5`` document, :meth:`plot` the
     figures."""
 
     source: str
@@ -159,6 +159,9 @@ class Diagnosis(JsonDocument):
     elapsed_s: float = 0.0
     where: tuple[str, ...] = ()
     spent: WorkSpent = field(default_factory=WorkSpent)
+    #: The best further candidate the search refused because it leaves a structured residual
+    #: too (weighed on the last step's model), or None.
+    refused: Candidate | None = None
 
     # -- views -------------------------------------------------------------------------------
     @property
@@ -213,7 +216,7 @@ class Diagnosis(JsonDocument):
 
     # -- document -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/4`` document."""
+        """The ``spicethermal-diagnosis/5`` document."""
         worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
                  for p in self.baseline.worst(WORST_POINTS)]
         fit = self.final_fit
@@ -230,6 +233,7 @@ class Diagnosis(JsonDocument):
                           "max_abs_k": _finite(self.final.max_abs_k),
                           "chi2": {k: _finite(v) for k, v in fit.chi2.items()}},
                 "verdict": self.verdict.to_dict(),
+                "refused": self.refused.to_dict() if self.refused is not None else None,
                 "skipped": dict(self.skipped), "work": {"rows": self.work,
                                                   "solves": self.spent.solves,
                                                   "budget": self.spent.budget,
