@@ -247,10 +247,6 @@ class _Path:
     stopped: str = ""
     refused: Candidate | None = None
 
-    def end(self, base: ModelFit) -> ModelFit:
-        """The model after the last step (``base`` before any)."""
-        return last_model(self.steps, base)
-
 
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
             effects: Sequence[str] | None, say: Callable[[str], None], budget: int,
@@ -273,7 +269,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     ctx = _Context(data, noise, plugins, skipped, say, meter, budget)
     path = _forward(ctx, base, base_cmp)
     work, revised, stopped = base.work + path.work, "", path.stopped
-    final = path.end(base)
+    final = last_model(path.steps, base)
     alt = next((i for i, c in enumerate(path.first) if i and c.catalogued
                 and decisive(0.0, -c.delta_bic, c.explained)), None)
     if path.steps and path.steps[0].chosen.catalogued and not stopped \
@@ -283,7 +279,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         # effect first, when its steps bring every data set to the noise
         other = _forward(ctx, base, base_cmp, path.first, alt)
         work += other.work
-        end = other.end(base)
+        end = last_model(other.steps, base)
         gain = bic(final, n_points) - bic(end, n_points)
         lead, name = path.first[0], path.first[alt].name
         if other.stopped:
