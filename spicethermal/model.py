@@ -2,10 +2,11 @@
 
 A linear model (no device effects) is solved in closed form. Device effects make the model
 nonlinear; it is then integrated as the nodal network the SPICE export describes,
-``Cm(θ) dθ/dt = b·P(t) − G(θ)·θ`` with θ the node rises over the reference, using an implicit
-stiff integrator (Radau). The PWM periodic steady state of a nonlinear model is found by shooting
-(a chord-Newton iteration on the one-period map, its Jacobian from the network frozen at the
-current state), which needs a handful of periods instead of the thousands a cold start needs.
+``Cm(θ) dθ/dt = b·P(t) − G(θ)·θ`` with θ the node rises over the reference, by the network
+simulator's exponential steps (:meth:`~spicethermal.engines.network.NetworkBatch.response`).
+The PWM periodic steady state of a nonlinear model is found by shooting (a chord-Newton
+iteration on the one-period map, its Jacobian from the network frozen at the current state),
+which needs a handful of periods instead of the thousands a cold start needs.
 """
 
 from __future__ import annotations
@@ -217,19 +218,39 @@ class ThermalModel:
         if self.is_linear:
             return steady_state(self.ladder, power_w, freq_hz, duty, window_s)
         check_drive(freq_hz, duty, power_w, window_s)
-        state0, net = self.pwm_initial_state(power_w, freq_hz, duty, tref_c, tol_k), self.network()
+        valley, peak, reading = self._periodic(power_w, freq_hz, duty, window_s, tref_c, tol_k)
         period = 1 / freq_hz
-        on = duty * period
-        peak, _ = self._integrate(net, state0, [(0.0, on, power_w)], tref_c)
-        valley = state0
-        reading = peak
-        if window_s > 0:
-            reading, _ = self._integrate(net, peak, [(0.0, window_s, 0.0)], tref_c)
         t = np.linspace(0, period, 401)
-        tr = self.simulate(t, Schedule.pwm(power_w, freq_hz, duty, 1), tref_c, state0)
+        tr = self.simulate(t, Schedule.pwm(power_w, freq_hz, duty, 1), tref_c, valley)
         mean = float(np.trapezoid(tr.tj_k, t) / period)
         return PwmState(float(freq_hz), float(duty), float(power_w), float(window_s),
                         float(peak[0]), mean, float(valley[0]), float(reading[0]))
+
+    def pwm_reading(self, power_w: float, freq_hz: float, duty: float, window_s: float = 0.0,
+                    tref_c: float = 25.0, tol_k: float = 1e-6) -> float:
+        """The junction's rise (K) read ``window_s`` after an on-phase ends in the PWM periodic
+        steady state: :meth:`pwm`'s ``reading_k`` without the period's mean (one integration
+        of a period fewer).
+
+        >>> m = ThermalModel(Foster.from_tau([100.0], [1.0]))
+        >>> m.pwm_reading(0.1, 1e3, 0.5, 1e-4) == m.pwm(0.1, 1e3, 0.5, 1e-4).reading_k
+        True
+        """
+        if self.is_linear:
+            return self.pwm(power_w, freq_hz, duty, window_s).reading_k
+        check_drive(freq_hz, duty, power_w, window_s)
+        return float(self._periodic(power_w, freq_hz, duty, window_s, tref_c, tol_k)[2][0])
+
+    def _periodic(self, power_w: float, freq_hz: float, duty: float, window_s: float,
+                  tref_c: float, tol_k: float) -> tuple[NDArray, NDArray, NDArray]:
+        """Node rises of the periodic steady state (nonlinear model): at the start of an
+        on-phase, at its end, and ``window_s`` after it."""
+        valley, net = self.pwm_initial_state(power_w, freq_hz, duty, tref_c, tol_k), self.network()
+        peak, _ = self._integrate(net, valley, [(0.0, duty / freq_hz, power_w)], tref_c)
+        reading = peak
+        if window_s > 0:
+            reading, _ = self._integrate(net, peak, [(0.0, window_s, 0.0)], tref_c)
+        return valley, peak, reading
 
     def pwm_initial_state(self, power_w: float, freq_hz: float, duty: float,
                           tref_c: float = 25.0, tol_k: float = 1e-6,

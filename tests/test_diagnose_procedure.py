@@ -67,7 +67,7 @@ def scripted(monkeypatch):
     network solves."""
     def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None,
             bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9,
-            after: dict | None = None):
+            after: dict | None = None, weighed: list | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: [])
@@ -83,6 +83,8 @@ def scripted(monkeypatch):
 
         def weigh(data, noise, model, cmp, fitted, n_points, sizes, work_left):
             _spend(cost)
+            if weighed is not None:  # the data each step's candidates were weighed on
+                weighed.append(data.source)
             if after is not None:  # the candidates after the model's effects, best first
                 got = after.get(tuple(e.name for e in model.effects), ())
                 return [_candidate(data, model, fit, gain) for fit, gain in got], 0
@@ -126,6 +128,22 @@ def test_what_a_model_leaves_is_built_only_for_a_plugin_that_judges_it(scripted,
     d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0))
     assert d.effects == [FIRST.name, SECOND.name]
     assert [[e.name for e in f.effects] for f in built] == [[FIRST.name, SECOND.name]]
+
+
+def test_each_chosen_model_is_settled_and_the_next_step_weighed_from_there(scripted,
+                                                                          monkeypatch):
+    settled, weighed = [], []
+
+    def settle(data, noise, fit, rounds):  # the data then hold the settled model's correction
+        settled.append([e.name for e in fit.effects])
+        return replace(data, source=f"settled at {fit.effects[-1].name}"), fit
+
+    monkeypatch.setattr(procedure, "settle", settle)
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0),
+                 weighed=weighed)
+    assert d.effects == [FIRST.name, SECOND.name]
+    assert settled == [[FIRST.name], [FIRST.name, SECOND.name]]
+    assert weighed == [DATA.source, f"settled at {FIRST.name}"]
 
 
 def test_a_first_effect_is_added_even_when_it_leaves_a_residual(scripted):

@@ -9,9 +9,12 @@ import pytest
 from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect
 from spicethermal.engines.pwm import stage_peaks, steady_state
-from spicethermal.fit.forward import predict_model
+from spicethermal.fit.forward import EXACT_TOL_K, predict_model, pwm_correction
+from spicethermal.fit.joint import Layout, Start, fit_starts
 from spicethermal.fit.measurement import BundleData
+from spicethermal.fit.search import settle
 from spicethermal.io.bundle import Bundle, CalibrationTable, CoolingTable, PwmTable
+from spicethermal.model import ThermalModel
 
 LADDER = Foster.from_tau([6.0, 20.0, 50.0, 70.0], [1e-4, 5e-3, 0.4, 30.0])
 T = np.geomspace(1e-5, 100.0, 31)
@@ -101,3 +104,83 @@ def test_effects_compose_in_the_order_of_their_stage():
     # the transient is added to the reading: after the sensor's law
     assert one["cooling_1"] - tsp_only["cooling_1"] == pytest.approx(
         -2.0 * np.exp(-5 * T / 1e-4))
+
+
+# -- the exact periodic state of a nonlinear model -----------------------------------------
+SLOW_F = np.array([1.0, 5.0, 50.0, 1.0, 5.0, 50.0])
+TC = Effect.create("temperature-coefficient", "local", alpha_per_k=5e-3)
+
+
+def _slow_pwm(readings: np.ndarray | None = None, noise_k: float = 0.0) -> BundleData:
+    """A curve and a PWM grid down to 1 Hz at 0.3 W, where the 0.4 s stage swings whole."""
+    rng = np.random.default_rng(3)
+    cooling = predict_model(BundleData.from_bundle(Bundle(ambient_c=25.0, cooling=(
+        CoolingTable(T, 0.3, tj_c=np.zeros(T.size), tref_steady_c=25.0),))), LADDER, [TC])
+    pwm = np.zeros(F.size) if readings is None else readings
+    return BundleData.from_bundle(Bundle(
+        ambient_c=25.0,
+        cooling=(CoolingTable(T, 0.3, tj_c=cooling["cooling_1"] + rng.normal(0, noise_k, T.size),
+                              tref_steady_c=25.0),),
+        pwm=PwmTable(SLOW_F, D, pwm + rng.normal(0, noise_k, F.size), power_w=0.3,
+                     sample_window_s=1e-4)))
+
+
+def _exact(effects) -> np.ndarray:
+    model = ThermalModel(LADDER, tuple(effects))
+    return np.array([25.0 + model.pwm_reading(0.3, f, d, 1e-4) for f, d in zip(SLOW_F, D,
+                                                                                strict=True)])
+
+
+def test_the_correction_makes_a_nonlinear_models_pwm_readings_exact():
+    data = _slow_pwm()
+    closed = predict_model(data, LADDER, [TC])["pwm"]
+    correction = pwm_correction(data, LADDER, [TC])
+    held = data.with_pwm_correction(correction, [TC])
+    exact = _exact([TC])
+    assert np.max(np.abs(closed - exact)) > 0.2  # first order in the ripple: a quarter kelvin
+    # to the shooting's tolerance
+    assert predict_model(held, LADDER, [TC])["pwm"] == pytest.approx(exact, abs=EXACT_TOL_K)
+    # a sample window of the declared length reads the corrected state too
+    window = Effect.create("sample-window", "end", window_s=1e-4)
+    assert predict_model(held, LADDER, [TC, window])["pwm"] == pytest.approx(exact,
+                                                                             abs=EXACT_TOL_K)
+
+
+def test_the_correction_is_held_only_for_the_device_effects_it_was_computed_for():
+    data = _slow_pwm()
+    held = data.with_pwm_correction(pwm_correction(data, LADDER, [TC]), [TC])
+    other = Effect.create("temperature-coefficient", "junction", alpha_per_k=5e-3)
+    assert predict_model(held, LADDER, [other])["pwm"] == \
+        pytest.approx(predict_model(data, LADDER, [other])["pwm"], abs=0)
+    assert predict_model(held, LADDER)["pwm"] == \
+        pytest.approx(predict_model(data, LADDER)["pwm"], abs=0)
+
+
+def test_a_linear_model_needs_no_correction():
+    data = _slow_pwm()
+    assert pwm_correction(data, LADDER, []) is None
+    assert pwm_correction(data, LADDER, [Effect.create("sample-window", window_s=1e-3)]) is None
+    assert pwm_correction(_data(), LADDER, [TC]) is not None
+    no_grid = BundleData.from_bundle(Bundle(ambient_c=25.0, cooling=(
+        CoolingTable(T, 0.3, tj_c=np.zeros(T.size), tref_steady_c=25.0),)))
+    assert pwm_correction(no_grid, LADDER, [TC]) is None
+
+
+def test_settling_brings_a_nonlinear_models_pwm_readings_to_their_noise():
+    noise_k = 0.01
+    data = _slow_pwm(_exact([TC]), noise_k)
+    noise = {n: noise_k for n in data.datasets}
+    cauer = LADDER.to_cauer()
+    layout = Layout(((TC.plugin, TC.form),), cauer.order)
+    fit = fit_starts(data, noise, layout, [Start(cauer, (dict(TC.params),))], 30)[0]
+    n = data.pwm.tj_c.size
+    assert fit.chi2["pwm"] > 10 * n  # the closed form cannot reach the exact readings
+    held, settled = settle(data, noise, fit, 30)
+    assert settled.chi2["pwm"] < n + 3 * np.sqrt(2 * n)
+    assert settled.chi2_total < fit.chi2_total
+    # the correction held is the settled model's own: its predictions are exact
+    model = ThermalModel(settled.ladder, settled.effects)
+    assert settled.predictions["pwm"] == pytest.approx(
+        [25.0 + model.pwm_reading(0.3, f, d, 1e-4) for f, d in zip(SLOW_F, D, strict=True)],
+        abs=1e-4)
+    assert held.pwm.tj_c is data.pwm.tj_c  # the readings themselves are untouched

@@ -45,7 +45,7 @@ from ..core.errors import DataFormatError
 from ..effects.base import MeasurementEffect, scalar_params
 from ..engines.network import NetworkBatch
 from ..engines.pwmsim import ENGINES, SpicePwm, run_parallel
-from ..fit.forward import MeasurementTerm, predict
+from ..fit.forward import MeasurementTerm, predict, pwm_correction
 from ..fit.measurement import BundleData, CurveData
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -402,6 +402,9 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
         data = replace(data, pwm=replace(data.pwm, window_s=float(window_s)))
     spice = (_spice_after_off(model, data, engine, dialect, quiet)
              if engine != "analytic" and data.pwm is not None else None)
+    if spice is None:  # the closed form, made exact for a nonlinear model
+        data = data.with_pwm_correction(pwm_correction(data, model.ladder, model.effects),
+                                        model.effects)
     measures = [MeasurementTerm(e.plugin, e.form, scalar_params(e))  # type: ignore[arg-type]
                 for e in model.effects if isinstance(e.plugin, MeasurementEffect)]
     pred = predict(data, NetworkBatch.of(model.ladder, model.effects), measures, spice)

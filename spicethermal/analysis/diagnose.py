@@ -15,14 +15,17 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    of it are *tied*. The effects are ranked on the model's ladder; the best, and every one
    within that margin of it, grow their ladders first while they leave a data set beyond
    the noise (:func:`~spicethermal.fit.search.grow`). A backward check then drops an earlier
-   effect the model no longer needs (its BIC without it within the margin). An effect after
-   a catalogued one is added only when it brings every data set to its noise (the verdict
-   says what the best one refused would do). Until every
-   data set is at its noise, nothing is decisive, or :data:`.rules.MAX_EFFECTS` effects are
-   named. A rival chosen stays in the model like any effect (a later backward check may drop
-   it); one left in the final model makes the verdict *none*. When the steps end beyond the
-   noise, they are run again with the first step's next best catalogued effect added first,
-   and replaced when they bring every data set to its noise at a BIC lower by the margin.
+   effect the model no longer needs (its BIC without it within the margin), and the model is
+   settled: refitted with its PWM readings exact (:func:`~spicethermal.fit.search.settle`;
+   the fits evaluate them in a closed form, first order in the ripple), the next step's
+   fits holding that correction. An effect after a catalogued one is added only when it
+   brings every data set to its noise (the verdict says what the best one refused would
+   do). Until every data set is at its noise, nothing is decisive, or
+   :data:`.rules.MAX_EFFECTS` effects are named. A rival chosen stays in the model like any
+   effect (a later backward check may drop it); one left in the final model makes the
+   verdict *none*. When the steps end beyond the noise, they are run again with the first
+   step's next best catalogued effect added first, and replaced when they bring every data
+   set to its noise at a BIC lower by the margin.
 5. **Verdict** (:func:`.verdict.verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
@@ -51,7 +54,7 @@ from ..engines.cauer import as_cauer
 from ..engines.network import Meter, metered
 from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
-from ..fit.search import FormFit, evidence, fit_effect, grow, refit, without
+from ..fit.search import FormFit, evidence, fit_effect, grow, refit, settle, without
 from ..model import ThermalModel
 from .compare import Comparison, comparison_of
 from .diagnosis import (
@@ -237,10 +240,12 @@ class _Context:
 
 @dataclass
 class _Path:
-    """The steps of one forward selection, the first step's candidates, the work (model
+    """The steps of one forward selection, the data its last model was settled on
+    (:func:`~spicethermal.fit.search.settle`), the first step's candidates, the work (model
     evaluations), why the work budget stopped it ("" when it did not) and the best further
     candidate it refused because it leaves a structured residual too (None when none)."""
 
+    data: BundleData
     steps: list[Step] = field(default_factory=list)
     first: tuple[Candidate, ...] = ()
     work: int = 0
@@ -297,7 +302,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
                f"part of what the approximate form of {path.steps[-1].chosen.name} leaves"
                ) if further else ""
     note = "; ".join(t for t in (refused, revised, stopped) if t)
-    result = verdict(data, base, path.steps, noise, note)
+    result = verdict(path.data, base, path.steps, noise, note)
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
@@ -311,7 +316,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
     data, noise = ctx.data, ctx.noise
     sizes = data.sizes()
     n_points = sum(sizes.values())
-    path = _Path(first=first)
+    path = _Path(data, first=first)
     steps = path.steps
     current, cmp = base, base_cmp
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS and short(data, current):
@@ -375,6 +380,10 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             path.work += lighter.work
             if bic(lighter, n_points) - bic(current, n_points) < DECISIVE_BIC:
                 current, _ = lighter, dropped.append(e.name)
+        # with its PWM readings exact, and the next step's fits from there
+        data, settled = settle(data, noise, current, REFINE_ROUNDS)
+        path.work += settled.work if settled is not current else 0
+        current, path.data = settled, data
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
                           why))
@@ -414,7 +423,8 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
     """The linear ladder and the named effects fitted jointly to every data set of
     ``bundle``, as the diagnosis fits them: the baseline and its noise, then each effect in
     turn (every form; the one with the lowest criterion kept, its ladder grown as the
-    diagnosis grows it) with the ladder and the effects before it refitted.
+    diagnosis grows it, and settles it: its PWM readings exact) with the ladder and the
+    effects before it refitted.
 
     Parameters
     ----------
@@ -442,6 +452,7 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
                            f"shows it)")
         best = min(fits, key=lambda f: bic(f.fit, n_points))
         current = grow(data, noise, best, REFINE_ROUNDS, partial(short, data))[0]
+        data, current = settle(data, noise, current, REFINE_ROUNDS)
     return ThermalModel(current.foster, current.effects, bundle.reference,
                         {**(provenance or {}), "fit": {
                             "effects": list(dict.fromkeys(names)),

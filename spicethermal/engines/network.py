@@ -29,7 +29,8 @@ The network, node rises ``θ`` over the reference at ``tref``, temperatures ``T 
   (first order in the ripple) otherwise. Where the junction swings by tens of kelvin (a
   strong temperature coefficient or a band crossed at a few hertz) the frozen peak is off
   by tenths of a kelvin; :class:`~spicethermal.model.ThermalModel` shoots the true periodic
-  state.
+  state, and the fits and comparisons add its difference as a correction
+  (:func:`spicethermal.fit.forward.pwm_correction`).
 
 A linear network's Foster form (:meth:`NetworkBatch.foster`) comes from the same modes:
 ``τ_k = 1/λ_k``, ``R_k = v_{0k}² / (c_0 λ_k)``.
@@ -154,6 +155,11 @@ class NetworkBatch:
         terms = [DeviceTerm(e.plugin, e.form, scalar_params(e))  # type: ignore[arg-type]
                  for e in effects if isinstance(e.plugin, DeviceEffect)]
         return cls(np.array([cauer.r]), np.array([cauer.c]), terms)
+
+    @property
+    def device_effects(self) -> frozenset[tuple[str, str]]:
+        """The names and forms of the batch's device effects."""
+        return frozenset((t.plugin.name, t.form) for t in self.terms)
 
     @property
     def linear(self) -> bool:

@@ -11,7 +11,10 @@ measurement effects turn its true junction temperatures into readings, in the or
 * steady readings: that steady state;
 * the PWM grid: the periodic steady state of each row, read ``delay`` after an on-phase ends
   (the declared sample window by default; a measurement effect may read elsewhere through
-  :attr:`~spicethermal.effects.base.Observation.after_off`);
+  :attr:`~spicethermal.effects.base.Observation.after_off`): the closed form of the network
+  frozen at its mean (:meth:`~spicethermal.engines.network.NetworkBatch.frozen_foster`),
+  plus the data's correction (:class:`~.measurement.PwmData`) when the batch's device
+  effects are those it was computed for;
 * the calibration: the thermocouple temperatures (a TSP's law bends them).
 
 Every reading went through the same calibration line, fitted to the calibration's own noisy
@@ -40,6 +43,7 @@ import numpy as np
 from ..effects.base import (
     CALIBRATION,
     COOLING,
+    DEVICE,
     PWM,
     STEADY,
     MeasurementEffect,
@@ -48,6 +52,7 @@ from ..effects.base import (
 )
 from ..engines.network import NetworkBatch
 from ..engines.pwm import stage_peaks
+from ..model import ThermalModel
 from .measurement import BundleData, CurveData
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -56,7 +61,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..core.ladder import Cauer, Foster
     from ..effects import Effect
 
-__all__ = ["MeasurementTerm", "line_error", "observations", "predict", "predict_model"]
+__all__ = ["EXACT_TOL_K", "MeasurementTerm", "line_error", "observations", "predict",
+           "predict_model", "pwm_correction"]
+
+#: The exact periodic state's accepted periodicity error (K): a five-hundredth of the best
+#: bench's noise.
+EXACT_TOL_K = 1e-5
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,11 +118,14 @@ def _after_off(data: BundleData, net: NetworkBatch,
     r, tau = r[rows], tau[rows]
     peaks = p.power_w[None, :, None] * stage_peaks(r, tau, 1.0 / p.freq_hz[None, :, None],
                                                    p.duty[None, :, None])
+    base = p.tref_c[None, :]
+    if p.correction_k is not None and net.device_effects == p.corrected_for:
+        base = base + p.correction_k[None, :]
 
     def after_off(delay: NDArray | float) -> NDArray:
         d = np.asarray(delay, dtype=float)
         d = d[..., None] if d.ndim else d
-        return p.tref_c[None, :] + np.sum(peaks * np.exp(-d / tau), axis=-1)
+        return base + np.sum(peaks * np.exp(-d / tau), axis=-1)
 
     return after_off
 
@@ -204,6 +217,45 @@ def predict_model(data: BundleData, ladder: Foster | Cauer,
     measures = [MeasurementTerm(e.plugin, e.form, scalar_params(e))  # type: ignore[arg-type]
                 for e in effects if isinstance(e.plugin, MeasurementEffect)]
     return {k: np.asarray(v[0]) for k, v in predict(data, net, measures).items()}
+
+
+def pwm_correction(data: BundleData, ladder: Foster | Cauer,
+                   effects: Sequence[Effect]) -> NDArray | None:
+    """What the closed form misses of each PWM reading of the model ``ladder`` with
+    ``effects``: the junction's exact periodic state read after the declared window
+    (:meth:`~spicethermal.model.ThermalModel.pwm_reading`, shooting) minus the closed form of
+    the network frozen at its mean, the quasi-static state that is first order in the
+    ripple. Where a device effect changes across the ripple (a strong temperature
+    coefficient, a band crossed at a few hertz) they differ by many times a bench's noise.
+
+    Parameters
+    ----------
+    data : BundleData
+    ladder : Foster or Cauer
+    effects : sequence of Effect
+
+    Returns
+    -------
+    ndarray or None
+        One correction (K) per row; None without a PWM grid or a device effect (the closed
+        form is then exact).
+
+    Raises
+    ------
+    SimulationError
+        When the shooting finds no periodic state.
+    """
+    device = tuple(e for e in effects if e.kind == DEVICE)
+    if data.pwm is None or not device:
+        return None
+    p = data.pwm
+    plain = data.with_pwm_correction(None)
+    closed = _after_off(plain, NetworkBatch.of(ladder, device),
+                        np.zeros(1, dtype=int))(p.window_s)[0]
+    model = ThermalModel(ladder, device)
+    exact = np.array([t + model.pwm_reading(w, f, d, p.window_s, t, EXACT_TOL_K) for w, f, d, t
+                      in zip(p.power_w, p.freq_hz, p.duty, p.tref_c, strict=True)])
+    return exact - closed
 
 
 def line_error(pred: NDArray, measured: NDArray, weight: NDArray,

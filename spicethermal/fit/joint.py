@@ -33,7 +33,7 @@ from ..identify.curves import ZthCurve
 from .forward import MeasurementTerm, line_error, predict
 from .ladder import fit_foster
 from .lm import MAX_ROUNDS, levenberg_marquardt
-from .measurement import BundleData
+from .measurement import BundleData, CurveData
 from .problem import MIN_TAU_RATIO
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -343,38 +343,43 @@ def start_ladders(data: BundleData, orders: Sequence[int]) -> dict[int, Cauer]:
     """Linear ladders of each order fitted to the Zth of the lowest-power cooling curve (the
     transient masked and extrapolated by √t), as Cauer ladders: the baseline's starts, and a
     start of every candidate's joint refit (the least heated curve is the one the effects,
-    which grow with temperature, change least). Each is computed once per data."""
+    which grow with temperature, change least). Each is computed once per curve."""
     out = {}
     for m in orders:
-        ladder = _reference_ladder(data, m)
+        ladder = _reference_ladder(data.reference_curve, m)
         if ladder is not None and ladder.order == m:
             out[m] = ladder
     return out
 
 
-@lru_cache(maxsize=64)
 def reference_order(data: BundleData) -> int:
     """The order the automatic ladder fit chooses for the least heated curve's Zth: the
     order of the linear network where the effects, which grow with temperature, are
     weakest (the joint baseline's order may have grown with their misfit)."""
-    curve = _reference_curve(data)
+    return _reference_order(data.reference_curve)
+
+
+@lru_cache(maxsize=64)
+def _reference_order(c: CurveData) -> int:
+    curve = _reference_curve(c)
     try:
         return fit_foster(curve.t_s, curve.zth_k_per_w, rth_k_per_w=curve.rth_k_per_w).order
     except (FitError, DataFormatError, ValueError, ArithmeticError):
         return 0
 
 
+# cached by the curve itself: a bundle's data with a PWM correction (:func:`~.search.settle`)
+# share their curves
 @lru_cache(maxsize=64)
-def _reference_curve(data: BundleData) -> ZthCurve:
-    c = data.reference_curve
+def _reference_curve(c: CurveData) -> ZthCurve:
     return ZthCurve.from_cooling(c.t_s, c.tj_c, c.power_w, c.tj_steady_c,
                                  c.tref_c if c.has_tref_column else None, c.tref_steady_c,
                                  label=c.name)
 
 
 @lru_cache(maxsize=256)
-def _reference_ladder(data: BundleData, order: int) -> Cauer | None:
-    curve = _reference_curve(data)
+def _reference_ladder(c: CurveData, order: int) -> Cauer | None:
+    curve = _reference_curve(c)
     try:
         f = fit_foster(curve.t_s, curve.zth_k_per_w, order=order,
                        rth_k_per_w=curve.rth_k_per_w).foster

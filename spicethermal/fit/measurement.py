@@ -21,19 +21,20 @@ readings a bench converted to °C itself (which may also have followed the TSP's
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.errors import DataFormatError
-from ..effects.base import CALIBRATION, COOLING, PWM, STEADY
+from ..effects.base import CALIBRATION, COOLING, DEVICE, PWM, STEADY
 from ..identify.readings import converter
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
+    from ..effects import Effect
     from ..io.bundle import Bundle
 
 __all__ = ["BundleData", "CalData", "CurveData", "PwmData", "kind_of"]
@@ -66,7 +67,13 @@ class CurveData:
 
 @dataclass(frozen=True, eq=False)
 class PwmData:
-    """The PWM grid: one reading per row, and the bundle's declared sample window."""
+    """The PWM grid: one reading per row, and the bundle's declared sample window.
+
+    ``correction_k`` is no data: the departure of a nonlinear model's exact periodic state
+    from the closed form the fits evaluate, computed at one model (a deferred correction:
+    :func:`~spicethermal.fit.search.settle`) and added to the closed form of every model
+    whose device effects are those of that model, ``corrected_for`` (their names and forms).
+    """
 
     freq_hz: NDArray
     duty: NDArray
@@ -74,6 +81,8 @@ class PwmData:
     tref_c: NDArray
     tj_c: NDArray
     window_s: float
+    correction_k: NDArray | None = None
+    corrected_for: frozenset[tuple[str, str]] = frozenset()
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,6 +210,17 @@ class BundleData:
         return replace(self, cooling=tuple(c for c in self.cooling if c.name in keep),
                        pwm=self.pwm if PWM in keep else None,
                        calibration=self.calibration if CALIBRATION in keep else None)
+
+    def with_pwm_correction(self, correction_k: NDArray | None,
+                            effects: Sequence[Effect] = ()) -> BundleData:
+        """These data with ``correction_k``, the PWM readings' correction computed at a model
+        with ``effects``, held for the models with the same device effects (names and forms;
+        see :class:`PwmData`); None removes it."""
+        if self.pwm is None:
+            return self
+        key = frozenset((e.name, e.form) for e in effects if e.kind == DEVICE)
+        return replace(self, pwm=replace(self.pwm, correction_k=correction_k,
+                                         corrected_for=key))
 
     @property
     def reference_curve(self) -> CurveData:

@@ -15,15 +15,16 @@ The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.errors import SimulationError
 from ..core.ladder import Cauer
 from ..effects.base import CurveEvidence, EffectPlugin, Evidence
 from ..engines.network import NetworkBatch
-from .forward import predict_model
+from .forward import predict_model, pwm_correction
 from .joint import (
     MAX_ORDER,
     ORDER_PATIENCE,
@@ -42,7 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     pass
 
 __all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect", "grow", "refit",
-           "without"]
+           "settle", "without"]
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
@@ -125,6 +126,48 @@ def refit(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     layout = Layout(_slots(model), model.ladder.order)
     got = fit_starts(data, noise, layout, [Start(model.ladder, _values(model))], rounds)[0]
     return got if got is not None and got.chi2_total <= model.chi2_total else model
+
+
+def settle(data: BundleData, noise: Mapping[str, float], model: ModelFit,
+           rounds: int) -> tuple[BundleData, ModelFit]:
+    """``model`` refitted with exact PWM readings. The fits evaluate a nonlinear model's
+    periodic states in closed form (:func:`~.forward.pwm_correction`); the exact ones at
+    ``model`` give each reading's correction, held while the model is refitted (a deferred
+    correction: it changes slowly with the parameters), and computed again at the refit,
+    which is evaluated with it.
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to noise (K)
+    model : ModelFit
+    rounds : int
+
+    Returns
+    -------
+    BundleData
+        ``data`` with the last correction, held for the model's device effects: the fits of
+        models with those effects that start from there evaluate their PWM readings with it.
+    ModelFit
+        The refit, evaluated exactly; ``data`` and ``model`` as they are without a PWM grid
+        or a device effect, or when no periodic state is found (the closed form stands).
+    """
+    layout = Layout(_slots(model), model.ladder.order)
+    fit, held, work = model, data, 0
+    for refine in (rounds, 0):
+        try:
+            correction = pwm_correction(data, fit.ladder, fit.effects)
+        except SimulationError:
+            return data, model
+        if correction is None:
+            return data, model
+        held = data.with_pwm_correction(correction, fit.effects)
+        got = fit_starts(held, noise, layout, [Start(fit.ladder, _values(fit))], 0)[0]
+        if got is None:
+            return data, model
+        fit = refit(held, noise, got, refine) if refine else got
+        work += got.work + (fit.work if fit is not got else 0)
+    return held, replace(fit, work=work)
 
 
 def without(data: BundleData, noise: Mapping[str, float], model: ModelFit, name: str,
