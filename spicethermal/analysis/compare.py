@@ -357,7 +357,9 @@ def compare(model: ThermalModel, bundle: Bundle, engine: str = "auto", *,
     model : ThermalModel
     bundle : Bundle
     engine : ``auto`` (analytic), ``analytic``, ``ngspice`` or ``pyspice``: how PWM
-        readings are computed.
+        readings are computed (analytic: the closed form, plus the exact periodic state's
+        correction for a model with device effects,
+        :func:`~spicethermal.fit.forward.pwm_correction`).
     window_s : sample window overriding the bundle's declared one.
     datasets : e.g. ``["pwm"]`` or ``["cooling_1"]``; default all.
     dialect : ``.lib`` dialect for the ngspice engines.

@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.errors import DataFormatError, FitError
-from ..effects.base import CALIBRATION, EffectPlugin
+from ..effects.base import CALIBRATION, EffectPlugin, overrides
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
 from ..engines.network import Meter, metered
@@ -413,7 +413,7 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
         return (f"the {what} data do not show it themselves: the bundle cannot tell it from "
                 f"a device effect")
     judge = chosen.effect.plugin
-    if type(judge).unshown is EffectPlugin.unshown:  # the default: shown (no evidence built)
+    if not overrides(judge, EffectPlugin.unshown):  # the default: shown (no evidence built)
         return ""
     return judge.unshown(chosen.effect, evidence(data, chosen.fit, noise))
 

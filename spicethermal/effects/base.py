@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["CALIBRATION", "COOLING", "DEVICE", "KINDS", "MEASUREMENT", "PWM", "STEADY",
            "CurveEvidence", "DeviceEffect", "EffectPlugin", "Evidence", "MeasurementEffect",
-           "Observation", "Param", "Traits", "scalar_params"]
+           "Observation", "Param", "Traits", "overrides", "scalar_params"]
 
 DEVICE = "device"
 MEASUREMENT = "measurement"
@@ -222,6 +222,19 @@ def scalar_params(effect: Effect) -> dict[str, NDArray]:
     dict of str to ndarray
     """
     return {k: np.full((1, 1), float(v)) for k, v in effect.params.items()}
+
+
+def overrides(plugin: EffectPlugin, hook: Callable) -> bool:
+    """Whether ``plugin``'s class overrides ``hook``, a hook of the base classes below whose
+    default does nothing (the work it needs is then skipped).
+
+    >>> from spicethermal.effects.registry import plugin
+    >>> overrides(plugin("phase-change"), DeviceEffect.stored_heat)
+    True
+    >>> overrides(plugin("phase-change"), DeviceEffect.resistance_scale)
+    False
+    """
+    return getattr(type(plugin), hook.__name__) is not hook
 
 
 class EffectPlugin(ABC):

@@ -53,7 +53,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.ladder import Cauer, Foster
-from ..effects.base import DeviceEffect, scalar_params
+from ..effects.base import DeviceEffect, overrides, scalar_params
 from .cauer import as_cauer
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -141,11 +141,10 @@ class NetworkBatch:
         self.c = np.atleast_2d(np.asarray(c, dtype=float))
         self.terms = tuple(terms)
         self.size, self.n = self.r.shape
-        self._scaled = any(t.plugin.resistance_scale.__func__ is not  # type: ignore[attr-defined]
-                           DeviceEffect.resistance_scale for t in self.terms)
+        self._scaled = any(overrides(t.plugin, DeviceEffect.resistance_scale)
+                           for t in self.terms)
         self._storing = tuple(t for t in self.terms
-                              if t.plugin.stored_heat.__func__  # type: ignore[attr-defined]
-                              is not DeviceEffect.stored_heat)
+                              if overrides(t.plugin, DeviceEffect.stored_heat))
 
     @classmethod
     def of(cls, ladder: Foster | Cauer, effects: Sequence[Effect] = ()) -> NetworkBatch:

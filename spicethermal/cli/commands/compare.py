@@ -30,8 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print the spicethermal-comparison/1 document")
     parser.add_argument("--engine", choices=NAMES, default="auto",
-                        help="PWM engine: auto (analytic for linear models, ngspice with device "
-                             "effects; default), analytic, ngspice or pyspice")
+                        help="PWM engine: auto (the network simulator: the closed form, made "
+                             "exact with device effects by their periodic state; default), "
+                             "analytic (linear models only), ngspice or pyspice")
     parser.add_argument("--window", type=_window, metavar="S",
                         help="sample window for PWM readings, s (default: the model's "
                              "sample-window effect, else the bundle's sample_window_s)")
