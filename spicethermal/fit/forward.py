@@ -43,7 +43,6 @@ import numpy as np
 from ..effects.base import (
     CALIBRATION,
     COOLING,
-    DEVICE,
     PWM,
     STEADY,
     MeasurementEffect,
@@ -245,14 +244,12 @@ def pwm_correction(data: BundleData, ladder: Foster | Cauer,
     SimulationError
         When the shooting finds no periodic state.
     """
-    device = tuple(e for e in effects if e.kind == DEVICE)
-    if data.pwm is None or not device:
+    model = ThermalModel(ladder, tuple(effects))
+    if data.pwm is None or model.is_linear:
         return None
     p = data.pwm
-    plain = data.with_pwm_correction(None)
-    closed = _after_off(plain, NetworkBatch.of(ladder, device),
+    closed = _after_off(data.with_pwm_correction(None), model.batch(),
                         np.zeros(1, dtype=int))(p.window_s)[0]
-    model = ThermalModel(ladder, device)
     exact = np.array([t + model.pwm_reading(w, f, d, p.window_s, t, EXACT_TOL_K) for w, f, d, t
                       in zip(p.power_w, p.freq_hz, p.duty, p.tref_c, strict=True)])
     return exact - closed
