@@ -146,14 +146,20 @@ def test_the_correction_makes_a_nonlinear_models_pwm_readings_exact():
                                                                              abs=EXACT_TOL_K)
 
 
-def test_the_correction_is_held_only_for_the_device_effects_it_was_computed_for():
+def test_the_correction_is_held_for_the_models_that_keep_the_device_effects_it_was_for():
     data = _slow_pwm()
-    held = data.with_pwm_correction(pwm_correction(data, LADDER, [TC]), [TC])
+    correction = pwm_correction(data, LADDER, [TC])
+    held = data.with_pwm_correction(correction, [TC])
+    # a model with a further device effect keeps it (a candidate weighed against the model
+    # it was computed at is weighed with it) ...
+    band = Effect.create("phase-change", t_c=60.0, width_k=3.0, latent_j=1e-3)
+    assert predict_model(held, LADDER, [TC, band])["pwm"] == \
+        pytest.approx(predict_model(data, LADDER, [TC, band])["pwm"] + correction, abs=1e-12)
+    # ... one without it, or with the effect in another form, does not
     other = Effect.create("temperature-coefficient", "junction", alpha_per_k=5e-3)
-    assert predict_model(held, LADDER, [other])["pwm"] == \
-        pytest.approx(predict_model(data, LADDER, [other])["pwm"], abs=0)
-    assert predict_model(held, LADDER)["pwm"] == \
-        pytest.approx(predict_model(data, LADDER)["pwm"], abs=0)
+    for effects in ([other], [], [band]):
+        assert predict_model(held, LADDER, effects)["pwm"] == \
+            pytest.approx(predict_model(data, LADDER, effects)["pwm"], abs=0)
 
 
 def test_a_linear_model_needs_no_correction():

@@ -14,7 +14,7 @@ measurement effects turn its true junction temperatures into readings, in the or
   :attr:`~spicethermal.effects.base.Observation.after_off`): the closed form of the network
   frozen at its mean (:meth:`~spicethermal.engines.network.NetworkBatch.frozen_foster`),
   plus the data's correction (:class:`~.measurement.PwmData`) when the batch's device
-  effects are those it was computed for;
+  effects include those it was computed for;
 * the calibration: the thermocouple temperatures (a TSP's law bends them).
 
 Every reading went through the same calibration line, fitted to the calibration's own noisy
@@ -118,7 +118,7 @@ def _after_off(data: BundleData, net: NetworkBatch,
     peaks = p.power_w[None, :, None] * stage_peaks(r, tau, 1.0 / p.freq_hz[None, :, None],
                                                    p.duty[None, :, None])
     base = p.tref_c[None, :]
-    if p.correction_k is not None and net.device_effects == p.corrected_for:
+    if p.correction_k is not None and p.corrected_for <= net.device_effects:
         base = base + p.correction_k[None, :]
 
     def after_off(delay: NDArray | float) -> NDArray:

@@ -72,7 +72,9 @@ class PwmData:
     ``correction_k`` is no data: the departure of a nonlinear model's exact periodic state
     from the closed form the fits evaluate, computed at one model (a deferred correction:
     :func:`~spicethermal.fit.search.settle`) and added to the closed form of every model
-    whose device effects are those of that model, ``corrected_for`` (their names and forms).
+    whose device effects include those of that model, ``corrected_for`` (their names and
+    forms): a further effect changes the correction by a fraction of what it adds, where
+    leaving the correction out would err by all of it.
     """
 
     freq_hz: NDArray
@@ -214,8 +216,8 @@ class BundleData:
     def with_pwm_correction(self, correction_k: NDArray | None,
                             effects: Sequence[Effect] = ()) -> BundleData:
         """These data with ``correction_k``, the PWM readings' correction computed at a model
-        with ``effects``, held for the models with the same device effects (names and forms;
-        see :class:`PwmData`); None removes it."""
+        with ``effects``, held for the models whose device effects include them (names and
+        forms; see :class:`PwmData`); None removes it."""
         if self.pwm is None:
             return self
         key = frozenset((e.name, e.form) for e in effects if e.kind == DEVICE)

@@ -147,7 +147,8 @@ def settle(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     -------
     BundleData
         ``data`` with the last correction, held for the model's device effects: the fits of
-        models with those effects that start from there evaluate their PWM readings with it.
+        models that keep those effects (and may add others) evaluate their PWM readings
+        with it.
     ModelFit
         The refit, evaluated exactly; ``data`` and ``model`` as they are without a PWM grid
         or a device effect, or when no periodic state is found (the closed form stands).
