@@ -29,6 +29,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.special import fdtrc, ndtri
 
 from ..effects.base import CALIBRATION, PWM, STEADY
 from ..fit.measurement import BundleData
@@ -136,15 +137,13 @@ def trimmed_scale(e: NDArray) -> float:
     >>> round(trimmed_scale(np.random.default_rng(0).normal(0, 2.0, 20000)), 1)
     2.0
     """
-    from scipy.stats import norm
-
     a = np.sort(np.abs(np.asarray(e, dtype=float)))
     keep = max(2, int(round(NOISE_KEPT * a.size)))
     frac = keep / a.size
     c = 1.0
     if frac < 1:
-        q = float(norm.ppf(0.5 * (1 + frac)))
-        c = 1 - 2 * q * float(norm.pdf(q)) / frac
+        q = float(ndtri(0.5 * (1 + frac)))  # the normal quantile and density there
+        c = 1 - 2 * q * (math.exp(-q**2 / 2.0) / math.sqrt(2 * math.pi)) / frac
     return math.sqrt(float(np.mean(a[:keep] ** 2)) / c)
 
 
@@ -165,8 +164,6 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
     >>> calibration_degree(t, t + 1e-3 * (t - 60) ** 2)[0]
     2
     """
-    from scipy.stats import f as fisher
-
     t = np.asarray(temp_c, dtype=float)
     y = np.asarray(read_c, dtype=float)
     x = (t - t.mean()) / max(float(np.ptp(t)), 1e-9)
@@ -182,7 +179,7 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
         if b <= 0:
             degree += 1
             break
-        if fisher.sf((a - b) / (b / dof), 1, dof) >= POLY_P:
+        if fdtrc(1, dof, (a - b) / (b / dof)) >= POLY_P:  # the F distribution's tail
             break
         degree += 1
     dof = n - degree - 1

@@ -188,9 +188,9 @@ def path_limit(levels: int) -> float:
     >>> round(path_limit(1), 6) == Z_OUTLIER, round(path_limit(37), 2)
     (True, 4.37)
     """
-    from scipy.stats import norm
+    from scipy.special import ndtr, ndtri
 
-    return float(norm.isf(norm.sf(Z_OUTLIER) / levels))
+    return float(-ndtri(ndtr(-Z_OUTLIER) / levels))  # the normal tail, shared by the levels
 
 
 def _persistent_peak(z: NDArray, excess: NDArray) -> tuple[int, bool]:

@@ -277,10 +277,10 @@ class Calibration:
                 tstat = math.inf if a2 != 0 else 0.0
                 p = 0.0 if a2 != 0 else 1.0
             else:
-                from scipy import stats
+                from scipy.special import stdtr
 
                 tstat = a2 / se
-                p = float(2 * stats.t.sf(abs(tstat), dof))
+                p = float(2 * stdtr(dof, -abs(tstat)))  # Student's two-sided tail
             significant = p < alpha
         else:
             tstat, p, noise_k = math.nan, math.nan, math.nan
