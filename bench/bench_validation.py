@@ -28,7 +28,7 @@ scores to ``OUT/summary.json``; only the aggregate is printed unless ``--show-ca
 draw is not read case by case).
 
 The verdict is read from ``spicethermal-diagnosis/2`` (``verdict.effects``, names in order) or
-``/3`` to ``/5`` (``verdict.class`` — ``named``, ``approximate``, ``ambiguous``, ``none`` — and
+``/3`` to ``/6`` (``verdict.class`` — ``named``, ``approximate``, ``ambiguous``, ``none`` — and
 ``verdict.effects``; for ``ambiguous`` the tied effects). Scoring (:func:`score`):
 
 * a detectable single effect is *right* when it is the first name of a ``named`` or
@@ -299,7 +299,7 @@ def run_diagnoses(folders: dict[str, Path], args: argparse.Namespace,
 
 # -- scoring -------------------------------------------------------------------------------------
 def verdict_of(doc: dict | None) -> dict:
-    """``{"class", "effects", "first"}`` of a diagnosis document (format 2 to 5).
+    """``{"class", "effects", "first"}`` of a diagnosis document (format 2 to 6).
 
     >>> verdict_of({"format": "spicethermal-diagnosis/2",
     ...             "verdict": {"effect": "phase-change", "effects": ["phase-change"]}})

@@ -16,7 +16,7 @@ from spicethermal.analysis.diagnosis import Candidate
 from spicethermal.core.errors import FitError
 from spicethermal.core.ladder import Cauer
 from spicethermal.effects import Effect
-from spicethermal.engines.network import NetworkBatch
+from spicethermal.engines.network import STEP_SOLVES, NetworkBatch
 from spicethermal.fit.joint import ModelFit
 from spicethermal.fit.measurement import BundleData
 from spicethermal.fit.search import FormFit
@@ -210,10 +210,13 @@ def test_a_step_starts_only_while_work_is_left(scripted):
     d = scripted(*two, cost=1000, budget=1000)
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
     assert 1000 <= d.spent.solves < 2000 and d.spent.budget == 1000
-    assert d.spent.stopped == "the work budget (1,000 network solves) was spent after step 1"
+    assert d.spent.stopped == "the work budget (a cost of 1,000) was spent after step 1"
     assert d.verdict.reason.endswith(d.spent.stopped)
-    assert d.to_dict()["work"] == {"rows": d.work, "solves": d.spent.solves, "budget": 1000,
-                                   "stopped": d.spent.stopped}
+    # the budget bounds the cost: the solves and a fixed cost for each batched step
+    assert d.spent.cost == d.spent.solves + STEP_SOLVES * d.spent.steps > d.spent.solves
+    assert d.to_dict()["work"] == {"rows": d.work, "solves": d.spent.solves,
+                                   "steps": d.spent.steps, "cost": d.spent.cost,
+                                   "budget": 1000, "stopped": d.spent.stopped}
     d = scripted(*two, cost=1000, budget=1500)
     assert d.effects == [FIRST.name, SECOND.name] and not d.spent.stopped
     assert d.spent.solves >= 2000
@@ -239,7 +242,7 @@ def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):
 def test_a_step_that_could_not_fit_every_candidate_is_not_taken(scripted):
     d = scripted((_fit((FIRST,), 0.0), 5000.0), budget=0)
     assert not d.steps and d.verdict.cls == "none" and not d.effects
-    assert d.spent.stopped.startswith("the work budget (0 network solves) was spent in step 1 "
+    assert d.spent.stopped.startswith("the work budget (a cost of 0) was spent in step 1 "
                                       "before ")
     assert d.verdict.reason.startswith(d.spent.stopped + ": nothing is named")
 

@@ -11,7 +11,7 @@ from scipy.special import lambertw
 
 from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect
-from spicethermal.engines.network import NetworkBatch, metered
+from spicethermal.engines.network import STEP_SOLVES, NetworkBatch, metered
 from spicethermal.validation.network import LatentHeat, Network, ResistanceLaw
 
 R4, C4 = (4.0, 12.0, 40.0, 90.0), (2e-5, 4e-4, 8e-3, 0.3)
@@ -166,17 +166,20 @@ def test_model_simulation_is_the_network_simulator():
 
 
 def test_the_meter_counts_one_solve_a_member_and_step_and_an_enclosing_count_gets_them():
-    """A linear cooling is one solve a member; a nonlinear one a solve a step (and more when
-    a step is rejected); a count inside another adds to it."""
+    """A linear cooling is one solve a member, in one step; a nonlinear one a solve a member
+    and step (and more when a step is rejected); a count inside another adds to it; the cost
+    is the solves and a fixed part for each step."""
     ladder = Cauer([2.0, 5.0, 10.0], [1e-4, 1e-3, 1e-2])
     t = np.geomspace(1e-5, 1.0, 30)
     with metered() as outer:
         with metered() as inner:
             NetworkBatch(np.tile(ladder.r, (4, 1)), np.tile(ladder.c, (4, 1))).cooling(1.0, 25.0, t)
-        assert inner.solves == 4 and outer.solves == 4
+        assert inner.solves == 4 and outer.solves == 4 and inner.steps == outer.steps == 1
+        assert inner.cost == 4 + STEP_SOLVES
         hot = NetworkBatch.of(ladder, [Effect.create("temperature-coefficient",
                                                      alpha_per_k=5e-3)])
         with metered() as nonlinear:
             hot.cooling(1.0, 25.0, t)
-    assert nonlinear.solves > 10
-    assert outer.solves == 4 + nonlinear.solves
+    assert nonlinear.solves > 10 and nonlinear.steps == nonlinear.solves  # a batch of one
+    assert outer.solves == 4 + nonlinear.solves and outer.steps == 1 + nonlinear.steps
+    assert outer.cost == outer.solves + STEP_SOLVES * outer.steps

@@ -32,7 +32,7 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    *none* otherwise, or when a rival explains the data as well. An effect whose
    ``traits.needs`` are missing, or do not show it themselves, is never named alone.
 
-The work is counted (model evaluations, and network solves against
+The work is counted (model evaluations, and the simulator's cost against
 :data:`.rules.WORK_BUDGET`), never timed: the same bundle gives the same verdict on every
 machine and under any load.
 """
@@ -182,7 +182,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
     quiet : bool
         No progress bar on stderr.
     budget : int
-        Network solves the diagnosis may spend (:data:`.rules.WORK_BUDGET`).
+        The simulator's cost the diagnosis may spend (:data:`.rules.WORK_BUDGET`).
 
     Returns
     -------
@@ -231,11 +231,11 @@ class _Context:
 
     @property
     def spent(self) -> bool:
-        return self.meter.solves >= self.budget
+        return self.meter.cost >= self.budget
 
     @property
     def budget_text(self) -> str:
-        return f"the work budget ({self.budget:,} network solves)"
+        return f"the work budget (a cost of {self.budget:,})"
 
 
 @dataclass
@@ -256,7 +256,7 @@ class _Path:
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
             effects: Sequence[str] | None, say: Callable[[str], None], budget: int,
             meter: Meter, t_start: float) -> Diagnosis:
-    """The procedure of the module docstring, its network solves counted by ``meter``."""
+    """The procedure of the module docstring, the simulator's work counted by ``meter``."""
     say("baseline ladder and noise")
     base, noise = _baseline(data, model)
     if model is None:
@@ -306,7 +306,8 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
-                     where, WorkSpent(meter.solves, budget, stopped), further)
+                     where, WorkSpent(meter.solves, budget, stopped, meter.steps, meter.cost),
+                     further)
 
 
 def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,

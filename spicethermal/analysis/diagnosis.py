@@ -1,5 +1,5 @@
 """The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
-verdict; its text report and its ``spicethermal-diagnosis/5`` document
+verdict; its text report and its ``spicethermal-diagnosis/6`` document
 (docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
@@ -25,7 +25,7 @@ __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIV
 
 #: The document's format; version 5 adds the further effect the search refused and each
 #: step's ``why`` (docs/diagnosis-json.md), and keeps every key of versions 1 to 4.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/5"
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/6"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
 RIVAL, UNSHOWN = "rival", "unshown"
@@ -131,18 +131,21 @@ class Verdict:
 
 @dataclass(frozen=True)
 class WorkSpent:
-    """The network solves a diagnosis spent (:func:`spicethermal.engines.network.metered`),
-    its budget, and why the budget stopped the search ("" when it did not)."""
+    """The simulator's work a diagnosis spent (:func:`spicethermal.engines.network.metered`):
+    network solves, the steps they were done in and their cost, the budget of that cost, and
+    why the budget stopped the search ("" when it did not)."""
 
     solves: int = 0
     budget: int = 0
     stopped: str = ""
+    steps: int = 0
+    cost: int = 0
 
 
 @dataclass(frozen=True, eq=False)
 class Diagnosis(JsonDocument):
     """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
-    report, :meth:`to_dict` the ``spicethermal-diagnosis/5`` document, :meth:`plot` the
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/6`` document, :meth:`plot` the
     figures."""
 
     source: str
@@ -216,7 +219,7 @@ class Diagnosis(JsonDocument):
 
     # -- document -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/5`` document."""
+        """The ``spicethermal-diagnosis/6`` document."""
         worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
                  for p in self.baseline.worst(WORST_POINTS)]
         fit = self.final_fit
@@ -236,6 +239,8 @@ class Diagnosis(JsonDocument):
                 "refused": self.refused.to_dict() if self.refused is not None else None,
                 "skipped": dict(self.skipped), "work": {"rows": self.work,
                                                   "solves": self.spent.solves,
+                                                  "steps": self.spent.steps,
+                                                  "cost": self.spent.cost,
                                                   "budget": self.spent.budget,
                                                   "stopped": self.spent.stopped}}
 
@@ -285,7 +290,8 @@ class Diagnosis(JsonDocument):
                 lines.append(f"  {name:12s} {sub.rms_k:8.3f} → "
                              f"{final.dataset(name).rms_k:8.3f} K")
         lines.append(f"(work: {self.work} model evaluations, {self.spent.solves:,} network "
-                     f"solves of a budget of {self.spent.budget:,}, {self.elapsed_s:.1f} s)")
+                     f"solves in {self.spent.steps:,} steps, a cost of {self.spent.cost:,} of a "
+                     f"budget of {self.spent.budget:,}, {self.elapsed_s:.1f} s)")
         return "\n".join(lines)
 
 

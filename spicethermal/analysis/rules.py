@@ -74,13 +74,14 @@ MAX_EFFECTS = 3
 SCREEN_ROUNDS = 15
 #: Rounds of a candidate's joint refit with the ladder and every other effect.
 REFINE_ROUNDS = 30
-#: Network solves (:func:`spicethermal.engines.network.metered`) one diagnosis may spend:
-#: 35 to 60 s of CPU at 4 to 7 µs a solve on the bench's 2-core machine, where the median
-#: bundle takes under a million. A step starts while some is left; once it is spent, a ladder
-#: stops growing, the candidates not yet fitted are not, and a step that did not fit every
-#: candidate is not taken; a bounded fit that has started finishes (a diagnosis may overrun
-#: the budget by one candidate's fits).
-WORK_BUDGET = 8_000_000
+#: The simulator's cost (:func:`spicethermal.engines.network.metered`: network solves and
+#: :data:`~spicethermal.engines.network.STEP_SOLVES` for each batched step) one diagnosis may
+#: spend: about 45 s of CPU at 3 to 4 µs a unit on the bench's 2-core machine, so that with
+#: the overrun below no bundle takes a minute; the median bundle takes a fifth of it. A step
+#: starts while some is left; once it is spent, a ladder stops growing, the candidates not
+#: yet fitted are not, and a step that did not fit every candidate is not taken; a bounded
+#: fit that has started finishes (a diagnosis may overrun the budget by one candidate's fits).
+WORK_BUDGET = 12_000_000
 
 
 def runs_z(residuals: NDArray) -> float:

@@ -35,10 +35,11 @@ The network, node rises ``θ`` over the reference at ``tref``, temperatures ``T 
 A linear network's Foster form (:meth:`NetworkBatch.foster`) comes from the same modes:
 ``τ_k = 1/λ_k``, ``R_k = v_{0k}² / (c_0 λ_k)``.
 
-Every response, steady state aside, goes through the modes of frozen networks, one member at
-a time: the number of those *solves* is the simulator's work, which :func:`metered` counts
-(a solve takes about the same time whatever the network's order and the effects, a few µs,
-where a model evaluation takes one solve or thousands).
+Every response, steady state aside, goes through the modes of frozen networks, a batch at a
+time: the number of those *solves* (one member's network, in its modes) and of the batched
+*steps* they are done in is the simulator's work, which :func:`metered` counts, and their
+cost (:data:`STEP_SOLVES`) is proportional to the CPU time it takes, whatever the network's
+order and the effects (a model evaluation takes one step or thousands).
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..effects import Effect
 
-__all__ = ["TOL_REL", "DeviceTerm", "Meter", "NetworkBatch", "metered"]
+__all__ = ["STEP_SOLVES", "TOL_REL", "DeviceTerm", "Meter", "NetworkBatch", "metered"]
 
 #: A transient step is accepted when its predictor and corrector agree within this fraction
 #: of the largest node rise (and :data:`TOL_ABS_K`).
@@ -77,12 +78,26 @@ MAX_STEPS, GROWTH, MAX_REJECTED = 20000, 4.0, 25
 _EIGH_LO = getattr(getattr(np.linalg, "_umath_linalg", None), "eigh_lo", None)
 
 
+#: What one batched step of the simulator costs beyond its members, in solves: a step's numpy
+#: calls (a few dozen on small arrays) take about 200 µs whatever the batch, where each member
+#: adds 3 to 4 µs (its modes, its effects' terms), fitted over the diagnoses of eight bundles
+#: on the bench's 2-core machine. A batch of a few members costs its step, not its members.
+STEP_SOLVES = 60
+
+
 @dataclass(eq=False)
 class Meter:
-    """The network solves counted by :func:`metered` (one member's frozen network, in its
-    modes)."""
+    """The simulator's work counted by :func:`metered`: the network *solves* (one member's
+    frozen network, in its modes), the batched *steps* they were done in (one frozen network
+    per member each), and their ``cost``, ``solves + STEP_SOLVES × steps``, proportional to
+    the CPU time they take."""
 
     solves: int = 0
+    steps: int = 0
+
+    @property
+    def cost(self) -> int:
+        return self.solves + STEP_SOLVES * self.steps
 
 
 _METER: ContextVar[Meter | None] = ContextVar("spicethermal_network_meter", default=None)
@@ -95,8 +110,8 @@ def metered() -> Iterator[Meter]:
 
     >>> with metered() as meter:
     ...     _ = NetworkBatch(np.ones((3, 2)), np.ones((3, 2))).foster()
-    >>> meter.solves
-    3
+    >>> meter.solves, meter.steps, meter.cost
+    (3, 1, 63)
     """
     meter, outer = Meter(), _METER.get()
     token = _METER.set(meter)
@@ -106,6 +121,7 @@ def metered() -> Iterator[Meter]:
         _METER.reset(token)
         if outer is not None:
             outer.solves += meter.solves
+            outer.steps += meter.steps
 
 
 @dataclass(frozen=True, eq=False)
@@ -253,6 +269,7 @@ class NetworkBatch:
         meter = _METER.get()
         if meter is not None:
             meter.solves += self.size
+            meter.steps += 1
         g = 1.0 / (self.r * scale)
         # positive and finite (NaN fails both tests, and min and max carry it)
         ok = (np.minimum(g.min(axis=1), cap.min(axis=1)) > 0) \
