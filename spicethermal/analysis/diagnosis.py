@@ -23,8 +23,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
            "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent", "last_model"]
 
-#: The document's format; version 5 adds the further effect the search refused and each
-#: step's ``why`` (docs/diagnosis-json.md), and keeps every key of versions 1 to 4.
+#: The document's format; version 6 adds the work's steps and cost, which its budget now
+#: bounds (docs/diagnosis-json.md), and keeps every other key of versions 1 to 5.
 DIAGNOSIS_FORMAT = "spicethermal-diagnosis/6"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"

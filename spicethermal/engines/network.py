@@ -142,7 +142,8 @@ def _eigh(s: NDArray) -> tuple[NDArray, NDArray]:
     """:func:`numpy.linalg.eigh` of a stack of real symmetric matrices (their lower triangle),
     called as its generalized ufunc when numpy exposes it: the same LAPACK routine and the
     same results, without the checks and the type dispatch of its wrapper, a tenth of a
-    transient step's time on small ladders."""
+    transient step's time on small ladders. A matrix whose eigenvalues do not converge gives
+    NaN (the wrapper raised instead), which :meth:`NetworkBatch._modes` fails as a member."""
     if _EIGH_LO is None:  # pragma: no cover - another numpy
         return np.linalg.eigh(s)
     return _EIGH_LO(s, signature="d->dd")
