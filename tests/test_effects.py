@@ -25,6 +25,7 @@ from spicethermal.effects import (
     rival_names,
 )
 from spicethermal.effects.base import CurveEvidence
+from spicethermal.effects.temperature_coefficient import law
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Names and kinds are a contract (docs/model-format.md).
@@ -125,6 +126,20 @@ def test_a_device_effect_renders_spice_for_every_layer_it_touches():
     band = Effect.create("phase-change", t_c=60.0, width_k=1.0, latent_j=2.0, node=1)
     assert band.plugin.spice_stored_heat(band, 0, "V(TJ)", 1.0) is None
     assert "EXP" in band.plugin.spice_stored_heat(band, 1, "V(N1)", 1.0)
+
+
+def test_the_quadratic_law_renders_as_it_computes():
+    """R(T) = R0·(1 + α ΔT + γ ΔT²), clipped at 5 %: a resistance with a maximum where the
+    curvature is negative, and the SPICE expression gives the law's own values."""
+    e = Effect.create("temperature-coefficient", "quadratic", alpha_per_k=4e-3,
+                      curvature_per_k2=-1e-4, t0_c=25.0, first_layer=1)
+    assert law(e, [25.0, 45.0, 65.0]).tolist() == pytest.approx([1.0, 1.04, 1.0])
+    assert law(e, 500.0) == pytest.approx(0.05)
+    assert e.plugin.spice_resistance_scale(e, 0, "V(N0)", "V(TJ)") is None
+    text = e.plugin.spice_resistance_scale(e, 1, "V(N1)", "V(TJ)")
+    for t in (-40.0, 25.0, 45.0, 80.0, 500.0):
+        value = eval(text.replace("MAX", "max").replace("V(N1)", repr(t)))  # noqa: S307
+        assert value == pytest.approx(float(law(e, t)), rel=1e-12)
 
 
 def test_a_ringing_is_started_at_its_frequency_from_sparse_first_readings():

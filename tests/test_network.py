@@ -52,6 +52,10 @@ CASES = {
                             c_slope_per_k=(0.0, 0.0, 3e-3, 3e-3)),
                        [Effect.create("temperature-coefficient", "power-law", exponent=2.0,
                                       c_slope_per_k=3e-3, first_layer=2)]),
+    "tc-inner-quadratic": (dict(laws=(ResistanceLaw("quadratic", 4e-3, beta_per_k2=-8e-5),) * 2
+                                + (None, None)),
+                           [Effect.create("temperature-coefficient", "quadratic", alpha_per_k=4e-3,
+                                          curvature_per_k2=-8e-5, last_layer=1)]),
     "pc-gaussian-junction": (dict(latent=(LatentHeat(0, 0.02, 60.0, 1.5, "gaussian"),)),
                              [Effect.create("phase-change", "gaussian", t_c=60.0, width_k=1.5,
                                             latent_j=0.02)]),

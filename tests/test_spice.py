@@ -113,6 +113,27 @@ def test_device_effects_in_ngspice_match_python(tmp_path, dialect, topology, tem
     assert np.max(np.abs(lin - py)) > 1.0  # the effects matter at this strength
 
 
+@pytest.mark.ngspice
+@pytest.mark.parametrize("dialect", spice.DIALECTS)
+def test_a_quadratic_law_on_inner_layers_in_ngspice_matches_python(tmp_path, dialect):
+    """The resistance of the two inner layers peaks 40 K above the reference (a negative
+    curvature): the exported Cauer .lib heats as the one network simulator does."""
+    model = ThermalModel(Cauer((20.0, 30.0, 50.0), (2e-4, 3e-3, 0.2)), (
+        Effect.create("temperature-coefficient", "quadratic", alpha_per_k=8e-3,
+                      curvature_per_k2=-1e-4, t0_c=25.0, last_layer=1),))
+    lib = spice.export(model, tmp_path / "q.lib", dialect, "cauer", "Q")
+    tref, toffset = spice.reference_drive(model, 25.0)
+    net = spice.render_bench(lib, "Q", power_w=0.6, tstop_s=2.0, tmax_s=2e-3, tref_c=tref,
+                             toffset_c=toffset)
+    w = spice.NgspiceBatch().run(net, ["V(TJ)"], dialect)
+    t = w.t_s[w.t_s > 1e-3]
+    py = model.simulate(t, Schedule((0.0, 2e-8), (0.0, 0.6)), tref_c=25.0).tj_k + 25.0
+    sim = w["V(TJ)"][w.t_s > 1e-3] + 25.0 - tref
+    assert np.max(np.abs(sim - py)) < 0.03  # K, of a rise of about 60 K
+    lin = ThermalModel(model.ladder).simulate(t, Schedule.step(0.6)).tj_k + 25.0
+    assert np.max(np.abs(lin - py)) > 1.0  # the law matters at this strength
+
+
 def test_a_band_one_layer_out_is_exported_on_the_cauer_form(tmp_path, actuator, capsys):
     model = ThermalModel(actuator, (Effect.create("phase-change", t_c=40.0, width_k=2.0,
                                                   latent_j=0.02, node=1),))

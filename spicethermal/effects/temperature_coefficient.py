@@ -10,6 +10,9 @@ Forms (``junction`` is the default; files that do not name a form read as juncti
   ``(T_i + T_{i+1})/2`` with the same linear law.
 * ``power-law``: as ``local`` with ``R0 · ((T + 273.15)/(t0_c + 273.15))^exponent`` (T in
   kelvin: a conductivity ``k ∝ T^−n`` gives ``exponent = n``; silicon about +1.3).
+* ``quadratic``: as ``local`` with ``R0 · (1 + alpha_per_k·(T − t0_c) + curvature_per_k2·(T −
+  t0_c)²)`` (clipped at 5 % of R0): any smooth law to second order about ``t0_c``, a
+  conductivity with a minimum (a resistance with a maximum) included.
 
 In the local forms only the layers ``first_layer`` to ``last_layer`` change (0 = the layer at
 the junction; ``last_layer`` is clipped to the ladder's last layer, so the defaults mean every
@@ -47,7 +50,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 KELVIN = 273.15
 #: Forms whose resistances follow their own layer's temperature (simulated on a Cauer ladder).
-LOCAL_FORMS = ("local", "power-law")
+LOCAL_FORMS = ("local", "power-law", "quadratic")
 #: Smallest resistance factor of the linear law (a resistance never vanishes).
 FLOOR = 0.05
 #: ``last_layer`` default: clipped to the ladder's last layer, i.e. every layer.
@@ -57,7 +60,10 @@ LAST = 1000.0
 def _law(form: str, p: Mapping[str, NDArray], t: NDArray) -> NDArray:
     if form == "power-law":
         return (np.maximum(t + KELVIN, 1.0) / (p["t0_c"] + KELVIN)) ** p["exponent"]
-    return np.maximum(FLOOR, 1.0 + p["alpha_per_k"] * (t - p["t0_c"]))
+    d = t - p["t0_c"]
+    if form == "quadratic":
+        return np.maximum(FLOOR, 1.0 + d * (p["alpha_per_k"] + p["curvature_per_k2"] * d))
+    return np.maximum(FLOOR, 1.0 + p["alpha_per_k"] * d)
 
 
 def law(effect: Effect, t_c: float | NDArray) -> NDArray:
@@ -109,11 +115,14 @@ class TemperatureCoefficient(DeviceEffect):
     forms = ("junction", *LOCAL_FORMS)
     params = {
         "alpha_per_k": Param("1/K", 0.0, -0.02, 0.02, "relative change of R per kelvin",
-                             ("junction", "local"), typical=1e-3),
+                             ("junction", "local", "quadratic"), typical=1e-3),
         "t0_c": Param("°C", 25.0, -273.15, 1000.0, "temperature at which R = R0 (and C = C0)",
                       fitted=False),
         "exponent": Param("", 0.0, -4.0, 6.0, "power-law exponent n of R ∝ T^n, T in kelvin",
                           ("power-law",), typical=0.3),
+        "curvature_per_k2": Param("1/K²", 0.0, -1e-3, 1e-3,
+                                  "relative change of R per kelvin squared (quadratic)",
+                                  ("quadratic",), typical=1e-5),
         "c_slope_per_k": Param("1/K", 0.0, -0.01, 0.02,
                                "relative rise of the subset's heat capacities per kelvin",
                                LOCAL_FORMS, typical=1e-3),
@@ -180,7 +189,8 @@ class TemperatureCoefficient(DeviceEffect):
                                "c_slope_per_k": 0.0, "t0_c": t0})
             else:
                 starts.append({"alpha_per_k": a, "t0_c": t0,
-                               **({"c_slope_per_k": 0.0} if form != "junction" else {})})
+                               **({"c_slope_per_k": 0.0} if form != "junction" else {}),
+                               **({"curvature_per_k2": 0.0} if form == "quadratic" else {})})
         return starts
 
     # -- SPICE --------------------------------------------------------------------------------
@@ -193,8 +203,11 @@ class TemperatureCoefficient(DeviceEffect):
             return (f"PWR(MAX({t_layer}+{number(KELVIN)},1)/({number(p['t0_c'] + KELVIN)}),"
                     f"{number(p['exponent'])})")
         t = t_junction if effect.form == "junction" else t_layer
-        return (f"MAX({number(FLOOR)},1+({number(p['alpha_per_k'])})*({t}-"
-                f"({number(p['t0_c'])})))")
+        d = f"({t}-({number(p['t0_c'])}))"
+        if effect.form == "quadratic":
+            return (f"MAX({number(FLOOR)},1+{d}*(({number(p['alpha_per_k'])})"
+                    f"+({number(p['curvature_per_k2'])})*{d}))")
+        return f"MAX({number(FLOOR)},1+({number(p['alpha_per_k'])})*{d})"
 
     def spice_stored_heat(self, effect: Effect, node: int, t_node: str,
                           c_node: float) -> str | None:
@@ -213,6 +226,9 @@ class TemperatureCoefficient(DeviceEffect):
                  f"layers {int(p['first_layer'])}..{last} on their own temperature")
         if effect.form == "power-law":
             law_text = f"R ∝ T^{p['exponent']:.3g} (T in kelvin)"
+        elif effect.form == "quadratic":
+            law_text = (f"R = R0·(1 {p['alpha_per_k']:+.3g}·ΔT {p['curvature_per_k2']:+.3g}·ΔT²),"
+                        " ΔT in K")
         else:
             law_text = f"R changes {100 * p['alpha_per_k']:+.3g} %/K"
         slope = (f", heat capacity {100 * p['c_slope_per_k']:+.3g} %/K"
