@@ -70,7 +70,7 @@ def scripted(monkeypatch):
             after: dict | None = None, weighed: list | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
-        monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: [])
+        monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: ([], True))
         monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: fit)
 
         def without(*a, **k):  # the model without an earlier effect: none, or ``lighter``
@@ -186,6 +186,21 @@ def test_an_effect_is_named_alone_only_when_the_data_it_needs_show_it(scripted, 
         assert d.effects == [SENSOR.name] and d.verdict.cls == "named"
 
 
+@pytest.mark.parametrize(("bundle", "calibration", "named"), [
+    (CALIBRATED, 40.0, [FIRST.name]), (CALIBRATED, 0.0, [FIRST.name, SENSOR.name]),
+    (BUNDLE, 0.0, [FIRST.name, SENSOR.name])])
+def test_an_effect_its_own_data_do_not_show_is_not_tied(scripted, bundle, calibration, named):
+    """A TSP within the margin of a temperature coefficient: tied when its calibration shows
+    it, or when the bundle holds no calibration (nothing can tell them apart); not named at
+    all when the calibration is there and keeps its misfit (the curvature is the device's)."""
+    data = BundleData.from_bundle(bundle)
+    after = {(): [(_fit((FIRST,), 0.0, data), 5000.0),
+                  (_fit((SENSOR,), 0.0, data, calibration=calibration), 4995.0)]}
+    d = scripted(after=after, bundle=bundle)
+    assert list(d.verdict.effects) == named
+    assert d.verdict.cls == ("named" if len(named) == 1 else "ambiguous")
+
+
 OUTSIDE = Effect.create("phase-change", t_c=80.0, width_k=2.0, latent_j=1e-3)
 
 
@@ -265,3 +280,27 @@ def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scr
     after[(SECOND.name,)] = [(_fit((SECOND, window), 2.0), 900.0)]
     d = scripted(after=after)
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+
+
+def test_the_budget_stops_an_effect_between_its_forms():
+    """``left()`` is asked before each form's screen and before its joint refits: once it
+    says no, no further form is fitted and the fits say they were cut short."""
+    base, noise = procedure._baseline(DATA, None)
+    plugin = Effect.create("electrical-transient").plugin
+    whole, done = procedure.fit_effect(DATA, noise, base, plugin, 3, 3)
+    assert done and len(whole) == len(plugin.forms) > 1
+    asked = []
+    cut, done = procedure.fit_effect(DATA, noise, base, plugin, 3, 3,
+                                     left=lambda: asked.append(1) or len(asked) < 3)
+    assert not done and len(asked) == 3 and len(cut) == 1
+    assert cut[0].fit.chi2 == whole[0].fit.chi2  # the first form, fitted alike
+
+
+def test_a_candidate_cut_between_its_forms_stops_the_step(scripted, monkeypatch):
+    """A step in which the budget cut a candidate's forms short is not taken."""
+    scripted((_fit((FIRST,), 0.0), 5000.0))  # the procedure scripted, then every fit cut
+    monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: ([], False))
+    d = diagnose(BUNDLE)
+    assert not d.steps and d.verdict.cls == "none"
+    assert d.spent.stopped.startswith(f"the work budget (a cost of {d.spent.budget:,}) was "
+                                      "spent in step 1 before ")

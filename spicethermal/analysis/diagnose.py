@@ -30,7 +30,8 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
    *none* otherwise, or when a rival explains the data as well. An effect whose
-   ``traits.needs`` are missing, or do not show it themselves, is never named alone.
+   ``traits.needs`` are missing is never named alone; one they do not show, although in the
+   bundle, is not named at all.
 
 The work is counted (model evaluations, and the simulator's cost against
 :data:`.rules.WORK_BUDGET`), never timed: the same bundle gives the same verdict on every
@@ -336,10 +337,13 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                     unfitted.append(p.name)
                     continue
                 ctx.say(f"step {k}: {p.name}")
-                forms = fit_effect(data, noise, current, p, SCREEN_ROUNDS, REFINE_ROUNDS)
-                if forms:
+                forms, whole = fit_effect(data, noise, current, p, SCREEN_ROUNDS,
+                                          REFINE_ROUNDS, left=lambda: not ctx.spent)
+                path.work += sum(f.fit.work for f in forms)
+                if not whole:  # the budget was spent between two of its forms
+                    unfitted.append(p.name)
+                elif forms:
                     fitted[p.name] = forms
-                    path.work += sum(f.fit.work for f in forms)
             if unfitted:  # a step that did not weigh every candidate is not taken
                 path.stopped = (f"{ctx.budget_text} was spent in step {k} before "
                                 f"{', '.join(unfitted)} "
@@ -366,7 +370,8 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
         tied = tuple(c for c in cands[i + 1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
-                     and decisive(0.0, -c.delta_bic, c.explained))
+                     and decisive(0.0, -c.delta_bic, c.explained)
+                     and not _refuted(c, data, current))
         status = _status(chosen, tied, why)
         # the model the next step starts from is converged: what a further refit would still
         # gain is then no candidate's
@@ -409,14 +414,23 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
     what = " and ".join(sorted(needs))
     if not needs <= data.kinds:
         return f"without {what} data the bundle cannot tell it from a device effect"
-    if not shows(before.chi2, chosen.fit.chi2,
-                 [n for n in data.datasets if kind_of(n) in needs]):
+    if _refuted(chosen, data, before):
         return (f"the {what} data do not show it themselves: the bundle cannot tell it from "
                 f"a device effect")
     judge = chosen.effect.plugin
     if not overrides(judge, EffectPlugin.unshown):  # the default: shown (no evidence built)
         return ""
     return judge.unshown(chosen.effect, evidence(data, chosen.fit, noise))
+
+
+def _refuted(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
+    """Whether the data sets ``cand``'s effect needs (``traits.needs``) are in the bundle and
+    do not show it themselves (:func:`.rules.shows`): what the rest of the bundle attributes
+    to it, those data, over the same temperatures, attribute to something else (a curvature
+    the transients show and the calibration does not is the device's, not the sensor's)."""
+    needs = cand.effect.plugin.traits.needs
+    return bool(needs) and needs <= data.kinds and not shows(
+        before.chi2, cand.fit.chi2, [n for n in data.datasets if kind_of(n) in needs])
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str],
@@ -446,7 +460,7 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
     current, noise = _baseline(data, None)
     n_points = sum(data.sizes().values())
     for name in dict.fromkeys(names):
-        fits = fit_effect(data, noise, current, plugin(name), SCREEN_ROUNDS, REFINE_ROUNDS)
+        fits, _ = fit_effect(data, noise, current, plugin(name), SCREEN_ROUNDS, REFINE_ROUNDS)
         if not fits:
             raise FitError(f"{data.source}: {name} cannot be fitted to these data (none of its "
                            f"data sets, {', '.join(sorted(plugin(name).traits.shown_by))}, "

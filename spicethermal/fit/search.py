@@ -203,7 +203,8 @@ def _clip(plugin: EffectPlugin, values: Mapping[str, float]) -> dict[str, float]
 
 def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                plugin: EffectPlugin, screen_rounds: int, refine_rounds: int,
-               forms: Sequence[str] | None = None) -> list[FormFit]:
+               forms: Sequence[str] | None = None,
+               left: Callable[[], bool] = lambda: True) -> tuple[list[FormFit], bool]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
     docstring); forms whose guess gives no start are left out. Every form is screened on the
     model's ladder from the plugin's starts (for every variant in the first form, for the
@@ -222,11 +223,16 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         Rounds of the screen and of the joint refit.
     forms : sequence of str, optional
         The forms to fit (default: all).
+    left : callable, optional
+        Whether work is left: asked before each form's screen and before its joint refits,
+        which are not started once it says no.
 
     Returns
     -------
     list of FormFit
         One per form fitted, in the plugin's order of forms.
+    bool
+        False when ``left()`` cut the fits short (the list then lacks forms).
     """
     ev = evidence(data, model, noise)
     slots = _slots(model)
@@ -254,6 +260,8 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     ev_ref = evidence(data, at_ref, noise) if at_ref is not None else None
 
     for form in forms or plugin.forms:
+        if not left():
+            return _form_fits(out, seeds), False
         variants = list(plugin.variants(form, ev))
         keys = frozenset().union(*(v.keys() for v in variants))
         if keys and keys in ranked:
@@ -290,6 +298,8 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                 heads = [there[0]]
         if not heads:
             continue
+        if not left():
+            return _form_fits(out, seeds), False
         seeds.append([dict(m.effect(plugin.name).params) for m in heads])  # type: ignore
         fits = [_refine(data, noise, m, refine_rounds, 0) for m in heads]
         fit = min(fits, key=lambda m: bic(m, n_points))
@@ -298,7 +308,12 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         if lead is None or bic(fit, n_points) < bic(lead, n_points):
             lead = fit
         out.append(fit)
-    return [FormFit(f, tuple(v)) for f, v in zip(out, seeds, strict=True)]
+    return _form_fits(out, seeds), True
+
+
+def _form_fits(fits: Sequence[ModelFit], seeds: Sequence[Sequence[Mapping[str, float]]]
+               ) -> list[FormFit]:
+    return [FormFit(f, tuple(v)) for f, v in zip(fits, seeds, strict=True)]
 
 
 def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: int,
