@@ -76,12 +76,16 @@ SCREEN_ROUNDS = 15
 REFINE_ROUNDS = 30
 #: The simulator's cost (:func:`spicethermal.engines.network.metered`: network solves and
 #: :data:`~spicethermal.engines.network.STEP_SOLVES` for each batched step) one diagnosis may
-#: spend: about 45 s of CPU at 3 to 4 µs a unit on the bench's 2-core machine, so that with
-#: the overrun below no bundle takes a minute; the median bundle takes a fifth of it. A step
-#: starts while some is left; once it is spent, a ladder stops growing, the candidates not
-#: yet fitted are not, and a step that did not fit every candidate is not taken; a bounded
-#: fit that has started finishes (a diagnosis may overrun the budget by one candidate's fits).
-WORK_BUDGET = 12_000_000
+#: spend. A unit takes 3 to 4 µs of CPU on a quiet 2-core machine of the bench's kind and 4 to
+#: 7.5 µs with two diagnoses at once (measured over the 89 bundles of a development seed; the
+#: slowest units are local temperature coefficients, whose terms cost twice as much a member):
+#: 8,000,000 and the overrun below keep every bundle under a minute on a loaded machine; the
+#: median bundle takes a quarter of it. A step starts while some is left; once it is spent, a
+#: ladder stops growing, the candidates and forms not yet fitted are not, and a step that did
+#: not fit every form of every candidate is not taken; a bounded fit that has started
+#: finishes (a diagnosis may overrun the budget by one form's fits, one longer ladder's, or
+#: one step's refit and settling).
+WORK_BUDGET = 8_000_000
 
 
 def runs_z(residuals: NDArray) -> float:
