@@ -1,9 +1,10 @@
 """Speed and accuracy of the temperature-coefficient forms' cooling model (issue 14).
 
 One cooling curve (200 points, 1 µs to the bench's last time) of each validation device with
-a strong ``local`` and ``power-law`` form: the CPU time of the network simulator's cooling
-curve as the fits evaluate it (:meth:`spicethermal.engines.network.NetworkBatch.cooling`:
-exponential steps on the network frozen at each step's temperatures) and its largest difference
+a strong ``local``, ``power-law`` and ``quadratic`` form: the CPU time of the network
+simulator's cooling curve as the fits evaluate it
+(:meth:`spicethermal.engines.network.NetworkBatch.cooling`: exponential steps on the network
+frozen at each step's temperatures) and its largest difference
 from the independent validation network (:mod:`spicethermal.validation.network`, integrated at
 tight tolerance).
 
@@ -34,7 +35,10 @@ def measure() -> tuple[float, float]:
                  (Effect.create("temperature-coefficient", "power-law", exponent=2.5,
                                 c_slope_per_k=3e-3),
                   {"laws": (ResistanceLaw("power", exponent=2.5),) * 4,
-                   "c_slope_per_k": (3e-3,) * 4}))
+                   "c_slope_per_k": (3e-3,) * 4}),
+                 (Effect.create("temperature-coefficient", "quadratic", alpha_per_k=6e-3,
+                                curvature_per_k2=-4e-5),
+                  {"laws": (ResistanceLaw("quadratic", 6e-3, beta_per_k2=-4e-5),) * 4}))
         for effect, changes in cases:
             c0 = time.process_time()
             for _ in range(3):
@@ -50,7 +54,7 @@ def measure() -> tuple[float, float]:
 def summary() -> list[tuple[str, str, str, str]]:
     """The row of bench/README.md's table."""
     cpu, err = measure()
-    return [("temperature-coefficient local/power-law cooling curve, 200 points (CPU per "
+    return [("temperature-coefficient local/power-law/quadratic cooling curve, 200 points (CPU per "
              "curve; worst difference from the validation network)", "— (no local forms)",
              f"{cpu * 1e3:.0f} ms; {err * 1e3:.2f} mK", "≤ 100 ms; ≤ 2 mK")]
 
