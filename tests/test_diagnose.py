@@ -73,10 +73,13 @@ def test_the_sample_bundle_names_its_calibrations_bow_and_adding_it_lowers_the_e
 def test_an_effect_the_data_cannot_show_alone_is_never_named_alone():
     """A TSP's curvature without calibration points reads as a device effect would."""
     b = scenario_bundle("tsp-nonlinearity", seed=1)
-    d = diagnose(Bundle(device=b.device, ambient_c=b.ambient_c, cooling=b.cooling, pwm=b.pwm),
-                 effects=("tsp-nonlinearity", "temperature-coefficient"))
-    # the curvature is the best explanation of the step, and is refused for want of a calibration
+    b = Bundle(device=b.device, ambient_c=b.ambient_c, cooling=b.cooling, pwm=b.pwm)
+    # alone, the curvature explains the step, and is refused for want of a calibration
+    d = diagnose(b, effects=("tsp-nonlinearity",))
     assert (d.steps[0].chosen.name, d.steps[0].status) == ("tsp-nonlinearity", "unshown")
+    assert not d.effects and d.verdict.cls == "none", d.verdict.reason
+    # beside a device effect that bends the same way (a quadratic law), never named alone
+    d = diagnose(b, effects=("tsp-nonlinearity", "temperature-coefficient"))
     assert "tsp-nonlinearity" not in d.effects or d.verdict.cls == "ambiguous", \
         d.verdict.reason
 
