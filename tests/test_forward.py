@@ -190,3 +190,33 @@ def test_settling_brings_a_nonlinear_models_pwm_readings_to_their_noise():
         [25.0 + model.pwm_reading(0.3, f, d, 1e-4) for f, d in zip(SLOW_F, D, strict=True)],
         abs=1e-4)
     assert held.pwm.tj_c is data.pwm.tj_c  # the readings themselves are untouched
+
+
+def test_a_memo_spares_the_network_a_fit_that_moves_only_measurements_and_changes_nothing():
+    from spicethermal.engines.network import NetworkBatch, metered
+    from spicethermal.fit.forward import MeasurementTerm, predict
+
+    data = _data()
+    band = Effect.create("phase-change", "logistic", node=1.0, t_c=40.0, width_k=3.0,
+                         latent_j=1e-3)
+    window = Effect.create("sample-window", "average", window_s=3e-4)
+    net = NetworkBatch.of(LADDER, [band])
+    terms = [MeasurementTerm(window.plugin, window.form,  # type: ignore[arg-type]
+                             {"window_s": np.array([[3e-4]])})]
+    plain = predict(data, net, terms)
+    memo: dict = {}
+    with metered() as first:
+        once = predict(data, net, terms, memo=memo)
+    terms2 = [MeasurementTerm(window.plugin, window.form,  # type: ignore[arg-type]
+                              {"window_s": np.array([[5e-4]])})]
+    with metered() as second:
+        again = predict(data, NetworkBatch.of(LADDER, [band]), terms2, memo=memo)
+    assert all(np.array_equal(plain[k], once[k]) for k in plain)
+    assert first.cost > 0 and second.cost == 0
+    assert again["cooling_1"] == pytest.approx(once["cooling_1"], abs=0)
+    assert not np.allclose(again["pwm"], once["pwm"])  # the window moved the readings
+    other = NetworkBatch.of(Foster.from_tau([6.0, 20.0, 50.0, 71.0], [1e-4, 5e-3, 0.4, 30.0]),
+                            [band])
+    with metered() as third:
+        predict(data, other, terms, memo=memo)
+    assert third.cost > 0 and len(memo) == 1  # another network: simulated, and the one kept

@@ -108,12 +108,13 @@ def _true_cooling(data: BundleData, net: NetworkBatch) -> tuple[dict[str, NDArra
     return curves, steady
 
 
-def _after_off(data: BundleData, net: NetworkBatch,
-               rows: NDArray) -> Callable[[NDArray | float], NDArray]:
+def _after_off(data: BundleData, net: NetworkBatch, rows: NDArray,
+               frozen: tuple[NDArray, NDArray] | None = None
+               ) -> Callable[[NDArray | float], NDArray]:
     """The PWM rows' true junction temperature ``delay`` after an on-phase ends, for the
-    members ``net[rows]``."""
+    members ``net[rows]`` (``frozen``: their frozen Foster stages, when known)."""
     p = data.pwm
-    r, tau = net.frozen_foster(p.power_w, p.freq_hz, p.duty, p.tref_c)
+    r, tau = frozen or net.frozen_foster(p.power_w, p.freq_hz, p.duty, p.tref_c)
     r, tau = r[rows], tau[rows]
     peaks = p.power_w[None, :, None] * stage_peaks(r, tau, 1.0 / p.freq_hz[None, :, None],
                                                    p.duty[None, :, None])
@@ -155,8 +156,8 @@ def observations(data: BundleData,
 
 def predict(data: BundleData, net: NetworkBatch,
             measures: Sequence[MeasurementTerm] = (),
-            pwm_engine: Callable[[NDArray | float], NDArray] | None = None
-            ) -> dict[str, NDArray]:
+            pwm_engine: Callable[[NDArray | float], NDArray] | None = None,
+            memo: dict | None = None) -> dict[str, NDArray]:
     """What the bench would read (°C, ``(B, N)`` per data set) for every parameter set of
     the batch ``net`` (its ladders and device effects) and ``measures``.
 
@@ -169,6 +170,10 @@ def predict(data: BundleData, net: NetworkBatch,
     pwm_engine : callable, optional
         The PWM rows' junction temperature ``delay`` after an on-phase ends, from another
         engine (ngspice) instead of the network's closed form.
+    memo : dict, optional
+        Keeps the last network's simulation of ``data`` between calls (a fit's): when the
+        next call's distinct members are the same (a fit that moves only measurement
+        effects), they are not simulated again.
 
     Returns
     -------
@@ -177,14 +182,14 @@ def predict(data: BundleData, net: NetworkBatch,
     """
     true: dict[str, NDArray] = {}
     distinct, rows = net.unique()  # members that differ only in measurement effects share one
+    curves, steady, frozen = _simulated(data, distinct, pwm_engine is None, memo)
     if data.cooling:
-        curves, steady = _true_cooling(data, distinct)
         true.update({k: v[rows] for k, v in curves.items()})
         if data.steady_curves:
             true[STEADY] = np.concatenate([steady[c.name][rows] for c in data.steady_curves],
                                           axis=1)
-    after_off = pwm_engine or (_after_off(data, distinct, rows) if data.pwm is not None
-                               else None)
+    after_off = pwm_engine or (_after_off(data, distinct, rows, frozen)
+                               if data.pwm is not None else None)
     if after_off is not None:
         true[PWM] = after_off(data.pwm.window_s)
     if data.calibration is not None:
@@ -195,6 +200,31 @@ def predict(data: BundleData, net: NetworkBatch,
         for name in true:
             true[name] = term.plugin.read(term.form, term.params, obs[name], true[name])
     return true
+
+
+def _simulated(data: BundleData, net: NetworkBatch, pwm: bool, memo: dict | None
+               ) -> tuple[dict[str, NDArray], dict[str, NDArray],
+                          tuple[NDArray, NDArray] | None]:
+    """``net``'s true cooling curves and steady states (:func:`_true_cooling`) and, when
+    ``pwm`` and the bundle has a PWM grid, its frozen Foster stages at every row; from
+    ``memo`` when it holds this very network's (its only entry is the last network)."""
+    key = None
+    if memo is not None:
+        key = (net.r.tobytes(), net.c.tobytes(), net.tol_rel, net.tol_k, pwm,
+               tuple((t.plugin.name, t.form, tuple((n, np.asarray(v).tobytes())
+                                                   for n, v in sorted(t.params.items())))
+                     for t in net.terms))
+        if key in memo:
+            return memo[key]
+    curves, steady = _true_cooling(data, net) if data.cooling else ({}, {})
+    frozen = None
+    if pwm and data.pwm is not None:
+        p = data.pwm
+        frozen = net.frozen_foster(p.power_w, p.freq_hz, p.duty, p.tref_c)
+    if memo is not None:
+        memo.clear()
+        memo[key] = (curves, steady, frozen)
+    return curves, steady, frozen
 
 
 def predict_model(data: BundleData, ladder: Foster | Cauer,

@@ -208,6 +208,9 @@ class _Problem:
                         for k in p.params} for i, (p, _f) in enumerate(layout.slots)]
         self.line = _line_centre(data)
         self.sizes = [data.measured(n).size for n in self.names]
+        # the last network simulated (see predict), at the fit's tolerance and at the default
+        self.memo: dict = {}
+        self.exact_memo: dict = {}
 
     def _read(self, pred: Mapping[str, NDArray]) -> NDArray:
         """Every data set's predictions side by side, ``(B, N)``, corrected for the error of
@@ -241,14 +244,15 @@ class _Problem:
         r, c, devices, measures = self.network(x, rows)
         with np.errstate(all="ignore"):
             pred = predict(self.data, NetworkBatch(r, c, devices, self.tol_rel, self.tol_k),
-                           measures)
+                           measures, memo=self.memo)
             out = (self._read(pred) - self.measured) * self.weight
         return np.where(np.isfinite(out), out, np.nan)
 
     def model(self, x: NDArray, row: int, noise: Mapping[str, float], k: int, work: int,
               converged: bool) -> ModelFit:
         r, c, devices, measures = self.network(x[None, :], np.array([row]))
-        pred = predict(self.data, NetworkBatch(r, c, devices), measures)
+        pred = predict(self.data, NetworkBatch(r, c, devices), measures,
+                       memo=self.exact_memo)
         read = self._read(pred)[0]
         cuts = np.cumsum([0, *self.sizes])
         preds = {n: read[cuts[i]:cuts[i + 1]] for i, n in enumerate(self.names)}
