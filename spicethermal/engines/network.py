@@ -253,9 +253,10 @@ class NetworkBatch:
         (h_a, dh_a), (h_b, dh_b) = heat_a, heat_b
         d = np.asarray(dtheta)  # (B, n) or a scalar: the where below broadcasts it
         small = np.abs(d) < 1e-9
-        sec = np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
+        sec = (np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
+               if small.any() else (h_b - h_a) / d)  # the same without the wheres
         cap = self.c + sec
-        return np.where(cap > 0, cap, np.nan)
+        return cap if cap.min() > 0 else np.where(cap > 0, cap, np.nan)
 
     def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
         """:meth:`_capacity` between the temperatures ``t_a`` and ``t_b``."""
@@ -272,10 +273,11 @@ class NetworkBatch:
             meter.solves += self.size
             meter.steps += 1
         g = 1.0 / (self.r * scale)
-        # positive and finite (NaN fails both tests, and min and max carry it)
-        ok = (np.minimum(g.min(axis=1), cap.min(axis=1)) > 0) \
-            & (np.maximum(g.max(axis=1), cap.max(axis=1)) < np.inf)
-        if not ok.all():
+        # positive and finite (NaN fails both, min and max carry it); member by member if not
+        ok = None  # every member is
+        if not (min(g.min(), cap.min()) > 0 and max(g.max(), cap.max()) < np.inf):
+            ok = (np.minimum(g.min(axis=1), cap.min(axis=1)) > 0) \
+                & (np.maximum(g.max(axis=1), cap.max(axis=1)) < np.inf)
             g = np.where(ok[:, None], g, 1.0)
             cap = np.where(ok[:, None], cap, 1.0)
         diag = g.copy()
@@ -288,10 +290,10 @@ class NetworkBatch:
         if n > 1:
             s[:, n::n + 1] = -g[:, :-1] / (root[:, :-1] * root[:, 1:])
         lam, v = _eigh(s.reshape(self.size, n, n))
-        ok &= (lam > 0).all(axis=1)
-        if not ok.all():
-            lam = np.where(ok[:, None], lam, np.nan)
-        return lam, v, root
+        if ok is None and lam.min() > 0:
+            return lam, v, root
+        ok = (lam > 0).all(axis=1) & (True if ok is None else ok)
+        return np.where(ok[:, None], lam, np.nan), v, root
 
     def foster(self, scale: NDArray | None = None,
                cap: NDArray | None = None) -> tuple[NDArray, NDArray]:
@@ -427,8 +429,7 @@ class NetworkBatch:
             states = (self._held(modes, theta, at, q_a, self._tends(pred, tref, p), b - a)
                       if powered else self._frozen(modes, theta, at, p))
             err = np.abs(states[:, -1] - pred).max(axis=1)
-            err_max = float(np.fmax.reduce(err))  # NaN members aside; all NaN: 0
-            err_max = 0.0 if math.isnan(err_max) else err_max
+            err_max = float(np.nan_to_num(np.fmax.reduce(err), nan=0.0, posinf=np.inf))  # NaN: 0
             steps += 1
             if steps > MAX_STEPS:  # what is left does not resolve: those members fail
                 out[:, k:] = np.nan
