@@ -429,7 +429,7 @@ class NetworkBatch:
             states = (self._held(modes, theta, at, q_a, self._tends(pred, tref, p), b - a)
                       if powered else self._frozen(modes, theta, at, p))
             err = np.abs(states[:, -1] - pred).max(axis=1)
-            err_max = float(np.nan_to_num(np.fmax.reduce(err), nan=0.0, posinf=np.inf))  # NaN: 0
+            err_max = float(np.fmax.reduce(err, initial=0.0))  # NaN members aside; all NaN: 0
             steps += 1
             if steps > MAX_STEPS:  # what is left does not resolve: those members fail
                 out[:, k:] = np.nan
