@@ -4,6 +4,7 @@ network (its own stiff integrator, shared physics code none)."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -187,3 +188,19 @@ def test_the_meter_counts_one_solve_a_member_and_step_and_an_enclosing_count_get
     assert nonlinear.solves > 10 and nonlinear.steps == nonlinear.solves  # a batch of one
     assert outer.solves == 4 + nonlinear.solves and outer.steps == 1 + nonlinear.steps
     assert outer.cost == outer.solves + STEP_SOLVES * outer.steps
+
+
+@pytest.mark.parametrize("where", ["r", "c"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -1.0, 0.0])
+def test_a_member_whose_network_is_not_positive_and_finite_fails_alone_and_quietly(where, bad):
+    r, c = np.array([[1.0, 2.0, 3.0]] * 3), np.array([[1e-3, 1e-2, 1e-1]] * 3)
+    (r if where == "r" else c)[1, 1] = bad
+    with warnings.catch_warnings():
+        # no invalid value reaches the eigensolver
+        warnings.filterwarnings("error", message="invalid value encountered in eigh")
+        with np.errstate(divide="ignore"):  # a zero resistance: an infinite conductance
+            got_r, tau = NetworkBatch(r, c).foster()
+    good = NetworkBatch(r[:1], c[:1]).foster()
+    assert np.all(np.isnan(tau[1]))
+    for i in (0, 2):
+        assert np.array_equal(got_r[i], good[0][0]) and np.array_equal(tau[i], good[1][0])

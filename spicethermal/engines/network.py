@@ -275,7 +275,7 @@ class NetworkBatch:
         g = 1.0 / (self.r * scale)
         # positive and finite (NaN fails both, min and max carry it); member by member if not
         ok = None  # every member is
-        if not (min(g.min(), cap.min()) > 0 and max(g.max(), cap.max()) < np.inf):
+        if not (np.minimum(g.min(), cap.min()) > 0 and np.maximum(g.max(), cap.max()) < np.inf):
             ok = (np.minimum(g.min(axis=1), cap.min(axis=1)) > 0) \
                 & (np.maximum(g.max(axis=1), cap.max(axis=1)) < np.inf)
             g = np.where(ok[:, None], g, 1.0)
