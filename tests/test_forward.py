@@ -8,8 +8,15 @@ import pytest
 
 from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect
+from spicethermal.engines.network import NetworkBatch, metered
 from spicethermal.engines.pwm import stage_peaks, steady_state
-from spicethermal.fit.forward import EXACT_TOL_K, predict_model, pwm_correction
+from spicethermal.fit.forward import (
+    EXACT_TOL_K,
+    MeasurementTerm,
+    predict,
+    predict_model,
+    pwm_correction,
+)
 from spicethermal.fit.joint import Layout, Start, fit_starts
 from spicethermal.fit.measurement import BundleData
 from spicethermal.fit.search import settle
@@ -193,9 +200,6 @@ def test_settling_brings_a_nonlinear_models_pwm_readings_to_their_noise():
 
 
 def test_a_memo_spares_the_network_a_fit_that_moves_only_measurements_and_changes_nothing():
-    from spicethermal.engines.network import NetworkBatch, metered
-    from spicethermal.fit.forward import MeasurementTerm, predict
-
     data = _data()
     band = Effect.create("phase-change", "logistic", node=1.0, t_c=40.0, width_k=3.0,
                          latent_j=1e-3)
