@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 
 import spicethermal.analysis.diagnose as procedure
+import spicethermal.fit.search as search
 from spicethermal.analysis.compare import comparison_of
 from spicethermal.analysis.diagnose import diagnose
 from spicethermal.analysis.diagnosis import Candidate
 from spicethermal.core.errors import FitError
 from spicethermal.core.ladder import Cauer
-from spicethermal.effects import Effect
-from spicethermal.engines.network import STEP_SOLVES, NetworkBatch
+from spicethermal.effects import CATALOGUE, Effect
+from spicethermal.engines.network import STEP_SOLVES, NetworkBatch, metered
 from spicethermal.fit.joint import ModelFit
 from spicethermal.fit.measurement import BundleData
 from spicethermal.fit.search import FormFit
@@ -64,13 +65,28 @@ def _spend(solves: int) -> None:
 def scripted(monkeypatch):
     """Runs the procedure with the candidates of each step given in order (and ``lighter``
     as the model without each earlier effect, when given); each step spends ``cost``
-    network solves."""
+    network solves. With ``cut_after``, each step fits that many effects and the budget
+    is spent before the next ones."""
     def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None,
             bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9,
-            after: dict | None = None, weighed: list | None = None):
+            after: dict | None = None, weighed: list | None = None,
+            cut_after: int | None = None, asked: list | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
-        monkeypatch.setattr(procedure, "fit_effect", lambda *a, **k: ([], True))
+        fitted = []
+
+        def fit_effect(data, noise, model, plugin, *a, **k):
+            if asked is not None:  # the effects each step fitted, in order
+                asked.append((tuple(e.name for e in model.effects), plugin.name))
+            if cut_after is None:
+                return [], True
+            fitted.append(plugin.name)
+            if len(fitted) > cut_after:
+                _spend(budget)
+                return [], False
+            return [FormFit(_fit((FIRST,), 0.0), ())], True
+
+        monkeypatch.setattr(procedure, "fit_effect", fit_effect)
         monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: fit)
 
         def without(*a, **k):  # the model without an earlier effect: none, or ``lighter``
@@ -241,8 +257,8 @@ def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):
     """A candidate that leaves a structured residual grows while work is left, not after."""
     asked = []
 
-    def grow(data, noise, form, rounds, short):
-        asked.append(short(form.fit))
+    def grow(data, noise, form, rounds, short, affords):
+        asked.append(short(form.fit) and affords(0))
         return form.fit, 0
 
     monkeypatch.setattr(procedure, "grow", grow)
@@ -250,16 +266,78 @@ def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):
     for left in (True, False):
         procedure._weigh(DATA, NOISE, base, comparison_of(DATA, base.predictions),
                          {FIRST.name: [form]}, sum(DATA.sizes().values()), DATA.sizes(),
-                         lambda left=left: left)
+                         lambda cost, left=left: left)
     assert asked == [True, False]
 
 
-def test_a_step_that_could_not_fit_every_candidate_is_not_taken(scripted):
+def test_a_longer_ladder_starts_only_when_the_work_left_affords_one_like_the_last(
+        monkeypatch):
+    """Each longer ladder costs 1,000 and lowers the criterion: with 2,500 to spend, a
+    third is not started (1,000 more after 2,000 spent does not fit); the first needs only
+    some work left."""
+    calls = []
+
+    def longer(data, noise, fit, rounds, seeds):
+        calls.append(fit.ladder.order)
+        _spend(1000 - STEP_SOLVES)
+        more = Cauer([*fit.ladder.r, 1.0], [*fit.ladder.c, 1.0])
+        return replace(fit, ladder=more, chi2={n: v / 2 for n, v in fit.chi2.items()})
+
+    monkeypatch.setattr(search, "_longer", longer)
+    form = FormFit(_fit((FIRST,), 8.0), ())
+    with metered() as meter:
+        grown, _ = search.grow(DATA, NOISE, form, 3, lambda m: True,
+                               lambda cost: meter.cost + cost < 2500)
+    assert calls == [1, 2] and grown.ladder.order == 3 and meter.cost == 2000
+    calls.clear()
+    search.grow(DATA, NOISE, form, 3, lambda m: True, lambda cost: False)
+    assert calls == []
+
+
+def test_a_step_that_could_not_fit_any_candidate_is_not_taken(scripted):
     d = scripted((_fit((FIRST,), 0.0), 5000.0), budget=0)
     assert not d.steps and d.verdict.cls == "none" and not d.effects
     assert d.spent.stopped.startswith("the work budget (a cost of 0) was spent in step 1 "
                                       "before ")
     assert d.verdict.reason.startswith(d.spent.stopped + ": nothing is named")
+
+
+def test_a_step_cut_by_the_budget_is_taken_only_when_its_best_is_at_the_noise(scripted):
+    """The budget is spent after two effects were fitted: their best, at the noise, is
+    added (the others could at most tie with it) and the verdict says which were not
+    weighed; a best that leaves a structured residual is not."""
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), cut_after=2, budget=20_000)
+    assert not d.steps and d.verdict.cls == "none"
+    assert d.spent.stopped.startswith("the work budget (a cost of 20,000) was spent in step 1 "
+                                      "before ")
+    d = scripted((_fit((FIRST,), 8.0), 5000.0))  # uncut: named, an approximate form
+    assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+    d = scripted((_fit((FIRST,), 0.0), 5000.0), cut_after=2, budget=20_000)
+    assert d.effects == [FIRST.name] and d.verdict.cls == "named"
+    assert d.spent.stopped.startswith("the work budget (a cost of 20,000) was spent in step 1 "
+                                      "before ")
+    assert d.spent.stopped.endswith(f"could at most tie with {FIRST.name}, which brings every "
+                                    "data set to its noise")
+    assert d.verdict.reason.endswith(d.spent.stopped)
+    d = scripted((_fit((FIRST,), 0.0), 5000.0), cut_after=0, budget=20_000)  # none fitted
+    assert not d.steps and d.verdict.cls == "none"
+
+
+def test_a_later_step_fits_the_effects_in_the_order_of_the_first_steps_ranking(scripted):
+    """The first step fits in the registry's order; the next one in the order of the first
+    step's candidates (each effect's gain alone), then the effects that had none."""
+    transient = Effect.create("electrical-transient")
+    after = {(): [(_fit((SECOND,), 8.0), 5000.0), (_fit((FIRST,), 9.0), 900.0),
+                  (_fit((transient,), 9.0), 400.0)],
+             (SECOND.name,): [(_fit((SECOND, FIRST), 0.0), 300.0)]}
+    asked: list = []
+    d = scripted(after=after, asked=asked)
+    assert d.effects == [SECOND.name, FIRST.name]
+    step1 = [name for model, name in asked if not model]
+    step2 = [name for model, name in asked if model == (SECOND.name,)]
+    assert step1 == sorted(step1, key=list(CATALOGUE).index) and len(step1) > 3
+    assert step2[:2] == [FIRST.name, transient.name]
+    assert step2[2:] == [n for n in step1 if n not in (SECOND.name, FIRST.name, transient.name)]
 
 
 def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scripted):

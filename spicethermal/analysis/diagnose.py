@@ -35,7 +35,9 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
 
 The work is counted (model evaluations, and the simulator's cost against
 :data:`.rules.WORK_BUDGET`), never timed: the same bundle gives the same verdict on every
-machine and under any load.
+machine and under any load. Steps after the first fit the effects in the order of the first
+step's ranking; a step the budget cut short is taken only when its best candidate brings
+every data set to its noise (those left could at most tie with it).
 """
 
 from __future__ import annotations
@@ -136,12 +138,13 @@ def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Seque
 
 def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
            fitted: dict[str, list[FormFit]], n_points: int, sizes: dict,
-           left: Callable[[], bool]) -> tuple[list[Candidate], int]:
+           affords: Callable[[int], bool]) -> tuple[list[Candidate], int]:
     """Every effect's candidate, best first. The effects are ranked on the model's ladder;
     the best, and every one within :data:`.rules.DECISIVE_BIC` of it, then grow their
     ladders while they leave a data set beyond the noise (the model's order was chosen
-    without the effect, whose misfit may have taken or hidden stages) and ``left()`` says
-    work is left, and are weighed grown."""
+    without the effect, whose misfit may have taken or hidden stages) and the work left
+    affords it (``affords(cost)``, :func:`~spicethermal.fit.search.grow`), and are weighed
+    grown."""
     work = 0
     leads = {n: min(forms, key=lambda f: bic(f.fit, n_points)) for n, forms in fitted.items()}
     cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], leads[n].fit,
@@ -153,8 +156,7 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
         if top - cands[name].delta_bic >= DECISIVE_BIC:
             continue
         lead = leads[name]
-        grown, spent = grow(data, noise, lead, REFINE_ROUNDS,
-                            lambda m: left() and short(data, m))
+        grown, spent = grow(data, noise, lead, REFINE_ROUNDS, partial(short, data), affords)
         work += spent
         if grown is not lead.fit:
             fits = [grown if f is lead else f.fit for f in forms]
@@ -230,9 +232,13 @@ class _Context:
     meter: Meter
     budget: int
 
+    def affords(self, cost: int = 0) -> bool:
+        """Whether the budget left exceeds ``cost``."""
+        return self.meter.cost + cost < self.budget
+
     @property
     def spent(self) -> bool:
-        return self.meter.cost >= self.budget
+        return not self.affords()
 
     @property
     def budget_text(self) -> str:
@@ -243,8 +249,9 @@ class _Context:
 class _Path:
     """The steps of one forward selection, the data its last model was settled on
     (:func:`~spicethermal.fit.search.settle`), the first step's candidates, the work (model
-    evaluations), why the work budget stopped it ("" when it did not) and the best further
-    candidate it refused because it leaves a structured residual too (None when none)."""
+    evaluations), why the work budget stopped it ("" when it did not), the best further
+    candidate it refused because it leaves a structured residual too (None when none), and
+    the candidates a step it took left unweighed when the budget was spent ("" when none)."""
 
     data: BundleData
     steps: list[Step] = field(default_factory=list)
@@ -252,6 +259,7 @@ class _Path:
     work: int = 0
     stopped: str = ""
     refused: Candidate | None = None
+    unweighed: str = ""
 
 
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
@@ -274,7 +282,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
             skipped[p.name] = f"no data set that can show it ({shown})"
     ctx = _Context(data, noise, plugins, skipped, say, meter, budget)
     path = _forward(ctx, base, base_cmp)
-    work, revised, stopped = base.work + path.work, "", path.stopped
+    work, revised, stopped, unweighed = base.work + path.work, "", path.stopped, path.unweighed
     final = last_model(path.steps, base)
     alt = next((i for i, c in enumerate(path.first) if i and c.catalogued
                 and decisive(0.0, -c.delta_bic, c.explained)), None)
@@ -295,19 +303,20 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
                        f"criterion more (by {lead.delta_bic - path.first[alt].delta_bic:.1f}): "
                        f"after {lead.name} no further effect brings every data set to its "
                        f"noise, and the criterion ends {gain:.1f} higher")
-            path = other
+            path, unweighed = other, other.unweighed
     further = path.refused
     refused = (f"{further.name} would lower the criterion by a further {further.delta_bic:.1f} "
                f"and remove {100 * max(further.explained, 0):.0f} % of the misfit left, but it "
                "leaves a structured residual too: not named, since any flexible effect takes "
                f"part of what the approximate form of {path.steps[-1].chosen.name} leaves"
                ) if further else ""
-    note = "; ".join(t for t in (refused, revised, stopped) if t)
+    note = "; ".join(t for t in (refused, revised, stopped, unweighed) if t)
     result = verdict(path.data, base, path.steps, noise, note)
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
-                     where, WorkSpent(meter.solves, budget, stopped, meter.steps, meter.cost),
+                     where, WorkSpent(meter.solves, budget, stopped or unweighed, meter.steps,
+                               meter.cost),
                      further)
 
 
@@ -330,7 +339,10 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             cands, i = list(path.first), pick
         else:
             fitted, unfitted = {}, []
-            for p in ctx.plugins:
+            # after the first step, in the order of the first step's ranking (each effect's
+            # gain alone): when the budget is spent, those left are the least favoured
+            rank = {c.name: j for j, c in enumerate(path.first)}
+            for p in sorted(ctx.plugins, key=lambda p: rank.get(p.name, len(rank))):
                 if p.name in ctx.skipped or current.effect(p.name):
                     continue
                 if ctx.spent:
@@ -344,15 +356,24 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                     unfitted.append(p.name)
                 elif forms:
                     fitted[p.name] = forms
-            if unfitted:  # a step that did not weigh every candidate is not taken
-                path.stopped = (f"{ctx.budget_text} was spent in step {k} before "
-                                f"{', '.join(unfitted)} "
-                                f"{'was' if len(unfitted) == 1 else 'were'} fitted")
+            cut = (f"{ctx.budget_text} was spent in step {k} before {', '.join(unfitted)} "
+                   f"{'was' if len(unfitted) == 1 else 'were'} fitted") if unfitted else ""
+            if not fitted and cut:
+                path.stopped = cut
                 break
             ctx.say(f"step {k}: the best on longer ladders")
             cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes,
-                                  lambda: not ctx.spent)
+                                  ctx.affords)
             path.work += spent
+            if cut and not (cands and decisive(0.0, -cands[0].delta_bic, cands[0].explained)
+                            and not short(data, cands[0].fit)):
+                # a step that did not weigh every candidate is taken only when its best
+                # brings every data set to the noise: the others could at most tie with it
+                path.stopped = cut
+                break
+            path.unweighed = (f"{cut}: {'it' if len(unfitted) == 1 else 'they'} could at "
+                              f"most tie with {cands[0].name}, which brings every data set "
+                              "to its noise") if cut else path.unweighed
             i = 0
             if not steps:
                 path.first = tuple(cands)

@@ -22,7 +22,7 @@ import numpy as np
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer
 from ..effects.base import CurveEvidence, EffectPlugin, Evidence
-from ..engines.network import NetworkBatch
+from ..engines.network import NetworkBatch, metered
 from .forward import predict_model, pwm_correction
 from .joint import (
     MAX_ORDER,
@@ -313,12 +313,15 @@ def _form_fits(fits: Sequence[ModelFit], seeds: Sequence[Sequence[Mapping[str, f
 
 
 def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: int,
-         short: Callable[[ModelFit], bool]) -> tuple[ModelFit, int]:
+         short: Callable[[ModelFit], bool],
+         affords: Callable[[int], bool] = lambda cost: True) -> tuple[ModelFit, int]:
     """``form``'s fit on longer ladders while ``short(fit)`` holds of the best (it leaves a
     data set beyond its noise): one stage more, then another (:func:`_longer`), until
-    :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing. The model's
-    order was chosen without the effect, whose misfit may have taken or hidden stages. A
-    longer ladder replaces the fit when its criterion (two parameters a stage) is lower.
+    :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing, or until
+    the work left does not afford (``affords(cost)``) one more as costly as the last (the
+    first needs only some work left). The model's order was chosen without the effect, whose
+    misfit may have taken or hidden stages. A longer ladder replaces the fit when its
+    criterion (two parameters a stage) is lower.
 
     Parameters
     ----------
@@ -327,6 +330,8 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
     form : FormFit
     rounds : int
     short : callable
+    affords : callable, optional
+        Whether the work left affords a simulator cost (a :class:`~..engines.network.Meter`'s).
 
     Returns
     -------
@@ -337,9 +342,11 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
     """
     n_points = sum(data.sizes().values())
     best = current = form.fit
-    misses = 0
-    while short(best) and misses < ORDER_PATIENCE:
-        longer = _longer(data, noise, current, rounds, form.screened)
+    misses = last = 0
+    while short(best) and misses < ORDER_PATIENCE and affords(last):
+        with metered() as meter:
+            longer = _longer(data, noise, current, rounds, form.screened)
+        last = meter.cost
         if longer is None:
             break
         current = longer
