@@ -350,7 +350,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                     continue
                 ctx.say(f"step {k}: {p.name}")
                 forms, whole = fit_effect(data, noise, current, p, SCREEN_ROUNDS,
-                                          REFINE_ROUNDS, left=lambda: not ctx.spent)
+                                          REFINE_ROUNDS, left=ctx.affords)
                 path.work += sum(f.fit.work for f in forms)
                 if not whole:  # the budget was spent between two of its forms
                     unfitted.append(p.name)
