@@ -371,9 +371,10 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                 # brings every data set to the noise: the others could at most tie with it
                 path.stopped = cut
                 break
-            path.unweighed = (f"{cut}: {'it' if len(unfitted) == 1 else 'they'} could at "
-                              f"most tie with {cands[0].name}, which brings every data set "
-                              "to its noise") if cut else path.unweighed
+            if cut:
+                path.unweighed = (f"{cut}: {'it' if len(unfitted) == 1 else 'they'} could at "
+                                  f"most tie with {cands[0].name}, which brings every data "
+                                  "set to its noise")
             i = 0
             if not steps:
                 path.first = tuple(cands)

@@ -331,7 +331,7 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
     rounds : int
     short : callable
     affords : callable, optional
-        Whether the work left affords a simulator cost (a :class:`~..engines.network.Meter`'s).
+        Whether the work left affords a simulator cost (``engines.network.Meter.cost``).
 
     Returns
     -------
