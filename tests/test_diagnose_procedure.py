@@ -257,9 +257,9 @@ def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):
     """A candidate that leaves a structured residual grows while work is left, not after."""
     asked = []
 
-    def grow(data, noise, form, rounds, short, affords):
+    def grow(data, noise, form, rounds, short, affords, last):
         asked.append(short(form.fit) and affords(0))
-        return form.fit, 0
+        return form.fit, 0, last
 
     monkeypatch.setattr(procedure, "grow", grow)
     base, form = _fit((), 40.0), FormFit(_fit((FIRST,), 8.0), ())
@@ -277,7 +277,7 @@ def test_a_longer_ladder_starts_only_when_the_work_left_affords_one_like_the_las
     some work left."""
     calls = []
 
-    def longer(data, noise, fit, rounds, seeds):
+    def longer(data, noise, fit, rounds, seeds, go_on):
         calls.append(fit.ladder.order)
         _spend(1000 - STEP_SOLVES)
         more = Cauer([*fit.ladder.r, 1.0], [*fit.ladder.c, 1.0])
@@ -286,12 +286,54 @@ def test_a_longer_ladder_starts_only_when_the_work_left_affords_one_like_the_las
     monkeypatch.setattr(search, "_longer", longer)
     form = FormFit(_fit((FIRST,), 8.0), ())
     with metered() as meter:
-        grown, _ = search.grow(DATA, NOISE, form, 3, lambda m: True,
-                               lambda cost: meter.cost + cost < 2500)
+        grown, _, last = search.grow(DATA, NOISE, form, 3, lambda m: True,
+                                     lambda cost: meter.cost + cost < 2500)
     assert calls == [1, 2] and grown.ladder.order == 3 and meter.cost == 2000
+    assert last == 1000
     calls.clear()
     search.grow(DATA, NOISE, form, 3, lambda m: True, lambda cost: False)
     assert calls == []
+
+
+def test_a_longer_ladder_stops_fitting_once_the_work_left_affords_nothing(monkeypatch):
+    """A longer ladder's fit asks whether to go on, counting what it spent so far: with
+    1,500 to spend, it goes on after 600 and 1,200, not after 1,800."""
+    answers = []
+
+    def longer(data, noise, fit, rounds, seeds, go_on):
+        for _ in range(3):
+            _spend(600 - STEP_SOLVES)
+            answers.append(go_on())
+
+    monkeypatch.setattr(search, "_longer", longer)
+    with metered() as meter:
+        search.grow(DATA, NOISE, FormFit(_fit((FIRST,), 8.0), ()), 3, lambda m: True,
+                    lambda cost: meter.cost + cost < 1500)
+    assert answers == [True, True, False]
+
+
+def test_a_candidate_grows_only_when_the_work_left_affords_a_ladder_like_the_last(
+        monkeypatch):
+    """The growth of a step's candidates shares the last longer ladder's cost: with 2,500
+    to spend and each candidate's first longer ladder costing 1,000 (its last), the first
+    candidate grows one from nothing spent, the second one from 1,000 spent (2,000 fits),
+    and the third none (3,000 does not fit, though some budget is left)."""
+    calls = []
+
+    def longer(data, noise, fit, rounds, seeds, go_on):
+        calls.append(fit.effects[-1].name)
+        _spend(1000 - STEP_SOLVES)
+
+    monkeypatch.setattr(search, "_longer", longer)
+    monkeypatch.setattr(procedure, "short", lambda data, fit: True)
+    base = _fit((), 40.0)
+    third = Effect.create("reference-drift", rate_k_per_s=1e-3)
+    fitted = {e.name: [FormFit(_fit((e,), 8.0), ())] for e in (FIRST, SECOND, third)}
+    with metered() as meter:
+        procedure._weigh(DATA, NOISE, base, comparison_of(DATA, base.predictions), fitted,
+                         sum(DATA.sizes().values()), DATA.sizes(),
+                         lambda cost: meter.cost + cost < 2500)
+    assert calls == [FIRST.name, SECOND.name] and meter.cost == 2000
 
 
 def test_a_step_that_could_not_fit_any_candidate_is_not_taken(scripted):

@@ -43,3 +43,22 @@ def test_the_work_is_the_same_for_the_same_input():
     b = levenberg_marquardt(_two_exponentials, starts, [0] * 4, [10] * 4, rounds=20)
     assert (a.rows, a.rounds) == (b.rows, b.rounds) and np.array_equal(a.x, b.x)
     assert a.rounds <= 20
+
+
+def test_a_fit_stops_where_it_is_when_asked_before_a_round():
+    """``go_on`` is asked before every round after the first; once it says no, the fit
+    returns its points as they are, not converged, after the rounds it took."""
+    starts = np.array([[1.0, 1.0, 1.0, 0.1], [5.0, 4.0, 0.1, 0.5]])
+    asked = []
+
+    def go_on():
+        asked.append(True)
+        return len(asked) < 3
+
+    full = levenberg_marquardt(_two_exponentials, starts, [0] * 4, [10] * 4, rounds=200)
+    cut = levenberg_marquardt(_two_exponentials, starts, [0] * 4, [10] * 4, rounds=200,
+                              go_on=go_on)
+    # the first evaluation and three rounds, each of two points and their four differences
+    assert len(asked) == 3 and cut.rows == 2 * 5 * (1 + 3) and not np.any(cut.converged)
+    assert full.rows > cut.rows
+    assert np.all(cut.cost < 0.5 * np.sum(_two_exponentials(starts, None) ** 2, axis=1))

@@ -143,9 +143,9 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
     the best, and every one within :data:`.rules.DECISIVE_BIC` of it, then grow their
     ladders while they leave a data set beyond the noise (the model's order was chosen
     without the effect, whose misfit may have taken or hidden stages) and the work left
-    affords it (``affords(cost)``, :func:`~spicethermal.fit.search.grow`), and are weighed
-    grown."""
-    work = 0
+    affords it (``affords(cost)``: a longer ladder as costly as the last one grown, of any
+    candidate, :func:`~spicethermal.fit.search.grow`), and are weighed grown."""
+    work = last = 0
     leads = {n: min(forms, key=lambda f: bic(f.fit, n_points)) for n, forms in fitted.items()}
     cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], leads[n].fit,
                            n_points, sizes) for n, forms in fitted.items()}
@@ -156,7 +156,8 @@ def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
         if top - cands[name].delta_bic >= DECISIVE_BIC:
             continue
         lead = leads[name]
-        grown, spent = grow(data, noise, lead, REFINE_ROUNDS, partial(short, data), affords)
+        grown, spent, last = grow(data, noise, lead, REFINE_ROUNDS, partial(short, data),
+                                  affords, last)
         work += spent
         if grown is not lead.fit:
             fits = [grown if f is lead else f.fit for f in forms]

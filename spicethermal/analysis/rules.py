@@ -81,10 +81,10 @@ REFINE_ROUNDS = 30
 #: slowest units are local temperature coefficients, whose terms cost twice as much a member):
 #: 8,000,000 and the overrun below keep every bundle under a minute on a loaded machine; the
 #: median bundle takes a quarter of it. A step starts while some is left; once it is spent, a
-#: ladder stops growing, the candidates and forms not yet fitted are not, and a step that did
-#: not fit every form of every candidate is not taken; a bounded fit that has started
-#: finishes (a diagnosis may overrun the budget by one form's fits, one longer ladder's, or
-#: one step's refit and settling).
+#: ladder stops growing (a longer ladder's fit stops where it is), the candidates and forms
+#: not yet fitted are not, and a step that did not fit every form of every candidate is not
+#: taken; any other bounded fit that has started finishes (a diagnosis may overrun the budget
+#: by one form's fits, one round of a longer ladder's, or one step's refit and settling).
 WORK_BUDGET = 8_000_000
 
 

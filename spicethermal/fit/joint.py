@@ -297,7 +297,8 @@ def tau_range(data: BundleData) -> tuple[float, float]:
 def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
                starts: Sequence[Start], rounds: int = MAX_ROUNDS,
                n_ladder_params: int | None = None,
-               tol_rel: float = TOL_REL) -> list[ModelFit | None]:
+               tol_rel: float = TOL_REL,
+               go_on: Callable[[], bool] | None = None) -> list[ModelFit | None]:
     """Fit ``layout`` from every start, side by side; one :class:`ModelFit` per start (None
     where the model cannot be evaluated; its ``n_params`` counts the ladder's ``2n`` and every
     fitted effect parameter, or ``n_ladder_params`` for the ladder when given).
@@ -314,6 +315,8 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
     tol_rel : float
         Tolerance of the network's transients (a screen may take a coarser one than the
         default; the models returned are evaluated at the default).
+    go_on : callable, optional
+        Whether the fit may take another round (:func:`~.lm.levenberg_marquardt`).
 
     Returns
     -------
@@ -331,7 +334,7 @@ def fit_starts(data: BundleData, noise: Mapping[str, float], layout: Layout,
     if x0.shape[1] == 0:
         res_x, work, conv = x0, 0, np.ones(len(starts), dtype=bool)
     else:
-        res = levenberg_marquardt(prob.residuals, x0, lo, hi, typ, rounds)
+        res = levenberg_marquardt(prob.residuals, x0, lo, hi, typ, rounds, go_on)
         res_x, work, conv = res.x, res.rows, res.converged
     out: list[ModelFit | None] = []
     for i in range(len(starts)):

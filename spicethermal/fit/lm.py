@@ -64,7 +64,8 @@ def _cost(r: NDArray) -> NDArray:
 def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLike,
                         lo: Sequence[float], hi: Sequence[float],
                         typical: Sequence[float] | None = None,
-                        rounds: int = MAX_ROUNDS) -> LMResult:
+                        rounds: int = MAX_ROUNDS,
+                        go_on: Callable[[], bool] | None = None) -> LMResult:
     """Minimise ``½|fun(x)|²`` from every start of ``x0`` ``(P, k)`` within ``[lo, hi]``.
 
     Parameters
@@ -81,6 +82,9 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
         Typical size of each parameter (finite-difference steps); default 1.
     rounds : int
         Rounds at most.
+    go_on : callable, optional
+        Asked before each round after the first: the fit stops where it is (its problems
+        not converged) when it says no (a budget of work spent).
 
     Returns
     -------
@@ -115,7 +119,7 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
     done_rounds = 0
     for done_rounds in range(1, rounds + 1):  # noqa: B007 - the count is returned
         idx = np.nonzero(active)[0]
-        if not idx.size:
+        if not idx.size or (done_rounds > 1 and go_on is not None and not go_on()):
             break
         trials = np.empty((idx.size, k))
         predicted = np.empty(idx.size)

@@ -314,12 +314,15 @@ def _form_fits(fits: Sequence[ModelFit], seeds: Sequence[Sequence[Mapping[str, f
 
 def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: int,
          short: Callable[[ModelFit], bool],
-         affords: Callable[[int], bool] = lambda cost: True) -> tuple[ModelFit, int]:
+         affords: Callable[[int], bool] = lambda cost: True,
+         last: int = 0) -> tuple[ModelFit, int, int]:
     """``form``'s fit on longer ladders while ``short(fit)`` holds of the best (it leaves a
     data set beyond its noise): one stage more, then another (:func:`_longer`), until
     :data:`~spicethermal.fit.joint.ORDER_PATIENCE` stages in a row lower nothing, or until
     the work left does not afford (``affords(cost)``) one more as costly as the last (the
-    first needs only some work left). The model's order was chosen without the effect, whose
+    first as costly as ``last``, the last one grown before, of another fit: with none, the
+    first needs only some work left); a longer ladder's fit stops where it is once the
+    work left affords nothing. The model's order was chosen without the effect, whose
     misfit may have taken or hidden stages. A longer ladder replaces the fit when its
     criterion (two parameters a stage) is lower.
 
@@ -332,6 +335,8 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
     short : callable
     affords : callable, optional
         Whether the work left affords a simulator cost (``engines.network.Meter.cost``).
+    last : int, optional
+        The cost of the last longer ladder grown before (0: none).
 
     Returns
     -------
@@ -339,13 +344,16 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
         ``form.fit`` itself when no longer ladder is better.
     int
         The work spent growing.
+    int
+        The cost of the last longer ladder (``last`` when none was grown).
     """
     n_points = sum(data.sizes().values())
     best = current = form.fit
-    misses = last = 0
+    misses = 0
     while short(best) and misses < ORDER_PATIENCE and affords(last):
         with metered() as meter:
-            longer = _longer(data, noise, current, rounds, form.screened)
+            longer = _longer(data, noise, current, rounds, form.screened,
+                             lambda m=meter: affords(m.cost))
         last = meter.cost
         if longer is None:
             break
@@ -354,7 +362,7 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
             best, misses = longer, 0
         else:
             misses += 1
-    return best, current.work - form.fit.work
+    return best, current.work - form.fit.work, last
 
 
 def _evaluated(data: BundleData, noise: Mapping[str, float], ladder: Cauer,
@@ -393,13 +401,15 @@ def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds:
 
 
 def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
-            rounds: int, seeds: Sequence[Mapping[str, float]]) -> ModelFit | None:
+            rounds: int, seeds: Sequence[Mapping[str, float]],
+            go_on: Callable[[], bool] | None = None) -> ModelFit | None:
     """``fit`` refitted on a ladder one stage longer, side by side from: the linear ladder of
     that order, with the last effect's values as they are and as each of ``seeds`` (its
     screened values: a short ladder may have pulled the effect far from them); and the fit's
     own ladder with a stage more in each place it may go (:func:`~.joint.stage_more`: a
     stage the effect's misfit hid is often outside the linear ladder's span, as a fast
-    stage under a masked electrical transient). The best."""
+    stage under a masked electrical transient). The best; the fit stops where it is when
+    ``go_on()`` says no (:func:`~.joint.fit_starts`)."""
     n = fit.ladder.order + 1
     if n > MAX_ORDER:
         return None
@@ -409,8 +419,8 @@ def _longer(data: BundleData, noise: Mapping[str, float], fit: ModelFit,
     if ladder is not None:
         starts += [Start(ladder, values)] + [Start(ladder, (*values[:-1], dict(s)))
                                              for s in seeds]
-    got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds)
-           if m is not None]
+    got = [m for m in fit_starts(data, noise, Layout(_slots(fit), n), starts, rounds,
+                                 go_on=go_on) if m is not None]
     if not got:
         return None
     best = min(got, key=lambda m: m.chi2_total)
