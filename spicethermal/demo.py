@@ -268,7 +268,7 @@ def run_demo(out: str | Path = "out/demo", seed: int = 1, quiet: bool = False) -
         f"Table 2 in ngspice: RMS {table2_cmp.rms_k:.2f} K, worst {table2_cmp.max_abs_k:.2f} K "
         f"over {len(table2_cmp.points)} PWM points" + _circuit_summary(law_fit, circuit,
                                                                      table2_cmp),
-        f"diagnosis: {diag.verdict_effect or 'no catalogued effect'} — {diag.verdict_reason}",
+        f"diagnosis: {diag.verdict_effect or 'no catalogued effect'} — {diag.verdict.reason}",
         (f"with {', '.join(diag.effects)}: RMS {before.rms_k:.3g} K -> {after.rms_k:.3g} K "
          f"({before.rms_k / max(after.rms_k, 1e-12):.3g}x lower)") if better is not None else
         f"model RMS over all data sets {before.rms_k:.2f} K (nothing to add)",

@@ -114,17 +114,30 @@ def scripted(monkeypatch):
     return run
 
 
-def test_a_further_effect_that_leaves_a_structured_residual_too_is_not_added(scripted):
-    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 3.0), 200.0))
+def test_a_further_effect_whose_fall_does_not_stand_out_of_the_misfit_it_leaves_is_not_added(
+        scripted):
+    """The second effect takes the trend left from 8 noises to 6: a fall of χ² by 388, but
+    the residual it leaves is that trend still, and the fall weighed under its correlation
+    is below the criterion's two parameters (rules.correlated_gain)."""
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 6.0), 200.0))
     assert d.effects == [FIRST.name]
     assert d.verdict.cls == "approximate"
     # the verdict says what the refused effect would do, and why it is not named
     assert (f"{SECOND.name} would lower the criterion by a further 200.0 and remove 90 % of "
-            "the misfit left, but it leaves a structured residual too: not named, since any "
-            f"flexible effect takes part of what the approximate form of {FIRST.name} leaves"
-            in d.verdict.reason)
+            "the misfit left, but it leaves a structured residual too, and weighed under that "
+            "residual's correlation by -0.2 only: not named, since any flexible effect takes "
+            f"part of what the approximate form of {FIRST.name} leaves" in d.verdict.reason)
     refused = d.to_dict()["refused"]  # and the document holds its numbers
     assert refused["effect"] == SECOND.name and refused["delta_bic"] == 200.0
+    assert round(refused["weighed_delta_bic"], 1) == -0.2
+
+
+def test_a_further_effect_whose_fall_stands_out_of_the_misfit_it_leaves_is_added(scripted):
+    """From a trend of 8 noises to one of 2: beyond the noise still, but the fall weighed
+    under the correlation of what is left is decisive (270)."""
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 2.0), 200.0))
+    assert d.effects == [FIRST.name, SECOND.name]
+    assert d.verdict.cls == "approximate" and d.to_dict()["refused"] is None
 
 
 def test_a_further_effect_that_brings_every_data_set_to_its_noise_is_added(scripted):
@@ -388,7 +401,7 @@ def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scr
     set to it: those steps are taken, and the verdict says why."""
     window = Effect.create("sample-window", window_s=1e-4)
     after = {(): [(_fit((FIRST,), 8.0), 5000.0), (_fit((SECOND,), 9.0), 4000.0)],
-             (FIRST.name,): [(_fit((FIRST, window), 3.0), 300.0)],
+             (FIRST.name,): [(_fit((FIRST, window), 6.0), 300.0)],
              (SECOND.name,): [(_fit((SECOND, window), 0.0), 900.0)]}
     d = scripted(after=after)
     assert d.effects == [SECOND.name, window.name] and d.verdict.cls == "named"
@@ -397,7 +410,7 @@ def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scr
     assert (f"{SECOND.name} is added first although {FIRST.name} alone lowers the criterion "
             f"more (by 1000.0)") in d.verdict.reason
     # when the next best's steps end beyond the noise too, the best's stand
-    after[(SECOND.name,)] = [(_fit((SECOND, window), 2.0), 900.0)]
+    after[(SECOND.name,)] = [(_fit((SECOND, window), 8.0), 900.0)]
     d = scripted(after=after)
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
 

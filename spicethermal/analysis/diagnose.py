@@ -19,8 +19,10 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    settled: refitted with its PWM readings exact (:func:`~spicethermal.fit.search.settle`;
    the fits evaluate them in a closed form, first order in the ripple), the next step's
    fits holding that correction. An effect after a catalogued one is added only when it
-   brings every data set to its noise (the verdict says what the best one refused would
-   do). Until every data set is at its noise, nothing is decisive, or
+   brings every data set to its noise or its fall of the criterion is decisive still under
+   the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`; the verdict
+   says what the best one refused would do).
+   Until every data set is at its noise, nothing is decisive, or
    :data:`.rules.MAX_EFFECTS` effects are named. A rival chosen stays in the model like any
    effect (a later backward check may drop it); one left in the final model makes the
    verdict *none*. When the steps end beyond the noise, they are run again with the first
@@ -33,15 +35,15 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    ``traits.needs`` are missing is never named alone; one they do not show, although in the
    bundle, is not named at all.
 
-The work is counted (model evaluations, and the simulator's cost against
-:data:`.rules.WORK_BUDGET`), never timed: the same bundle gives the same verdict on every
-machine and under any load. Steps after the first fit the effects in the order of the first
-step's ranking; a step the budget cut short is taken only when its best candidate brings
-every data set to its noise (those left could at most tie with it).
+The work is counted against :data:`.rules.WORK_BUDGET`, never timed: the same bundle gives
+the same verdict on every machine and under any load. Later steps fit the effects in the first
+step's order; a step the budget cut short is taken only when its best brings every data set
+to its noise (those left could at most tie with it).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -83,14 +85,13 @@ from .rules import (
     explained,
     shows,
 )
-from .verdict import beyond, short, verdict
+from .verdict import beyond, short, verdict, weighed_fall
 from .where import localise
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..io.bundle import Bundle
 
 __all__ = ["diagnose", "fit_with_effects"]
-
 
 
 def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, dict]:
@@ -112,16 +113,9 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
             if fit is None:
                 raise FitError(f"{data.source}: the model does not simulate these data")
         noise = noise_estimates(data, fit.predictions)
-    # the criterion's χ² under the final noise
-    assert fit is not None
-    fit = _rechi(data, fit, noise)
-    return fit, noise
-
-
-def _rechi(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
-    chi2 = {n: float(np.sum(((fit.predictions[n] - data.measured(n)) / noise[n]) ** 2))
-            for n in data.datasets}
-    return replace(fit, chi2=chi2)
+    assert fit is not None  # the criterion's χ² under the final noise
+    return replace(fit, chi2={n: float(np.sum(((fit.predictions[n] - data.measured(n))
+                                               / noise[n]) ** 2)) for n in data.datasets}), noise
 
 
 def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Sequence[ModelFit],
@@ -238,10 +232,6 @@ class _Context:
         return self.meter.cost + cost < self.budget
 
     @property
-    def spent(self) -> bool:
-        return not self.affords()
-
-    @property
     def budget_text(self) -> str:
         return f"the work budget (a cost of {self.budget:,})"
 
@@ -250,9 +240,8 @@ class _Context:
 class _Path:
     """The steps of one forward selection, the data its last model was settled on
     (:func:`~spicethermal.fit.search.settle`), the first step's candidates, the work (model
-    evaluations), why the work budget stopped it ("" when it did not), the best further
-    candidate it refused because it leaves a structured residual too (None when none), and
-    the candidates a step it took left unweighed when the budget was spent ("" when none)."""
+    evaluations), why the budget stopped it, the best further candidate it refused (None:
+    none) and its :func:`~.verdict.weighed_fall`, and what a step it took left unweighed."""
 
     data: BundleData
     steps: list[Step] = field(default_factory=list)
@@ -260,6 +249,7 @@ class _Path:
     work: int = 0
     stopped: str = ""
     refused: Candidate | None = None
+    weighed: float = 0.0
     unweighed: str = ""
 
 
@@ -288,7 +278,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     alt = next((i for i, c in enumerate(path.first) if i and c.catalogued
                 and decisive(0.0, -c.delta_bic, c.explained)), None)
     if path.steps and path.steps[0].chosen.catalogued and not stopped \
-            and short(data, final) and alt is not None and not ctx.spent:
+            and short(data, final) and alt is not None and ctx.affords():
         # the best effect alone may be the one that leaves no second effect a way to the
         # noise (its form, or the ladder, took part of the other's misfit): the next best
         # effect first, when its steps bring every data set to the noise
@@ -308,8 +298,9 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     further = path.refused
     refused = (f"{further.name} would lower the criterion by a further {further.delta_bic:.1f} "
                f"and remove {100 * max(further.explained, 0):.0f} % of the misfit left, but it "
-               "leaves a structured residual too: not named, since any flexible effect takes "
-               f"part of what the approximate form of {path.steps[-1].chosen.name} leaves"
+               "leaves a structured residual too, and weighed under that residual's correlation "
+               f"by {path.weighed:.1f} only: not named, since any flexible effect takes part of "
+               f"what the approximate form of {path.steps[-1].chosen.name} leaves"
                ) if further else ""
     note = "; ".join(t for t in (refused, revised, stopped, unweighed) if t)
     result = verdict(path.data, base, path.steps, noise, note)
@@ -318,7 +309,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
                      where, WorkSpent(meter.solves, budget, stopped or unweighed, meter.steps,
                                meter.cost),
-                     further)
+                     further, path.weighed)
 
 
 def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
@@ -333,7 +324,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
     current, cmp = base, base_cmp
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS and short(data, current):
         k = len(steps) + 1
-        if steps and ctx.spent:
+        if steps and not ctx.affords():
             path.stopped = f"{ctx.budget_text} was spent after step {k - 1}"
             break
         if not steps and path.first:
@@ -346,7 +337,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             for p in sorted(ctx.plugins, key=lambda p: rank.get(p.name, len(rank))):
                 if p.name in ctx.skipped or current.effect(p.name):
                     continue
-                if ctx.spent:
+                if not ctx.affords():
                     unfitted.append(p.name)
                     continue
                 ctx.say(f"step {k}: {p.name}")
@@ -382,12 +373,14 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         if not cands or not decisive(0.0, -cands[i].delta_bic, cands[i].explained):
             break
         chosen = cands[i]
-        if chosen.catalogued and any(s.status != RIVAL for s in steps) \
-                and short(data, chosen.fit):
-            # a further effect that leaves a structured residual too: the effect before it
-            # is an approximate form, and any flexible effect explains part of what the
-            # approximation leaves, which is no evidence of its physics
-            path.refused = chosen
+        weighed = weighed_fall(data, current, chosen.fit, noise) \
+            if chosen.catalogued and any(s.status != RIVAL for s in steps) \
+            and short(data, chosen.fit) else math.inf
+        if weighed < DECISIVE_BIC:
+            # a further effect that leaves a structured residual too: any flexible effect
+            # explains part of what an approximate form leaves, no evidence of its physics
+            # unless its fall stands out of the correlated misfit it leaves
+            path.refused, path.weighed = chosen, weighed
             break
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):

@@ -1,5 +1,5 @@
 """The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
-verdict; its text report and its ``spicethermal-diagnosis/6`` document
+verdict; its text report and its ``spicethermal-diagnosis/7`` document
 (docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
@@ -25,7 +25,7 @@ __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIV
 
 #: The document's format; version 6 adds the work's steps and cost, which its budget now
 #: bounds (docs/diagnosis-json.md), and keeps every other key of versions 1 to 5.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/6"
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/7"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
 RIVAL, UNSHOWN = "rival", "unshown"
@@ -145,7 +145,7 @@ class WorkSpent:
 @dataclass(frozen=True, eq=False)
 class Diagnosis(JsonDocument):
     """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
-    report, :meth:`to_dict` the ``spicethermal-diagnosis/6`` document, :meth:`plot` the
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/7`` document, :meth:`plot` the
     figures."""
 
     source: str
@@ -163,17 +163,16 @@ class Diagnosis(JsonDocument):
     where: tuple[str, ...] = ()
     spent: WorkSpent = field(default_factory=WorkSpent)
     #: The best further candidate the search refused because it leaves a structured residual
-    #: too (weighed on the last step's model), or None.
+    #: too (weighed on the last step's model), or None ...
     refused: Candidate | None = None
+    #: ... and how much it lowers the criterion weighed under the correlation of that
+    #: residual (:func:`.rules.correlated_gain`).
+    refused_weighed: float = 0.0
 
     # -- views -------------------------------------------------------------------------------
     @property
     def verdict_effect(self) -> str | None:
         return self.verdict.effect
-
-    @property
-    def verdict_reason(self) -> str:
-        return self.verdict.reason
 
     @property
     def effects(self) -> list[str]:
@@ -219,7 +218,7 @@ class Diagnosis(JsonDocument):
 
     # -- document -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/6`` document."""
+        """The ``spicethermal-diagnosis/7`` document."""
         worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
                  for p in self.baseline.worst(WORST_POINTS)]
         fit = self.final_fit
@@ -236,7 +235,9 @@ class Diagnosis(JsonDocument):
                           "max_abs_k": _finite(self.final.max_abs_k),
                           "chi2": {k: _finite(v) for k, v in fit.chi2.items()}},
                 "verdict": self.verdict.to_dict(),
-                "refused": self.refused.to_dict() if self.refused is not None else None,
+                "refused": {**self.refused.to_dict(),
+                            "weighed_delta_bic": _finite(self.refused_weighed)}
+                if self.refused is not None else None,
                 "skipped": dict(self.skipped), "work": {"rows": self.work,
                                                   "solves": self.spent.solves,
                                                   "steps": self.spent.steps,

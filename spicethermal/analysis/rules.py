@@ -20,7 +20,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["AT_NOISE_Z", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS", "MIN_APPROXIMATE",
            "MIN_EXPLAINED", "NOISE_EFFICIENCY", "NOISE_FLOOR_K", "NOISE_KEPT", "POLY_MAX_DEGREE",
            "POLY_P", "REFINE_ROUNDS",
-           "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "decisive",
+           "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "correlated_gain",
+           "decisive",
            "excess", "explained", "runs_z", "shows"]
 
 # -- noise ------------------------------------------------------------------------------------
@@ -86,6 +87,20 @@ REFINE_ROUNDS = 30
 #: taken; any other bounded fit that has started finishes (a diagnosis may overrun the budget
 #: by one form's fits, one round of a longer ladder's, or one step's refit and settling).
 WORK_BUDGET = 8_000_000
+
+
+def correlated_gain(before: NDArray, after: NDArray) -> float:
+    """The fall of χ² from residual ``before`` to ``after`` (in noises, data order) weighed
+    under the correlation of the misfit ``after`` leaves: generalised least squares with
+    first-order autoregressive errors (Cochrane–Orcutt). Both are prewhitened by ``after``'s
+    lag-one autocorrelation ρ in [0, 0.99] (``e_i = r_i − ρ r_(i−1)``, ``e_0 = √(1 − ρ²)
+    r_0``) and the fall divided by the variance of ``after``'s innovations, at least 1: a
+    smooth misfit left is one error repeated, a white one the plain fall."""
+    a, b = np.asarray(after, dtype=float), np.asarray(before, dtype=float)
+    norm = float(a @ a)
+    rho = min(max(float(a[1:] @ a[:-1]) / norm, 0.0), 0.99) if norm > 0 and a.size > 1 else 0.0
+    ea, eb = ([math.sqrt(1.0 - rho * rho) * r[0], *(r[1:] - rho * r[:-1])] for r in (a, b))
+    return float(np.dot(eb, eb) - np.dot(ea, ea)) / max(float(np.dot(ea, ea)) / a.size, 1.0)
 
 
 def runs_z(residuals: NDArray) -> float:

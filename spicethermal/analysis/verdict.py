@@ -4,6 +4,7 @@ noise, which class the steps earn, and the reasons, generated from the numbers.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -20,14 +21,14 @@ from .diagnosis import (
     Verdict,
     last_model,
 )
-from .rules import MIN_APPROXIMATE, beyond_noise, explained
+from .rules import MIN_APPROXIMATE, beyond_noise, correlated_gain, explained
 from .where import localise
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..fit.joint import ModelFit
     from ..fit.measurement import BundleData
 
-__all__ = ["beyond", "short", "verdict"]
+__all__ = ["beyond", "short", "verdict", "weighed_fall"]
 
 
 def beyond(data: BundleData, fit: ModelFit) -> dict[str, bool]:
@@ -39,6 +40,16 @@ def beyond(data: BundleData, fit: ModelFit) -> dict[str, bool]:
 def short(data: BundleData, fit: ModelFit) -> bool:
     """Whether ``fit`` leaves a data set of ``data`` beyond its noise."""
     return any(beyond(data, fit).values())
+
+
+def weighed_fall(data: BundleData, before: ModelFit, after: ModelFit, noise: dict) -> float:
+    """How much ``after`` lowers the criterion from ``before`` when each data set's fall of
+    χ² is weighed under the correlation of the misfit ``after`` leaves
+    (:func:`.rules.correlated_gain`)."""
+    fall = sum(correlated_gain((before.predictions[n] - data.measured(n)) / noise[n],
+                               (after.predictions[n] - data.measured(n)) / noise[n])
+               for n in data.datasets)
+    return fall - (after.n_params - before.n_params) * math.log(sum(data.sizes().values()))
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
