@@ -20,14 +20,13 @@ falls when it is added. The procedure, stated once (docs/diagnosis.md):
    the fits evaluate them in a closed form, first order in the ripple), the next step's
    fits holding that correction. An effect after a catalogued one is added only when it
    brings every data set to its noise or its fall of the criterion is decisive still under
-   the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`; the verdict
-   says what the best one refused would do).
-   Until every data set is at its noise, nothing is decisive, or
-   :data:`.rules.MAX_EFFECTS` effects are named. A rival chosen stays in the model like any
-   effect (a later backward check may drop it); one left in the final model makes the
-   verdict *none*. When the steps end beyond the noise, they are run again with the first
-   step's next best catalogued effect added first, and replaced when they bring every data
-   set to its noise at a BIC lower by the margin.
+   the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`; the verdict says
+   what the best one refused would do). Until every data set is at its noise, nothing is
+   decisive, or :data:`.rules.MAX_EFFECTS` effects are named. A rival chosen stays in the
+   model like any effect (a later backward check may drop it); one left in the final model
+   makes the verdict *none*. When the steps end beyond the noise, they are run again with
+   the first step's next best catalogued effect added first, and replaced when they bring
+   every data set to its noise at a BIC lower by the margin.
 5. **Verdict** (:func:`.verdict.verdict`): *named* when the effects bring every data set to its
    noise; *approximate* when they leave a structured residual but remove
    :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
@@ -373,9 +372,9 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         if not cands or not decisive(0.0, -cands[i].delta_bic, cands[i].explained):
             break
         chosen = cands[i]
+        further = chosen.catalogued and any(s.status != RIVAL for s in steps)
         weighed = weighed_fall(data, current, chosen.fit, noise) \
-            if chosen.catalogued and any(s.status != RIVAL for s in steps) \
-            and short(data, chosen.fit) else math.inf
+            if further and short(data, chosen.fit) else math.inf
         if weighed < DECISIVE_BIC:
             # a further effect that leaves a structured residual too: any flexible effect
             # explains part of what an approximate form leaves, no evidence of its physics

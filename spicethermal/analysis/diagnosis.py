@@ -23,8 +23,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
            "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent", "last_model"]
 
-#: The document's format; version 6 adds the work's steps and cost, which its budget now
-#: bounds (docs/diagnosis-json.md), and keeps every other key of versions 1 to 5.
+#: The document's format; version 7 adds the refused candidate's weighed fall, which decides
+#: it (docs/diagnosis-json.md), and keeps every other key of versions 1 to 6.
 DIAGNOSIS_FORMAT = "spicethermal-diagnosis/7"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
