@@ -42,21 +42,18 @@ to its noise (those left could at most tie with it).
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..core.errors import DataFormatError, FitError
 from ..effects.base import CALIBRATION, EffectPlugin, overrides
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
 from ..engines.network import Meter, metered
-from ..fit.joint import Layout, ModelFit, Start, bic, fit_baseline, fit_starts
+from ..fit.joint import Layout, ModelFit, Start, bic, chi2_by_set, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
 from ..fit.search import FormFit, evidence, fit_effect, grow, refit, settle, without
 from ..model import ThermalModel
@@ -113,8 +110,7 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
                 raise FitError(f"{data.source}: the model does not simulate these data")
         noise = noise_estimates(data, fit.predictions)
     assert fit is not None  # the criterion's χ² under the final noise
-    return replace(fit, chi2={n: float(np.sum(((fit.predictions[n] - data.measured(n))
-                                               / noise[n]) ** 2)) for n in data.datasets}), noise
+    return replace(fit, chi2=chi2_by_set(data, fit.predictions, noise)), noise
 
 
 def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Sequence[ModelFit],
@@ -372,15 +368,15 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         if not cands or not decisive(0.0, -cands[i].delta_bic, cands[i].explained):
             break
         chosen = cands[i]
-        further = chosen.catalogued and any(s.status != RIVAL for s in steps)
-        weighed = weighed_fall(data, current, chosen.fit, noise) \
-            if further and short(data, chosen.fit) else math.inf
-        if weighed < DECISIVE_BIC:
+        if chosen.catalogued and any(s.status != RIVAL for s in steps) \
+                and short(data, chosen.fit):
             # a further effect that leaves a structured residual too: any flexible effect
             # explains part of what an approximate form leaves, no evidence of its physics
             # unless its fall stands out of the correlated misfit it leaves
-            path.refused, path.weighed = chosen, weighed
-            break
+            weighed = weighed_fall(data, current, chosen.fit, noise)
+            if weighed < DECISIVE_BIC:
+                path.refused, path.weighed = chosen, weighed
+                break
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics

@@ -4,11 +4,11 @@ noise, which class the steps earn, and the reasons, generated from the numbers.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from ..fit.joint import penalty
 from .compare import comparison_of
 from .diagnosis import (
     AMBIGUOUS,
@@ -49,7 +49,7 @@ def weighed_fall(data: BundleData, before: ModelFit, after: ModelFit, noise: dic
     fall = sum(correlated_gain((before.predictions[n] - data.measured(n)) / noise[n],
                                (after.predictions[n] - data.measured(n)) / noise[n])
                for n in data.datasets)
-    return fall - (after.n_params - before.n_params) * math.log(sum(data.sizes().values()))
+    return fall - penalty(after.n_params - before.n_params, sum(data.sizes().values()))
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,

@@ -39,8 +39,9 @@ from .problem import MIN_TAU_RATIO
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-__all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "fit_baseline", "fit_starts",
-           "reference_order", "stage_more", "start_ladders", "tau_range"]
+__all__ = ["MAX_ORDER", "Layout", "ModelFit", "Start", "bic", "chi2_by_set", "fit_baseline",
+           "fit_starts", "penalty", "reference_order", "stage_more", "start_ladders",
+           "tau_range"]
 
 #: The baseline's order is searched up to this many stages (a distributed line or a continuous
 #: spectrum, read quietly, needs ten or more) ...
@@ -109,7 +110,19 @@ def bic(fit: ModelFit, n_points: int) -> float:
     -------
     float
     """
-    return fit.chi2_total + fit.n_params * math.log(max(n_points, 2))
+    return fit.chi2_total + penalty(fit.n_params, n_points)
+
+
+def penalty(n_params: int, n_points: int) -> float:
+    """``k ln N``: what the criterion (:func:`bic`) charges for ``n_params`` parameters."""
+    return n_params * math.log(max(n_points, 2))
+
+
+def chi2_by_set(data: BundleData, predictions: Mapping[str, NDArray],
+                noise: Mapping[str, float]) -> dict[str, float]:
+    """Each data set's χ² of ``predictions`` against ``data``, weighed by its noise."""
+    return {n: float(np.sum(((p - data.measured(n)) / noise[n]) ** 2))
+            for n, p in predictions.items()}
 
 
 @dataclass(frozen=True)
@@ -256,8 +269,7 @@ class _Problem:
         read = self._read(pred)[0]
         cuts = np.cumsum([0, *self.sizes])
         preds = {n: read[cuts[i]:cuts[i + 1]] for i, n in enumerate(self.names)}
-        chi2 = {n: float(np.sum(((preds[n] - self.data.measured(n)) / noise[n]) ** 2))
-                for n in self.names}
+        chi2 = chi2_by_set(self.data, preds, noise)
         effects = []
         for (p, form), values in zip(self.layout.slots, self.values, strict=True):
             term = next(t for t in devices + measures if t.plugin is p)

@@ -31,6 +31,7 @@ from .joint import (
     ModelFit,
     Start,
     bic,
+    chi2_by_set,
     fit_starts,
     reference_order,
     stage_more,
@@ -369,8 +370,8 @@ def _evaluated(data: BundleData, noise: Mapping[str, float], ladder: Cauer,
                model: ModelFit) -> ModelFit:
     """``model``'s effects on ``ladder``, evaluated (nothing fitted)."""
     pred = predict_model(data, ladder, model.effects)
-    chi2 = {n: float(np.sum(((pred[n] - data.measured(n)) / noise[n]) ** 2)) for n in pred}
-    return ModelFit(ladder, model.effects, pred, chi2, model.n_params, 0, True)
+    return ModelFit(ladder, model.effects, pred, chi2_by_set(data, pred, noise),
+                    model.n_params, 0, True)
 
 
 def _refine(data: BundleData, noise: Mapping[str, float], fit: ModelFit, rounds: int,
