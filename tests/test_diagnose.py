@@ -98,3 +98,19 @@ def test_the_command_prints_the_report_the_document_and_the_figures(tmp_path, ca
     text = capsys.readouterr().out
     assert "RMS staircase: baseline" in text and "verdict: named — sample-window" in text
     assert np.isfinite(doc["final"]["rms_k"])
+
+
+def test_the_command_takes_a_work_budget_and_says_when_it_stopped_the_search(capsys):
+    sample = str(DATA / "sample_bundle")
+    assert main(["diagnose", sample, "--budget", "1k", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["work"]["budget"] == 1000 and "work budget" in doc["work"]["stopped"]
+    assert doc["verdict"]["class"] == "none" and "work budget" in doc["verdict"]["reason"]
+    assert main(["diagnose", sample, "--budget", "1k"]) == 0
+    assert "e.g. --budget 4000," in capsys.readouterr().out
+    assert main(["diagnose", str(DATA / "actuator_table2.csv"), "--budget", "1k"]) == 2
+    assert capsys.readouterr().err.strip().endswith(
+        "--budget applies to a bundle, not to a table of readings")
+    with pytest.raises(SystemExit) as err:
+        main(["diagnose", sample, "--budget", "0"])
+    assert err.value.code == 2 and "must be >= 1" in capsys.readouterr().err
