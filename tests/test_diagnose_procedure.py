@@ -437,25 +437,3 @@ def test_a_candidate_cut_between_its_forms_stops_the_step(scripted, monkeypatch)
     assert not d.steps and d.verdict.cls == "none"
     assert d.spent.stopped.startswith(f"the work budget (a cost of {d.spent.budget:,}) was "
                                       "spent in step 1 before ")
-
-
-def test_the_least_heated_curves_ladder_screens_the_forms_until_one_is_refitted(monkeypatch):
-    """The first form is screened on the model's ladder and on the least heated curve's
-    linear ladder; the forms after it, once a form is refitted jointly (which frees the
-    ladder of what the model's ladder took), on the model's ladder and the refit's."""
-    base, noise = procedure._baseline(DATA, None)
-    ref = Cauer([21.0], [1.1e-2])  # the least heated curve's ladder, told apart
-    monkeypatch.setattr(search, "start_ladders", lambda data, orders: {1: ref})
-    seen, real = [], search.fit_starts
-
-    def spy(data, noise, layout, starts, *a, **k):
-        if layout.hold_ladder:  # a screen
-            seen.append((layout.slots[-1][1], {tuple(s.ladder.r) for s in starts}))
-        return real(data, noise, layout, starts, *a, **k)
-
-    monkeypatch.setattr(search, "fit_starts", spy)
-    plugin = Effect.create("electrical-transient").plugin
-    fits, done = search.fit_effect(DATA, noise, base, plugin, 3, 3)
-    assert done and len(fits) == len(plugin.forms) > 1 and base.ladder.order == 1
-    assert [form for form, ladders in seen if ladders == {(21.0,)}] == [plugin.forms[0]]
-    assert [form for form, _ in seen] == [f for f in plugin.forms for _ in (0, 1)]

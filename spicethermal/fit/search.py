@@ -206,9 +206,8 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     docstring); forms whose guess gives no start are left out. Every form is screened on the
     model's ladder from the plugin's starts (for every variant in the first form, for the
     best variants in the forms that share them) and refitted jointly from its best screened
-    point. The forms are screened on the least heated curve's linear ladder too until one is
-    refitted jointly; a form after that is screened instead on the best joint refit's ladder
-    from that refit's own values, and refitted from there when that screen is better.
+    point; a form after the first is also screened on the best joint refit's ladder from
+    that refit's own values, and refitted from there when that screen is better.
 
     Parameters
     ----------
@@ -251,9 +250,8 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         return got, sum(m.work for m in got if m is not None)
 
     # the model's ladder took some of the effect into its own values (a band's heat into its
-    # capacities, a coefficient's rise into its resistances): until a form is refitted jointly
-    # (which frees the ladder of it), the effect is also screened on the linear ladder of the
-    # least heated curve, which the effects change least
+    # capacities, a coefficient's rise into its resistances): the effect is also screened on
+    # the linear ladder of the least heated curve, which the effects change least
     ref = start_ladders(data, [model.ladder.order]).get(model.ladder.order)
     at_ref = _evaluated(data, noise, ref, model) if ref is not None else None
     ev_ref = evidence(data, at_ref, noise) if at_ref is not None else None
@@ -269,7 +267,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         if not pairs:
             continue
         got, work = screen(model, form, pairs)
-        if at_ref is not None and ev_ref is not None and lead is None:
+        if at_ref is not None and ev_ref is not None:
             more = [(v, s) for v in variants for s in plugin.guess(form, v, ev_ref)]
             if more:
                 got_ref, spent = screen(at_ref, form, more)
