@@ -17,7 +17,8 @@ from spicethermal.analysis.diagnosis import Candidate
 from spicethermal.core.errors import FitError
 from spicethermal.core.ladder import Cauer
 from spicethermal.effects import CATALOGUE, Effect
-from spicethermal.engines.network import STEP_SOLVES, NetworkBatch, metered
+from spicethermal.engines.meter import STEP_SOLVES, metered
+from spicethermal.engines.network import NetworkBatch
 from spicethermal.fit.joint import ModelFit
 from spicethermal.fit.measurement import BundleData
 from spicethermal.fit.search import FormFit

@@ -8,7 +8,8 @@ import pytest
 
 from spicethermal.core.ladder import Foster
 from spicethermal.effects import Effect
-from spicethermal.engines.network import NetworkBatch, metered
+from spicethermal.engines.meter import metered
+from spicethermal.engines.network import NetworkBatch
 from spicethermal.engines.pwm import stage_peaks, steady_state
 from spicethermal.fit.forward import (
     EXACT_TOL_K,

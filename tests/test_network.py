@@ -12,7 +12,8 @@ from scipy.special import lambertw
 
 from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect
-from spicethermal.engines.network import STEP_SOLVES, NetworkBatch, metered
+from spicethermal.engines.meter import STEP_SOLVES, metered
+from spicethermal.engines.network import NetworkBatch
 from spicethermal.validation.network import LatentHeat, Network, ResistanceLaw
 
 R4, C4 = (4.0, 12.0, 40.0, 90.0), (2e-5, 4e-4, 8e-3, 0.3)

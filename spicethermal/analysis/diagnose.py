@@ -52,7 +52,7 @@ from ..core.errors import DataFormatError, FitError
 from ..effects.base import CALIBRATION, EffectPlugin, overrides
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
-from ..engines.network import Meter, metered
+from ..engines.meter import Meter, metered
 from ..fit.joint import Layout, ModelFit, Start, bic, chi2_by_set, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
 from ..fit.search import FormFit, evidence, fit_effect, grow, refit, settle, without

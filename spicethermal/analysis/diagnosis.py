@@ -131,7 +131,7 @@ class Verdict:
 
 @dataclass(frozen=True)
 class WorkSpent:
-    """The simulator's work a diagnosis spent (:func:`spicethermal.engines.network.metered`):
+    """The simulator's work a diagnosis spent (:func:`spicethermal.engines.meter.metered`):
     network solves, the steps they were done in and their cost, the budget of that cost, and
     why the budget stopped the search ("" when it did not)."""
 

@@ -75,8 +75,8 @@ MAX_EFFECTS = 3
 SCREEN_ROUNDS = 15
 #: Rounds of a candidate's joint refit with the ladder and every other effect.
 REFINE_ROUNDS = 30
-#: The simulator's cost (:func:`spicethermal.engines.network.metered`: network solves and
-#: :data:`~spicethermal.engines.network.STEP_SOLVES` for each batched step) one diagnosis may
+#: The simulator's cost (:func:`spicethermal.engines.meter.metered`: network solves and
+#: :data:`~spicethermal.engines.meter.STEP_SOLVES` for each batched step) one diagnosis may
 #: spend. A unit takes 3 to 4 µs of CPU on a quiet 2-core machine of the bench's kind and 4 to
 #: 7.5 µs with two diagnoses at once (measured over the 89 bundles of a development seed; the
 #: slowest units are local temperature coefficients, whose terms cost twice as much a member):

@@ -37,17 +37,15 @@ A linear network's Foster form (:meth:`NetworkBatch.foster`) comes from the same
 
 Every response, steady state aside, goes through the modes of frozen networks, a batch at a
 time: the number of those *solves* (one member's network, in its modes) and of the batched
-*steps* they are done in is the simulator's work, which :func:`metered` counts, and their
-cost (:data:`STEP_SOLVES`) is proportional to the CPU time it takes, whatever the network's
-order and the effects (a model evaluation takes one step or thousands).
+*steps* they are done in is the simulator's work, which :mod:`~spicethermal.engines.meter`
+counts; its cost is proportional to the CPU time it takes, whatever the network's order and
+the effects (a model evaluation takes one step or thousands).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
-from contextvars import ContextVar
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -56,13 +54,14 @@ import numpy as np
 from ..core.ladder import Cauer, Foster
 from ..effects.base import DeviceEffect, overrides, scalar_params
 from .cauer import as_cauer
+from .meter import charge
 
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
     from ..effects import Effect
 
-__all__ = ["STEP_SOLVES", "TOL_REL", "DeviceTerm", "Meter", "NetworkBatch", "metered"]
+__all__ = ["TOL_REL", "DeviceTerm", "NetworkBatch"]
 
 #: A transient step is accepted when its predictor and corrector agree within this fraction
 #: of the largest node rise (and :data:`TOL_ABS_K`).
@@ -76,52 +75,6 @@ STEADY_ITER, STEADY_TOL = 40, 1e-12
 MAX_STEPS, GROWTH, MAX_REJECTED = 20000, 4.0, 25
 #: numpy's generalized ufunc behind ``linalg.eigh`` (lower triangle), when it has one.
 _EIGH_LO = getattr(getattr(np.linalg, "_umath_linalg", None), "eigh_lo", None)
-
-
-#: What one batched step of the simulator costs beyond its members, in solves: a step's numpy
-#: calls (a few dozen on small arrays) take about 200 µs whatever the batch, where each member
-#: adds 3 to 4 µs (its modes, its effects' terms), fitted over the diagnoses of eight bundles
-#: on the bench's 2-core machine. A batch of a few members costs its step, not its members.
-STEP_SOLVES = 60
-
-
-@dataclass(eq=False)
-class Meter:
-    """The simulator's work counted by :func:`metered`: the network *solves* (one member's
-    frozen network, in its modes), the batched *steps* they were done in (one frozen network
-    per member each), and their ``cost``, ``solves + STEP_SOLVES × steps``, proportional to
-    the CPU time they take."""
-
-    solves: int = 0
-    steps: int = 0
-
-    @property
-    def cost(self) -> int:
-        return self.solves + STEP_SOLVES * self.steps
-
-
-_METER: ContextVar[Meter | None] = ContextVar("spicethermal_network_meter", default=None)
-
-
-@contextmanager
-def metered() -> Iterator[Meter]:
-    """Count the network solves done inside the ``with`` block (in this thread or task); an
-    enclosing count gets them too.
-
-    >>> with metered() as meter:
-    ...     _ = NetworkBatch(np.ones((3, 2)), np.ones((3, 2))).foster()
-    >>> meter.solves, meter.steps, meter.cost
-    (3, 1, 63)
-    """
-    meter, outer = Meter(), _METER.get()
-    token = _METER.set(meter)
-    try:
-        yield meter
-    finally:
-        _METER.reset(token)
-        if outer is not None:
-            outer.solves += meter.solves
-            outer.steps += meter.steps
 
 
 @dataclass(frozen=True, eq=False)
@@ -246,8 +199,8 @@ class NetworkBatch:
                   dtheta: NDArray | float) -> NDArray:
         """Capacity ``(B, n)`` over a step: the linear one plus the secant of the stored heat
         between its ends (``heat_a``, ``heat_b``: :meth:`stored` there; ``dtheta`` the change
-        of temperature); NaN for a member whose capacity falls to zero or below (a capacity
-        slope too steep for the temperatures reached)."""
+        of temperature); a member whose capacity falls to zero or below (a capacity slope too
+        steep for the temperatures reached) fails in :meth:`_modes`."""
         if not self._storing:
             return self.c
         (h_a, dh_a), (h_b, dh_b) = heat_a, heat_b
@@ -255,8 +208,7 @@ class NetworkBatch:
         small = np.abs(d) < 1e-9
         sec = (np.where(small, 0.5 * (dh_a + dh_b), (h_b - h_a) / np.where(small, 1.0, d))
                if small.any() else (h_b - h_a) / d)  # the same without the wheres
-        cap = self.c + sec
-        return cap if cap.min() > 0 else np.where(cap > 0, cap, np.nan)
+        return self.c + sec
 
     def _secant(self, t_a: NDArray, t_b: NDArray) -> NDArray:
         """:meth:`_capacity` between the temperatures ``t_a`` and ``t_b``."""
@@ -265,17 +217,19 @@ class NetworkBatch:
         return self._capacity(self.stored(t_a), self.stored(t_b), t_b - t_a)
 
     # -- linear algebra of one frozen network ----------------------------------------------
-    def _modes(self, scale: NDArray, cap: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    def _modes(self, scale: NDArray | None, cap: NDArray,
+               g: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray]:
         """``(λ, V, √cap)`` of ``S = cap^{-1/2} G cap^{-1/2}``: ``(B, n)``, ``(B, n, n)``;
-        NaN for a member whose resistances or capacities are not positive and finite."""
-        meter = _METER.get()
-        if meter is not None:
-            meter.solves += self.size
-            meter.steps += 1
-        g = 1.0 / (self.r * scale)
+        NaN for a member whose resistances or capacities are not positive and finite; ``g``,
+        the conductances ``1/(r·scale)`` when the caller holds them (positive and finite)."""
+        charge(self.size)
         # positive and finite (NaN fails both, min and max carry it); member by member if not
+        lo, hi = cap.min(), cap.max()
+        if g is None:  # else the caller's, which are
+            g = 1.0 / (self.r * scale)
+            lo, hi = np.minimum(lo, g.min()), np.maximum(hi, g.max())
         ok = None  # every member is
-        if not (np.minimum(g.min(), cap.min()) > 0 and np.maximum(g.max(), cap.max()) < np.inf):
+        if not (lo > 0 and hi < np.inf):
             ok = (np.minimum(g.min(axis=1), cap.min(axis=1)) > 0) \
                 & (np.maximum(g.max(axis=1), cap.max(axis=1)) < np.inf)
             g = np.where(ok[:, None], g, 1.0)
@@ -402,9 +356,13 @@ class NetworkBatch:
         out[:, :k] = theta[:, None, :]
         h = float(t[k]) if k < t.size else 0.0
         heat_a = self.stored(tref + theta)
+        # resistances that do not move: their conductances once, when positive and finite
+        g = None if self._scaled else 1.0 / self.r
+        g = g if g is not None and g.min() > 0 and g.max() < np.inf else None
         # the predictor runs on the last accepted corrector's network (at the start: the
         # network at the start state)
-        guess = self._modes(self.scale(theta, tref), self._capacity(heat_a, heat_a, 0.0))
+        guess = self._modes(None if g is not None else self.scale(theta, tref),
+                            self._capacity(heat_a, heat_a, 0.0), g)
         # under power, the state the network tends to moves with its resistances: it is
         # taken as moving linearly over a step (from where it is at the start to where it is
         # at the predicted end), so that the fast nodes, which follow it, end where it ends
@@ -422,8 +380,8 @@ class NetworkBatch:
             pred = (self._held(guess, theta, span, q_a, q_a + slope * (b - a), b - a)
                     if powered else self._frozen(guess, theta, span, p))[:, 0]
             heat_b = self.stored(tref + pred)
-            modes = self._modes(self.scale(0.5 * (theta + pred), tref),
-                                self._capacity(heat_a, heat_b, pred - theta))
+            modes = self._modes(None if g is not None else self.scale(0.5 * (theta + pred), tref),
+                                self._capacity(heat_a, heat_b, pred - theta), g)
             inside = int(np.searchsorted(t, b, side="right"))
             at = np.concatenate((t[k:inside] - a, span))
             states = (self._held(modes, theta, at, q_a, self._tends(pred, tref, p), b - a)

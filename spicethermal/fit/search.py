@@ -22,7 +22,8 @@ import numpy as np
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer
 from ..effects.base import CurveEvidence, EffectPlugin, Evidence
-from ..engines.network import NetworkBatch, metered
+from ..engines.meter import metered
+from ..engines.network import NetworkBatch
 from .forward import predict_model, pwm_correction
 from .joint import (
     MAX_ORDER,
@@ -335,7 +336,7 @@ def grow(data: BundleData, noise: Mapping[str, float], form: FormFit, rounds: in
     rounds : int
     short : callable
     affords : callable, optional
-        Whether the work left affords a simulator cost (``engines.network.Meter.cost``).
+        Whether the work left affords a simulator cost (``engines.meter.Meter.cost``).
     last : int, optional
         The cost of the last longer ladder grown before (0: none).
 
