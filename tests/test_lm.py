@@ -31,6 +31,18 @@ def test_a_bound_holds_the_parameter_at_the_bound():
     assert res.x[0, 0] == pytest.approx(2.0)
 
 
+def test_a_parameter_the_descent_pushes_past_its_bound_is_held_and_the_others_converge():
+    # ½|r|² = ½(a + b − 1)² + 50(a − b − 2)²: unbounded at (1.5, −0.5); with b ≥ 0 the minimum
+    # is on the bound, b = 0, a = (1 + 200)/101. The whole step, projected on the bounds,
+    # goes nowhere (rejected round after round); the step of a alone reaches the minimum.
+    def fun(x, _rows):
+        return np.column_stack([x[:, 0] + x[:, 1] - 1.0, 10.0 * (x[:, 0] - x[:, 1] - 2.0)])
+
+    res = levenberg_marquardt(fun, np.array([[1.5, 0.0]]), [-10.0, 0.0], [10.0, 10.0])
+    assert res.x[0] == pytest.approx([201 / 101, 0.0], abs=1e-6)
+    assert res.converged[0] and res.rounds <= 4
+
+
 def test_points_where_the_model_fails_are_never_taken():
     res = levenberg_marquardt(lambda x, rows: np.where(x > 3.5, np.nan, x - 3.0) * np.ones(4),
                               np.array([[0.0]]), [-10.0], [10.0])

@@ -125,16 +125,40 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
         predicted = np.empty(idx.size)
         for q, i in enumerate(idx):
             j = jac[i]
+            # a parameter at a bound that the cost's descent (−Jᵀr) pushes beyond it is held
+            # there: the step of the others is the damped step of their own columns (the
+            # whole step, projected on the bounds, leaves the linear model's descent, and
+            # a trial that cannot lower the cost is rejected round after round)
+            grad = j.T @ r[i]
+            free = ~(((x[i] <= lo_a) & (grad > 0)) | ((x[i] >= hi_a) & (grad < 0)))
+            if not free.any():  # a minimum on the bounds
+                converged[i], active[i] = True, False
+                trials[q], predicted[q] = x[i], 0.0
+                continue
+            jf = j[:, free]
             # the damped step on columns scaled to unit norm, solved by least squares on the
             # augmented system (never the normal equations, whose condition is squared)
-            norms = np.linalg.norm(j, axis=0)
+            norms = np.linalg.norm(jf, axis=0)
             norms = np.where(norms > 0, norms, 1.0)
-            aug = np.vstack([j / norms, np.sqrt(lam[i]) * np.eye(k)])
-            rhs = np.concatenate([-r[i], np.zeros(k)])
-            step = np.linalg.lstsq(aug, rhs, rcond=None)[0] / norms
+            aug = np.vstack([jf / norms, np.sqrt(lam[i]) * np.eye(jf.shape[1])])
+            rhs = np.concatenate([-r[i], np.zeros(jf.shape[1])])
+            step = np.zeros(k)
+            step[free] = np.linalg.lstsq(aug, rhs, rcond=None)[0] / norms
             trials[q] = np.clip(x[i] + step, lo_a, hi_a)
             lin = j @ (trials[q] - x[i])
             predicted[q] = -(r[i] @ lin + 0.5 * lin @ lin)
+            if predicted[q] <= 0:  # projected off the descent: the step cut short at the bounds
+                room = np.where(step > 0, hi_a - x[i], np.where(step < 0, lo_a - x[i], np.inf))
+                frac = float(np.min(np.where(step != 0, room / np.where(step != 0, step, 1.0),
+                                             np.inf)))
+                trials[q] = np.clip(x[i] + min(frac, 1.0) * step, lo_a, hi_a)
+                lin = j @ (trials[q] - x[i])
+                predicted[q] = -(r[i] @ lin + 0.5 * lin @ lin)
+        keep = active[idx]  # those with a step to try
+        if not keep.all():
+            idx, trials, predicted = idx[keep], trials[keep], predicted[keep]
+            if not idx.size:
+                break
         # the trial points and, ready for those accepted, their Jacobians: one batch
         rt, jt = stencil(trials, idx)
         work += idx.size * (k + 1)
