@@ -77,7 +77,9 @@ def levenberg_marquardt(fun: Callable[[NDArray, NDArray], NDArray], x0: ArrayLik
     x0 : array_like
         Starts, ``(P, k)``.
     lo, hi : sequence of float
-        Bounds (clipped, projected steps).
+        Bounds: a parameter at a bound that the descent pushes beyond it is held there for
+        the step, the others' step is projected on the bounds, or cut short at them when the
+        projection would not lower the linear model's cost.
     typical : sequence of float, optional
         Typical size of each parameter (finite-difference steps); default 1.
     rounds : int
