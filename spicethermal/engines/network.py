@@ -47,6 +47,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -217,15 +218,23 @@ class NetworkBatch:
         return self._capacity(self.stored(t_a), self.stored(t_b), t_b - t_a)
 
     # -- linear algebra of one frozen network ----------------------------------------------
-    def _modes(self, scale: NDArray | None, cap: NDArray,
-               g: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray]:
+    @cached_property
+    def _fixed_conductances(self) -> NDArray | None:
+        """The layers' conductances ``1/r`` of a batch whose resistances do not move, once,
+        when every one is positive and finite (None otherwise)."""
+        if self._scaled:
+            return None
+        g = 1.0 / self.r
+        return g if g.min() > 0 and g.max() < np.inf else None
+
+    def _modes(self, scale: NDArray, cap: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         """``(λ, V, √cap)`` of ``S = cap^{-1/2} G cap^{-1/2}``: ``(B, n)``, ``(B, n, n)``;
-        NaN for a member whose resistances or capacities are not positive and finite; ``g``,
-        the conductances ``1/(r·scale)`` when the caller holds them (positive and finite)."""
+        NaN for a member whose resistances or capacities are not positive and finite."""
         charge(self.size)
         # positive and finite (NaN fails both, min and max carry it); member by member if not
         lo, hi = cap.min(), cap.max()
-        if g is None:  # else the caller's, which are
+        g = self._fixed_conductances  # checked once (scale is 1 without resistance effects)
+        if g is None:
             g = 1.0 / (self.r * scale)
             lo, hi = np.minimum(lo, g.min()), np.maximum(hi, g.max())
         ok = None  # every member is
@@ -356,13 +365,9 @@ class NetworkBatch:
         out[:, :k] = theta[:, None, :]
         h = float(t[k]) if k < t.size else 0.0
         heat_a = self.stored(tref + theta)
-        # resistances that do not move: their conductances once, when positive and finite
-        g = None if self._scaled else 1.0 / self.r
-        g = g if g is not None and g.min() > 0 and g.max() < np.inf else None
         # the predictor runs on the last accepted corrector's network (at the start: the
         # network at the start state)
-        guess = self._modes(None if g is not None else self.scale(theta, tref),
-                            self._capacity(heat_a, heat_a, 0.0), g)
+        guess = self._modes(self.scale(theta, tref), self._capacity(heat_a, heat_a, 0.0))
         # under power, the state the network tends to moves with its resistances: it is
         # taken as moving linearly over a step (from where it is at the start to where it is
         # at the predicted end), so that the fast nodes, which follow it, end where it ends
@@ -380,8 +385,8 @@ class NetworkBatch:
             pred = (self._held(guess, theta, span, q_a, q_a + slope * (b - a), b - a)
                     if powered else self._frozen(guess, theta, span, p))[:, 0]
             heat_b = self.stored(tref + pred)
-            modes = self._modes(None if g is not None else self.scale(0.5 * (theta + pred), tref),
-                                self._capacity(heat_a, heat_b, pred - theta), g)
+            modes = self._modes(self.scale(0.5 * (theta + pred), tref),
+                                self._capacity(heat_a, heat_b, pred - theta))
             inside = int(np.searchsorted(t, b, side="right"))
             at = np.concatenate((t[k:inside] - a, span))
             states = (self._held(modes, theta, at, q_a, self._tends(pred, tref, p), b - a)
