@@ -14,9 +14,12 @@ import spicethermal.fit.search as search
 from spicethermal.analysis.compare import comparison_of
 from spicethermal.analysis.diagnose import diagnose
 from spicethermal.analysis.diagnosis import Candidate
+from spicethermal.analysis.rules import CLOSED_FORM_COST
 from spicethermal.core.errors import FitError
 from spicethermal.core.ladder import Cauer
 from spicethermal.effects import CATALOGUE, Effect
+from spicethermal.effects.base import MeasurementEffect
+from spicethermal.effects.registry import plugin
 from spicethermal.engines.meter import STEP_SOLVES, metered
 from spicethermal.engines.network import NetworkBatch
 from spicethermal.fit.joint import ModelFit
@@ -71,10 +74,19 @@ def scripted(monkeypatch):
     def run(*steps: tuple[ModelFit, float], lighter: ModelFit | None = None,
             bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9,
             after: dict | None = None, weighed: list | None = None,
-            cut_after: int | None = None, asked: list | None = None):
+            cut_after: int | None = None, asked: list | None = None,
+            held: ModelFit | None = None, held_asked: list | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         fitted = []
+
+        def screen_held(data, noise, model, plugins, rounds, say):  # ``held``, each
+            if held_asked is not None:
+                held_asked.extend(p.name for p in plugins)
+            return {p.name: [FormFit(held, ())] for p in plugins
+                    if held is not None and isinstance(p, MeasurementEffect)}
+
+        monkeypatch.setattr(procedure, "screen_held", screen_held)
 
         def fit_effect(data, noise, model, plugin, *a, **k):
             if asked is not None:  # the effects each step fitted, in order
@@ -267,6 +279,32 @@ def test_a_step_starts_only_while_work_is_left(scripted):
     assert d.spent.solves >= 2000
 
 
+def test_once_the_work_is_spent_a_later_step_screens_the_measurement_effects_held(scripted):
+    """The budget is spent by the first step: the second screens the effects the model lacks
+    on the model held (no joint refit) and takes the best when it brings every data set to
+    its noise, and not otherwise."""
+    transient = Effect.create("electrical-transient")
+    for left, verdict in ((0.0, "named"), (8.0, "approximate")):
+        at = _fit((FIRST, transient), left)
+        after = {(): [(_fit((FIRST,), 8.0), 5000.0)], (FIRST.name,): [(at, 300.0)]}
+        screened: list = []
+        d = scripted(after=after, cost=1000, budget=1000, held=at, held_asked=screened)
+        assert d.verdict.cls == verdict
+        assert sorted(screened) == sorted(n for n in CATALOGUE
+                                          if n != FIRST.name and n not in d.skipped)
+        assert d.spent.stopped.startswith("the work budget (a cost of 1,000) was spent after "
+                                          "step 1 (")
+        assert "screened on the model held)" in d.spent.stopped
+        assert SECOND.name not in d.spent.stopped.split("(")[1]  # a device effect: not held
+        if left:
+            assert d.effects == [FIRST.name]
+        else:
+            assert d.effects == [FIRST.name, transient.name]
+            assert d.steps[-1].model is at  # not refitted
+            assert d.spent.stopped.endswith(f"could at most tie with {transient.name}, which "
+                                            "brings every data set to its noise")
+
+
 def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):
     """A candidate that leaves a structured residual grows while work is left, not after."""
     asked = []
@@ -379,9 +417,10 @@ def test_a_step_cut_by_the_budget_is_taken_only_when_its_best_is_at_the_noise(sc
     assert not d.steps and d.verdict.cls == "none"
 
 
-def test_a_later_step_fits_the_effects_in_the_order_of_the_first_steps_ranking(scripted):
-    """The first step fits in the registry's order; the next one in the order of the first
-    step's candidates (each effect's gain alone), then the effects that had none."""
+def test_a_later_step_fits_the_effects_in_closed_form_first(scripted):
+    """Each step fits the effects in closed form first, then the simulated ones: the first
+    step each group in the registry's order, the next one in the order of the first step's
+    candidates (each effect's gain alone), then the effects that had none."""
     transient = Effect.create("electrical-transient")
     after = {(): [(_fit((SECOND,), 8.0), 5000.0), (_fit((FIRST,), 9.0), 900.0),
                   (_fit((transient,), 9.0), 400.0)],
@@ -391,9 +430,17 @@ def test_a_later_step_fits_the_effects_in_the_order_of_the_first_steps_ranking(s
     assert d.effects == [SECOND.name, FIRST.name]
     step1 = [name for model, name in asked if not model]
     step2 = [name for model, name in asked if model == (SECOND.name,)]
-    assert step1 == sorted(step1, key=list(CATALOGUE).index) and len(step1) > 3
-    assert step2[:2] == [FIRST.name, transient.name]
-    assert step2[2:] == [n for n in step1 if n not in (SECOND.name, FIRST.name, transient.name)]
+    def costly(n: str) -> bool:
+        return plugin(n).traits.cost > CLOSED_FORM_COST
+
+    assert step1 == sorted(step1, key=lambda n: (costly(n), list(CATALOGUE).index(n)))
+    assert len(step1) > 3 and costly(step1[-1]) and not costly(step1[0])
+    closed = [n for n in step1 if not costly(n)]
+    assert FIRST.name not in closed and transient.name in closed and len(closed) > 1
+    assert step2[0] == transient.name  # ranked, behind the costly FIRST
+    assert step2[1:len(closed)] == [n for n in closed if n != transient.name]
+    assert step2[len(closed):] == [n for n in step1 if n not in closed and n != SECOND.name]
+    assert FIRST.name in step2[len(closed):]
 
 
 def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scripted):
@@ -414,6 +461,24 @@ def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scr
     after[(SECOND.name,)] = [(_fit((SECOND, window), 8.0), 900.0)]
     d = scripted(after=after)
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+
+
+def test_a_screen_on_the_model_held_fits_the_measurement_effects_only():
+    """Each measurement effect's every form, screened on the model's ladder and effects held:
+    the ladder as it was, χ² no higher than the model's (noiseless data); a device effect is
+    not screened."""
+    base, noise = procedure._baseline(DATA, None)
+    plugins = [plugin(n) for n in CATALOGUE]
+    got = search.screen_held(DATA, noise, base, plugins, 3)
+    measured = [p.name for p in plugins if isinstance(p, MeasurementEffect)
+                and p.traits.shown_by & DATA.kinds]
+    assert sorted(got) == sorted(measured) and FIRST.name not in got
+    for name, forms in got.items():
+        assert [f.fit.effect(name).form for f in forms] == list(plugin(name).forms)
+        for f in forms:
+            assert np.allclose(f.fit.ladder.r, base.ladder.r, rtol=1e-9, atol=0)
+            assert np.allclose(f.fit.ladder.c, base.ladder.c, rtol=1e-9, atol=0)
+            assert f.fit.chi2_total <= base.chi2_total + 1e-6
 
 
 def test_the_budget_stops_an_effect_between_its_forms():

@@ -1,43 +1,26 @@
 """Diagnosis: where a model fails, which physical effect is missing, and by how much the error
-falls when it is added. The procedure, stated once (docs/diagnosis.md):
+falls when it is added. The procedure is stated in full once, in docs/diagnosis.md:
 
-1. **Baseline**: the linear ladder fitted to every data set of the bundle (cooling curves,
-   steady readings, PWM grid), its order chosen by the criterion; a model given by the user
-   instead, as it is.
-2. **Noise** of every data set from its own scatter, never from the structure under test
-   (:mod:`.noise`); the baseline and the noise are estimated twice in turn.
-3. **Candidates**: every registered effect the model lacks whose data sets are present
-   (``traits.shown_by``), each form from the plugin's ``guess()`` with its variants and
-   starts, the ladder and the other effects refitted (:func:`~spicethermal.fit.search.fit_effect`).
-   Rivals (explanations outside the catalogue) are weighed alike and never named.
-4. **Forward selection**: the candidate with the lowest BIC is added when it is decisive
-   (:func:`.rules.decisive`); candidates of other effects within :data:`.rules.DECISIVE_BIC`
-   of it are *tied*. The effects are ranked on the model's ladder; the best, and every one
-   within that margin of it, grow their ladders first while they leave a data set beyond
-   the noise (:func:`~spicethermal.fit.search.grow`). A backward check then drops an earlier
-   effect the model no longer needs (its BIC without it within the margin), and the model is
-   settled: refitted with its PWM readings exact (:func:`~spicethermal.fit.search.settle`;
-   the fits evaluate them in a closed form, first order in the ripple), the next step's
-   fits holding that correction. An effect after a catalogued one is added only when it
-   brings every data set to its noise or its fall of the criterion is decisive still under
-   the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`; the verdict says
-   what the best one refused would do). Until every data set is at its noise, nothing is
-   decisive, or :data:`.rules.MAX_EFFECTS` effects are named. A rival chosen stays in the
-   model like any effect (a later backward check may drop it); one left in the final model
-   makes the verdict *none*. When the steps end beyond the noise, they are run again with
-   the first step's next best catalogued effect added first, and replaced when they bring
-   every data set to its noise at a BIC lower by the margin.
-5. **Verdict** (:func:`.verdict.verdict`): *named* when the effects bring every data set to its
-   noise; *approximate* when they leave a structured residual but remove
-   :data:`.rules.MIN_APPROXIMATE` of the baseline's misfit; *ambiguous* when a step was tied;
-   *none* otherwise, or when a rival explains the data as well. An effect whose
-   ``traits.needs`` are missing is never named alone; one they do not show, although in the
-   bundle, is not named at all.
+1. **Baseline**: the linear ladder fitted to every data set, its order chosen by the criterion
+   (or the user's model, as it is), and the **noise** of each data set from its own scatter
+   (:mod:`.noise`), estimated in turn with it.
+2. **Candidates**: every registered effect the model lacks whose data sets are present, each
+   form from its plugin's ``guess()`` (:func:`~spicethermal.fit.search.fit_effect`); the
+   closed-form ones first (:data:`.rules.CLOSED_FORM_COST`). Rivals are weighed alike and
+   never named.
+3. **Forward selection**: the lowest BIC is added when decisive (:func:`.rules.decisive`),
+   those within :data:`.rules.DECISIVE_BIC` of it are tied; the leaders grow their ladders
+   first (:func:`~spicethermal.fit.search.grow`); a backward check drops what is no longer
+   needed and the model is settled (:func:`~spicethermal.fit.search.settle`). A further
+   effect is added when it brings every data set to its noise or its fall is decisive under
+   the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`). Steps ending
+   beyond the noise are run again from the next best first effect.
+4. **Verdict** (:func:`.verdict.verdict`): *named*, *approximate*, *ambiguous* or *none*.
 
 The work is counted against :data:`.rules.WORK_BUDGET`, never timed: the same bundle gives
-the same verdict on every machine and under any load. Later steps fit the effects in the first
-step's order; a step the budget cut short is taken only when its best brings every data set
-to its noise (those left could at most tie with it).
+the same verdict on every machine and under any load. Once it is spent, a later step screens
+the measurement effects left on its model held; a step the budget cut short is taken only
+when its best brings every data set to its noise (those left could at most tie with it).
 """
 
 from __future__ import annotations
@@ -55,7 +38,7 @@ from ..engines.cauer import as_cauer
 from ..engines.meter import Meter, metered
 from ..fit.joint import Layout, ModelFit, Start, bic, chi2_by_set, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
-from ..fit.search import FormFit, evidence, fit_effect, grow, refit, settle, without
+from ..fit.search import FormFit, evidence, fit_effect, grow, refit, screen_held, settle, without
 from ..model import ThermalModel
 from .compare import Comparison, comparison_of
 from .diagnosis import (
@@ -71,6 +54,7 @@ from .diagnosis import (
 )
 from .noise import calibration_degree, noise_estimates
 from .rules import (
+    CLOSED_FORM_COST,
     DECISIVE_BIC,
     MAX_EFFECTS,
     NOISE_FLOOR_K,
@@ -319,17 +303,17 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
     current, cmp = base, base_cmp
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS and short(data, current):
         k = len(steps) + 1
-        if steps and not ctx.affords():
-            path.stopped = f"{ctx.budget_text} was spent after step {k - 1}"
-            break
+        spent_before, held = bool(steps) and not ctx.affords(), dict[str, list[FormFit]]()
         if not steps and path.first:
             cands, i = list(path.first), pick
         else:
             fitted, unfitted = {}, []
-            # after the first step, in the order of the first step's ranking (each effect's
-            # gain alone): when the budget is spent, those left are the least favoured
+            # the effects in closed form first, then the simulated ones; after the first
+            # step each group in the order of the first step's ranking (each effect's gain
+            # alone): when the budget is spent, those left are the least favoured costly ones
             rank = {c.name: j for j, c in enumerate(path.first)}
-            for p in sorted(ctx.plugins, key=lambda p: rank.get(p.name, len(rank))):
+            for p in sorted(ctx.plugins, key=lambda p: (p.traits.cost > CLOSED_FORM_COST,
+                                                        rank.get(p.name, len(rank)))):
                 if p.name in ctx.skipped or current.effect(p.name):
                     continue
                 if not ctx.affords():
@@ -343,8 +327,16 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                     unfitted.append(p.name)
                 elif forms:
                     fitted[p.name] = forms
-            cut = (f"{ctx.budget_text} was spent in step {k} before {', '.join(unfitted)} "
-                   f"{'was' if len(unfitted) == 1 else 'were'} fitted") if unfitted else ""
+            cut = "" if not unfitted else (
+                f"{ctx.budget_text} was spent after step {k - 1}" if spent_before else
+                f"{ctx.budget_text} was spent in step {k} before {', '.join(unfitted)} "
+                f"{'was' if len(unfitted) == 1 else 'were'} fitted")
+            if steps and unfitted:  # what the step can still weigh: screens, held
+                held = screen_held(data, noise, current, [plugin(n) for n in unfitted],
+                                   SCREEN_ROUNDS, ctx.say)
+                path.work += sum(f.fit.work for forms in held.values() for f in forms)
+                fitted.update(held)
+                cut += f" ({', '.join(held)} screened on the model held)" if held else ""
             if not fitted and cut:
                 path.stopped = cut
                 break
@@ -384,6 +376,10 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                      and decisive(0.0, -c.delta_bic, c.explained)
                      and not _refuted(c, data, current))
         status = _status(chosen, tied, why)
+        if chosen.name in held:  # at the noise on the model held: its PWM readings exact
+            current, cmp = chosen.fit, comparison_of(data, chosen.fit.predictions)
+            steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, (), why))
+            continue
         # the model the next step starts from is converged: what a further refit would still
         # gain is then no candidate's
         current = refit(data, noise, chosen.fit, REFINE_ROUNDS)

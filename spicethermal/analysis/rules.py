@@ -17,7 +17,8 @@ import numpy as np
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
-__all__ = ["AT_NOISE_Z", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS", "MIN_APPROXIMATE",
+__all__ = ["AT_NOISE_Z", "CLOSED_FORM_COST", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS",
+           "MIN_APPROXIMATE",
            "MIN_EXPLAINED", "NOISE_EFFICIENCY", "NOISE_FLOOR_K", "NOISE_KEPT", "POLY_MAX_DEGREE",
            "POLY_P", "REFINE_ROUNDS",
            "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "correlated_gain",
@@ -81,12 +82,20 @@ REFINE_ROUNDS = 30
 #: 7.5 µs with two diagnoses at once (measured over the 89 bundles of a development seed; the
 #: slowest units are local temperature coefficients, whose terms cost twice as much a member):
 #: 8,000,000 and the overrun below keep every bundle under a minute on a loaded machine; the
-#: median bundle takes a quarter of it. A step starts while some is left; once it is spent, a
-#: ladder stops growing (a longer ladder's fit stops where it is), the candidates and forms
-#: not yet fitted are not, and a step that did not fit every form of every candidate is not
-#: taken; any other bounded fit that has started finishes (a diagnosis may overrun the budget
-#: by one form's fits, one round of a longer ladder's, or one step's refit and settling).
+#: median bundle takes a quarter of it. Once it is spent, a ladder stops growing (a longer
+#: ladder's fit stops where it is), the candidates and forms not yet fitted are not (a later
+#: step screens the measurement effects left on its model held, one simulation of the device
+#: each), and a step that did not fit every form of every candidate is taken only when its
+#: best is at the noise; any other bounded fit that has started finishes (a diagnosis may
+#: overrun the budget by one form's fits, one round of a longer ladder's, or one step's refit
+#: and settling).
 WORK_BUDGET = 8_000_000
+#: An effect whose relative cost (``Traits.cost``) is at most this is evaluated in closed form,
+#: a few thousandths of the budget a fit. Each step fits those first, then the simulated ones
+#: (after the first step, each group in the first step's ranking): a budget that the simulated
+#: fits spend then leaves none of the closed-form effects unfitted, where in the ranking's
+#: order alone a cheap second effect queued behind a costly one was never tried.
+CLOSED_FORM_COST = 1.0
 
 
 def correlated_gain(before: NDArray, after: NDArray) -> float:

@@ -6,8 +6,10 @@ variants (a node, a subset of layers), the ladder and the model's other effects 
 *screen*, all side by side, on the model's ladder); the best screened point of each form (of
 its two best variants for the first form, which ranks the variants for the forms that share
 them) is then refitted jointly with the ladder and every other effect, every form alike.
-:func:`grow` refits a form's fit on longer ladders; :func:`refit` refits a model's every
-parameter; :func:`without` drops one effect and refits the rest.
+:func:`screen_held` only screens the measurement effects, on the model held (a fit keeps its
+last simulation, so each costs one simulation of the device). :func:`grow` refits a form's
+fit on longer ladders; :func:`refit` refits a model's every parameter; :func:`without` drops
+one effect and refits the rest.
 
 The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 """
@@ -21,7 +23,7 @@ import numpy as np
 
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer
-from ..effects.base import CurveEvidence, EffectPlugin, Evidence
+from ..effects.base import CurveEvidence, EffectPlugin, Evidence, MeasurementEffect
 from ..engines.meter import metered
 from ..engines.network import NetworkBatch
 from .forward import predict_model, pwm_correction
@@ -41,7 +43,7 @@ from .joint import (
 from .measurement import BundleData
 
 __all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect", "grow", "refit",
-           "settle", "without"]
+           "screen_held", "settle", "without"]
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
@@ -202,7 +204,8 @@ def _clip(plugin: EffectPlugin, values: Mapping[str, float]) -> dict[str, float]
 def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                plugin: EffectPlugin, screen_rounds: int, refine_rounds: int,
                forms: Sequence[str] | None = None,
-               left: Callable[[], bool] = lambda: True) -> tuple[list[FormFit], bool]:
+               left: Callable[[], bool] = lambda: True,
+               joint: bool = True) -> tuple[list[FormFit], bool]:
     """``model`` with ``plugin``'s effect added, the best fit of each form (see the module
     docstring); forms whose guess gives no start are left out. Every form is screened on the
     model's ladder from the plugin's starts (for every variant in the first form, for the
@@ -224,6 +227,10 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     left : callable, optional
         Whether work is left: asked before each form's screen and before its joint refits,
         which are not started once it says no.
+    joint : bool
+        False: screened on the model's ladder only and not refitted jointly: each form's
+        fit is its best screened point (the ladder and the other effects as they are in
+        ``model``, the device simulated once).
 
     Returns
     -------
@@ -253,7 +260,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     # the model's ladder took some of the effect into its own values (a band's heat into its
     # capacities, a coefficient's rise into its resistances): the effect is also screened on
     # the linear ladder of the least heated curve, which the effects change least
-    ref = start_ladders(data, [model.ladder.order]).get(model.ladder.order)
+    ref = start_ladders(data, [model.ladder.order]).get(model.ladder.order) if joint else None
     at_ref = _evaluated(data, noise, ref, model) if ref is not None else None
     ev_ref = evidence(data, at_ref, noise) if at_ref is not None else None
 
@@ -299,7 +306,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         if not left():
             return _form_fits(out, seeds), False
         seeds.append([dict(m.effect(plugin.name).params) for m in heads])  # type: ignore
-        fits = [_refine(data, noise, m, refine_rounds, 0) for m in heads]
+        fits = [_refine(data, noise, m, refine_rounds, 0) if joint else m for m in heads]
         fit = min(fits, key=lambda m: bic(m, n_points))
         fit = ModelFit(fit.ladder, fit.effects, fit.predictions, fit.chi2, fit.n_params,
                        work + sum(m.work for m in fits), fit.converged)
@@ -307,6 +314,40 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             lead = fit
         out.append(fit)
     return _form_fits(out, seeds), True
+
+
+def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
+                plugins: Sequence[EffectPlugin], rounds: int,
+                say: Callable[[str], None] = lambda _text: None) -> dict[str, list[FormFit]]:
+    """The measurement effects among ``plugins`` fitted onto ``model`` held: every form
+    screened, none refitted jointly (:func:`fit_effect` with ``joint=False``). Each costs one
+    simulation of the model's device (a fit keeps its last simulation), and its criterion is
+    one that a joint refit could only lower.
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to noise (K)
+    model : ModelFit
+    plugins : sequence of EffectPlugin
+    rounds : int
+        Rounds of each screen.
+    say : callable, optional
+        Told of each effect screened.
+
+    Returns
+    -------
+    dict of str to list of FormFit
+        By effect name, those with a screen.
+    """
+    out = {}
+    for p in plugins:
+        if isinstance(p, MeasurementEffect):
+            say(f"{p.name}, on the model held")
+            forms, _ = fit_effect(data, noise, model, p, rounds, 0, joint=False)
+            if forms:
+                out[p.name] = forms
+    return out
 
 
 def _form_fits(fits: Sequence[ModelFit], seeds: Sequence[Sequence[Mapping[str, float]]]
