@@ -80,7 +80,8 @@ def scripted(monkeypatch):
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         fitted = []
 
-        def screen_held(data, noise, model, plugins, rounds, say):  # ``held``, each
+        def screen_held(data, noise, model, plugins, rounds):  # ``held``, each
+            plugins = list(plugins)
             if held_asked is not None:
                 held_asked.extend(p.name for p in plugins)
             return {p.name: [FormFit(held, ())] for p in plugins
@@ -277,6 +278,20 @@ def test_a_step_starts_only_while_work_is_left(scripted):
     d = scripted(*two, cost=1000, budget=1500)
     assert d.effects == [FIRST.name, SECOND.name] and not d.spent.stopped
     assert d.spent.solves >= 2000
+
+
+def test_the_rest_is_outside_the_catalogue_only_when_the_search_ended(scripted):
+    """An effect that leaves too much for an approximate name is not named; what is left is
+    said to be outside the catalogue when the search ended, not when the budget stopped it
+    before a further effect was weighed."""
+    two = ((_fit((FIRST,), 20.0), 5000.0), (_fit((FIRST, SECOND), 18.0), 200.0))
+    ended, stopped = scripted(two[0]), scripted(*two, cost=1000, budget=1000)
+    assert ended.verdict.cls == stopped.verdict.cls == "none"
+    assert ended.verdict.reason.startswith(f"{FIRST.name} would remove only 75 %")
+    assert ended.verdict.reason.endswith("; not in the catalogue")
+    assert stopped.verdict.reason.startswith(f"{FIRST.name} would remove only 75 %")
+    assert "catalogue" not in stopped.verdict.reason
+    assert stopped.verdict.reason.endswith(stopped.spent.stopped)
 
 
 def test_once_the_work_is_spent_a_later_step_screens_the_measurement_effects_held(scripted):

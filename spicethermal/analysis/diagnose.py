@@ -282,7 +282,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
                f"what the approximate form of {path.steps[-1].chosen.name} leaves"
                ) if further else ""
     note = "; ".join(t for t in (refused, revised, stopped, unweighed) if t)
-    result = verdict(path.data, base, path.steps, noise, note)
+    result = verdict(path.data, base, path.steps, noise, note, bool(stopped))
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
@@ -308,9 +308,8 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             cands, i = list(path.first), pick
         else:
             fitted, unfitted = {}, []
-            # the effects in closed form first, then the simulated ones; after the first
-            # step each group in the order of the first step's ranking (each effect's gain
-            # alone): when the budget is spent, those left are the least favoured costly ones
+            # closed-form effects first, then the simulated ones, after the first step each in
+            # its ranking (each effect's gain alone): a spent budget leaves the least favoured
             rank = {c.name: j for j, c in enumerate(path.first)}
             for p in sorted(ctx.plugins, key=lambda p: (p.traits.cost > CLOSED_FORM_COST,
                                                         rank.get(p.name, len(rank)))):
@@ -332,8 +331,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                 f"{ctx.budget_text} was spent in step {k} before {', '.join(unfitted)} "
                 f"{'was' if len(unfitted) == 1 else 'were'} fitted")
             if steps and unfitted:  # what the step can still weigh: screens, held
-                held = screen_held(data, noise, current, [plugin(n) for n in unfitted],
-                                   SCREEN_ROUNDS, ctx.say)
+                held = screen_held(data, noise, current, map(plugin, unfitted), SCREEN_ROUNDS)
                 path.work += sum(f.fit.work for forms in held.values() for f in forms)
                 fitted.update(held)
                 cut += f" ({', '.join(held)} screened on the model held)" if held else ""

@@ -53,7 +53,7 @@ def weighed_fall(data: BundleData, before: ModelFit, after: ModelFit, noise: dic
 
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
-            note: str = "") -> Verdict:
+            note: str = "", cut: bool = False) -> Verdict:
     """The verdict of the steps (the module docstring's point 5).
 
     Parameters
@@ -65,17 +65,19 @@ def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict
     note : str
         What else the search says: why its first step is not the best candidate alone, why
         the work budget stopped it (ends the reason; with no step, it is the reason).
+    cut : bool
+        Whether the budget stopped the search (what is left is then not said to be elsewhere).
 
     Returns
     -------
     Verdict
     """
-    found = _judge(data, base, steps, noise, note)
+    found = _judge(data, base, steps, noise, note, cut)
     return replace(found, reason=f"{found.reason}; {note}") if note and steps else found
 
 
 def _judge(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
-           note: str) -> Verdict:
+           note: str, cut: bool) -> Verdict:
     final = last_model(steps, base)
     kept = {e.name for e in final.effects}
     live = [s for s in steps if s.chosen.name in kept]
@@ -127,7 +129,7 @@ def _judge(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
     return Verdict(NONE, (), f"{', '.join(effects)} would remove only {100 * share:.0f} % of "
                    f"the misfit beyond the noise (an approximate name needs "
                    f"{100 * MIN_APPROXIMATE:.0f} %) and leave " + "; and ".join(left[:2])
-                   + "; not in the catalogue", alternatives, separate, left)
+                   + ("" if cut else "; not in the catalogue"), alternatives, separate, left)
 
 
 def _named_reason(named: Sequence[Step], share: float, tail: str) -> str:

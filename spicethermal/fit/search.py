@@ -16,7 +16,7 @@ The work is counted in rounds (:mod:`spicethermal.fit.lm`), never timed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -317,8 +317,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
 
 
 def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
-                plugins: Sequence[EffectPlugin], rounds: int,
-                say: Callable[[str], None] = lambda _text: None) -> dict[str, list[FormFit]]:
+                plugins: Iterable[EffectPlugin], rounds: int) -> dict[str, list[FormFit]]:
     """The measurement effects among ``plugins`` fitted onto ``model`` held: every form
     screened, none refitted jointly (:func:`fit_effect` with ``joint=False``). Each costs one
     simulation of the model's device (a fit keeps its last simulation), and its criterion is
@@ -329,11 +328,9 @@ def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     data : BundleData
     noise : mapping of data set name to noise (K)
     model : ModelFit
-    plugins : sequence of EffectPlugin
+    plugins : iterable of EffectPlugin
     rounds : int
         Rounds of each screen.
-    say : callable, optional
-        Told of each effect screened.
 
     Returns
     -------
@@ -343,7 +340,6 @@ def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
     out = {}
     for p in plugins:
         if isinstance(p, MeasurementEffect):
-            say(f"{p.name}, on the model held")
             forms, _ = fit_effect(data, noise, model, p, rounds, 0, joint=False)
             if forms:
                 out[p.name] = forms
