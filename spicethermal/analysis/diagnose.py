@@ -293,7 +293,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
 
 def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
              first: tuple[Candidate, ...] = (), pick: int = 0) -> _Path:
-    """Forward selection from ``base`` (the module docstring's point 4); given the first
+    """Forward selection from ``base`` (the module docstring's point 3); given the first
     step's candidates, weighed already, the first step adds the one of rank ``pick``."""
     data, noise = ctx.data, ctx.noise
     sizes = data.sizes()

@@ -18,12 +18,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
 __all__ = ["AT_NOISE_Z", "CLOSED_FORM_COST", "DECISIVE_BIC", "LOCAL_WINDOW", "MAX_EFFECTS",
-           "MIN_APPROXIMATE",
-           "MIN_EXPLAINED", "NOISE_EFFICIENCY", "NOISE_FLOOR_K", "NOISE_KEPT", "POLY_MAX_DEGREE",
-           "POLY_P", "REFINE_ROUNDS",
-           "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS", "at_noise", "beyond_noise", "correlated_gain",
-           "decisive",
-           "excess", "explained", "runs_z", "shows"]
+           "MIN_APPROXIMATE", "MIN_EXPLAINED", "NOISE_EFFICIENCY", "NOISE_FLOOR_K", "NOISE_KEPT",
+           "POLY_MAX_DEGREE", "POLY_P", "REFINE_ROUNDS", "RUNS_MIN", "RUNS_Z", "SCREEN_ROUNDS",
+           "at_noise", "beyond_noise", "correlated_gain", "decisive", "excess", "explained",
+           "runs_z", "shows"]
 
 # -- noise ------------------------------------------------------------------------------------
 #: No bench reads better than this (K): a floor on every noise estimate.

@@ -1,4 +1,4 @@
-"""The verdict of a diagnosis's steps (docs/diagnosis.md, §5): whether a model is at the
+"""The verdict of a diagnosis's steps (docs/diagnosis.md, §7): whether a model is at the
 noise, which class the steps earn, and the reasons, generated from the numbers.
 """
 
@@ -54,7 +54,7 @@ def weighed_fall(data: BundleData, before: ModelFit, after: ModelFit, noise: dic
 
 def verdict(data: BundleData, base: ModelFit, steps: Sequence[Step], noise: dict,
             note: str = "", cut: bool = False) -> Verdict:
-    """The verdict of the steps (the module docstring's point 5).
+    """The verdict of the steps (docs/diagnosis.md §7).
 
     Parameters
     ----------
