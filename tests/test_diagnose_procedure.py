@@ -478,13 +478,22 @@ def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scr
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
 
 
-def test_a_screen_on_the_model_held_fits_the_measurement_effects_only():
+def test_a_screen_on_the_model_held_fits_the_measurement_effects_only(monkeypatch):
     """Each measurement effect's every form, screened on the model's ladder and effects held:
-    the ladder as it was, χ² no higher than the model's (noiseless data); a device effect is
-    not screened."""
+    the ladder as it was, χ² no higher than the model's (noiseless data), its work that of
+    its screens, counted once; a device effect is not screened."""
     base, noise = procedure._baseline(DATA, None)
     plugins = [plugin(n) for n in CATALOGUE]
+    screens, fit_starts = [], search.fit_starts
+
+    def counted(*a, **k):
+        got = fit_starts(*a, **k)
+        screens.append(sum(m.work for m in got if m is not None))
+        return got
+
+    monkeypatch.setattr(search, "fit_starts", counted)
     got = search.screen_held(DATA, noise, base, plugins, 3)
+    assert sum(f.fit.work for forms in got.values() for f in forms) == sum(screens) > 0
     measured = [p.name for p in plugins if isinstance(p, MeasurementEffect)
                 and p.traits.shown_by & DATA.kinds]
     assert sorted(got) == sorted(measured) and FIRST.name not in got

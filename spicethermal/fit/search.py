@@ -306,10 +306,11 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
         if not left():
             return _form_fits(out, seeds), False
         seeds.append([dict(m.effect(plugin.name).params) for m in heads])  # type: ignore
-        fits = [_refine(data, noise, m, refine_rounds, 0) if joint else m for m in heads]
-        fit = min(fits, key=lambda m: bic(m, n_points))
+        # the work of a head is its share of the screens, counted in ``work`` already
+        refits = [_refine(data, noise, m, refine_rounds, 0) for m in heads] if joint else []
+        fit = min(refits or heads, key=lambda m: bic(m, n_points))
         fit = ModelFit(fit.ladder, fit.effects, fit.predictions, fit.chi2, fit.n_params,
-                       work + sum(m.work for m in fits), fit.converged)
+                       work + sum(m.work for m in refits), fit.converged)
         if lead is None or bic(fit, n_points) < bic(lead, n_points):
             lead = fit
         out.append(fit)
