@@ -450,17 +450,16 @@ def fit_baseline(data: BundleData, noise: Mapping[str, float],
     ModelFit
     """
     n_points = sum(data.sizes().values())
-    starts = start_ladders(data, range(1, max_order + 1))
-    if not starts:
-        raise FitError(f"{data.source}: no linear ladder fits the cooling curves")
     fits: list[ModelFit] = []
     best: ModelFit | None = None
     previous: ModelFit | None = None
     worse = 0
     for m in range(1, max_order + 1):
         # from the least heated curve's ladder of this order, and from the previous order's
-        # fit with one stage more (so that a stage more never fits worse)
-        tries = [Start(starts[m])] if m in starts else []
+        # fit with one stage more (so that a stage more never fits worse); a start is
+        # computed when its order is reached (the orders past the criterion's are costly fits
+        # that split a time constant)
+        tries = [Start(s) for s in start_ladders(data, [m]).values()]
         if previous is not None:
             try:
                 tries.append(Start(next(stage_more(previous.ladder))))
