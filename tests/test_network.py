@@ -12,8 +12,8 @@ from scipy.special import lambertw
 
 from spicethermal.core.ladder import Cauer, Foster
 from spicethermal.effects import Effect
-from spicethermal.engines.meter import STEP_SOLVES, metered
-from spicethermal.engines.network import NetworkBatch
+from spicethermal.engines.meter import SOLVE_NODES, STEP_SOLVES, metered
+from spicethermal.engines.network import SHARED_STEPS, NetworkBatch
 from spicethermal.validation.network import LatentHeat, Network, ResistanceLaw
 
 R4, C4 = (4.0, 12.0, 40.0, 90.0), (2e-5, 4e-4, 8e-3, 0.3)
@@ -191,6 +191,21 @@ def test_the_meter_counts_one_solve_a_member_and_step_and_an_enclosing_count_get
     assert outer.cost == outer.solves + STEP_SOLVES * outer.steps
 
 
+def test_a_long_ladder_counts_more_a_member_and_a_steady_state_counts_its_newton_steps():
+    long = Cauer(np.full(2 * SOLVE_NODES, 2.0), np.geomspace(1e-4, 1.0, 2 * SOLVE_NODES))
+    with metered() as meter:
+        NetworkBatch(np.tile(long.r, (4, 1)), np.tile(long.c, (4, 1))).foster()
+    assert meter.solves == 4 * 4 and meter.steps == 1  # twice the nodes: four times a member
+    hot = NetworkBatch.of(Cauer([2.0, 5.0, 10.0], [1e-4, 1e-3, 1e-2]),
+                          [Effect.create("temperature-coefficient", alpha_per_k=5e-3)])
+    with metered() as meter:
+        hot.steady(1.0, 25.0)
+    assert 2 <= meter.steps == meter.solves < 10  # a few Newton steps of one member
+    with metered() as meter:
+        NetworkBatch.of(Cauer([2.0, 5.0, 10.0], [1e-4, 1e-3, 1e-2])).steady(1.0, 25.0)
+    assert meter.steps == 0  # a linear ladder's steady state is in closed form
+
+
 @pytest.mark.parametrize("where", ["r", "c"])
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -1.0, 0.0])
 def test_a_member_whose_network_is_not_positive_and_finite_fails_alone_and_quietly(where, bad):
@@ -205,3 +220,37 @@ def test_a_member_whose_network_is_not_positive_and_finite_fails_alone_and_quiet
     assert np.all(np.isnan(tau[1]))
     for i in (0, 2):
         assert np.array_equal(got_r[i], good[0][0]) and np.array_equal(tau[i], good[1][0])
+
+
+def test_a_few_members_that_hold_a_batch_past_its_shared_steps_fail_and_the_others_go_on():
+    # a fit's trial point far from any physical ladder (a first layer of 10^26 K/W, a
+    # coefficient's quadratic law at 10^23 K): alone it takes thousands of steps
+    e = Effect.create("temperature-coefficient", form="quadratic",
+                      alpha_per_k=3.7124419200361553e-3, curvature_per_k2=-3.340029182924946e-05,
+                      c_slope_per_k=8.13845458294043e-4)
+    odd = ([1.1420073898156763e+26, 241.4250200971635, 2203.5447210763086, 5.128882702291077,
+            401.5062680338615, 1423.489878169166, 596.3555737739014, 9.709419848882312],
+           [2.4605130961513786e-32, 4.606777951594394e-08, 1.675376125815569e-07,
+            6.36563584916833e-07, 9.054669935021068e-06, 2.149601834984747e-08,
+            9.874267384153456e-4, 0.18840087793371738])
+    theta = [1.3113649540513694e+23, 119.66164807960439, 114.23188430572532, 60.02952723578821,
+             59.89959688914322, 49.72359699300314, 14.263252513102492, 0.22307841586497407]
+    fine = (np.array(odd[0][1:] + [9.7]), np.array(odd[1][1:] + [0.19]))
+    t = np.geomspace(1e-6, 3.0, 66)
+
+    def run(rs, cs, thetas):
+        net = NetworkBatch.of(Cauer(rs[0], cs[0]), [e]).repeat(len(rs))
+        net = NetworkBatch(np.array(rs), np.array(cs), net.terms, tol_k=1.8e-3)
+        with metered() as meter:
+            out = net.response(np.array(thetas), t, 0.0, TREF)
+        return out[:, :, 0], meter.steps
+
+    alone, steps = run([odd[0]], [odd[1]], [theta])
+    assert steps > 2 * SHARED_STEPS
+    start = list(fine[0] * 0.3)
+    ordinary, few = run([fine[0]] * 3, [fine[1]] * 3, [start] * 3)
+    together, shared = run([fine[0]] * 3 + [odd[0]], [fine[1]] * 3 + [odd[1]],
+                           [start] * 3 + [theta])
+    assert shared < SHARED_STEPS + 2 * few
+    assert np.all(np.isnan(together[3, -1])) and np.all(np.isfinite(together[:3]))
+    assert together[:3] == pytest.approx(ordinary, abs=1e-2)  # a few of their tolerance

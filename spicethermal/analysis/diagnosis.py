@@ -1,5 +1,5 @@
 """The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
-verdict; its text report and its ``spicethermal-diagnosis/7`` document
+verdict; its text report and its ``spicethermal-diagnosis/8`` document
 (docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
@@ -25,7 +25,7 @@ __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIV
 
 #: The document's format; version 7 adds the refused candidate's weighed fall, which decides
 #: it (docs/diagnosis-json.md), and keeps every other key of versions 1 to 6.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/7"
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/8"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
 RIVAL, UNSHOWN = "rival", "unshown"
@@ -145,7 +145,7 @@ class WorkSpent:
 @dataclass(frozen=True, eq=False)
 class Diagnosis(JsonDocument):
     """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
-    report, :meth:`to_dict` the ``spicethermal-diagnosis/7`` document, :meth:`plot` the
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/8`` document, :meth:`plot` the
     figures."""
 
     source: str
@@ -218,7 +218,7 @@ class Diagnosis(JsonDocument):
 
     # -- document -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/7`` document."""
+        """The ``spicethermal-diagnosis/8`` document."""
         worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
                  for p in self.baseline.worst(WORST_POINTS)]
         fit = self.final_fit

@@ -337,7 +337,7 @@ class Explanation:
 class TableDiagnosis(JsonDocument):
     """What :func:`diagnose_table` found: the analysis, the explanations weighed (best
     first) and the verdict. ``str()`` is the report, :meth:`to_dict` the
-    ``spicethermal-diagnosis/7`` document (no steps: a table has one baseline and no second
+    ``spicethermal-diagnosis/8`` document (no steps: a table has one baseline and no second
     step)."""
 
     source: str

@@ -15,18 +15,24 @@ result on every machine and under any load.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
 
-__all__ = ["STEP_SOLVES", "Meter", "charge", "metered"]
+__all__ = ["SOLVE_NODES", "STEP_SOLVES", "Meter", "charge", "metered"]
 
 #: What one batched step of the simulator costs beyond its members, in solves: a step's numpy
 #: calls (a few dozen on small arrays) take about 200 µs whatever the batch, where each member
 #: adds 3 to 4 µs (its modes, its effects' terms), fitted over the diagnoses of eight bundles
 #: on the bench's 2-core machine. A batch of a few members costs its step, not its members.
 STEP_SOLVES = 60
+#: Nodes up to which a member's solve costs one: beyond, a member of ``n`` nodes counts
+#: ``(n / SOLVE_NODES)²`` solves, as its eigendecomposition (and a steady state's Newton
+#: solve) grows on these sizes: about 1, 3, 6 and 9.5 µs a member and step at 3, 6, 9 and 12
+#: nodes on the bench's machine.
+SOLVE_NODES = 7
 
 
 @dataclass(eq=False)
@@ -62,9 +68,11 @@ def metered() -> Iterator[Meter]:
             outer.steps += meter.steps
 
 
-def charge(solves: int) -> None:
-    """Charge one batched step of ``solves`` frozen networks to the running count, if any."""
+def charge(solves: int, nodes: int = 0) -> None:
+    """Charge one batched step of ``solves`` frozen networks of ``nodes`` nodes each to the
+    running count, if any (:data:`SOLVE_NODES`)."""
     meter = _METER.get()
     if meter is not None:
-        meter.solves += solves
+        meter.solves += solves if nodes <= SOLVE_NODES else math.ceil(
+            solves * (nodes / SOLVE_NODES) ** 2)
         meter.steps += 1

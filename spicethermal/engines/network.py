@@ -74,6 +74,14 @@ STEADY_ITER, STEADY_TOL = 40, 1e-12
 #: grow, and the rejections in a row (a step 5^-25 shorter) after which the members that
 #: still exceed the tolerance fail and the others go on.
 MAX_STEPS, GROWTH, MAX_REJECTED = 20000, 4.0, 25
+#: Steps of one transient after which a minority of its members can no longer hold the
+#: batch's step: a step that fewer than half of the members still computed exceed the
+#: tolerance of fails those members and goes on with the others. A physical network's
+#: transient over the records of a bundle takes a few hundred steps; a batch held far longer
+#: by a few members is waiting on trial points far from any physical ladder (a fit's
+#: finite-difference member with a layer of 10²⁶ K/W), which would otherwise cost the batch
+#: thousands of steps for every member.
+SHARED_STEPS = 1000
 #: numpy's generalized ufunc behind ``linalg.eigh`` (lower triangle), when it has one.
 _EIGH_LO = getattr(getattr(np.linalg, "_umath_linalg", None), "eigh_lo", None)
 
@@ -109,7 +117,8 @@ def _reverse_cumsum(x: NDArray) -> NDArray:
 
 class NetworkBatch:
     """``B`` Cauer ladders (``r``, ``c``: ``(B, n)``) with their device effects; transients
-    accept a step within ``tol_rel`` of the largest rise (or ``tol_k`` kelvin, if larger).
+    accept a step within ``tol_rel`` of each member's largest rise (or ``tol_k`` kelvin, if
+    larger).
 
     >>> net = NetworkBatch.of(Foster.from_tau([2.0, 3.0], [1e-3, 1.0]))
     >>> r, tau = net.foster()
@@ -230,7 +239,7 @@ class NetworkBatch:
     def _modes(self, scale: NDArray, cap: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         """``(λ, V, √cap)`` of ``S = cap^{-1/2} G cap^{-1/2}``: ``(B, n)``, ``(B, n, n)``;
         NaN for a member whose resistances or capacities are not positive and finite."""
-        charge(self.size)
+        charge(self.size, self.n)
         # positive and finite (NaN fails both, min and max carry it); member by member if not
         lo, hi = cap.min(), cap.max()
         g = self._fixed_conductances  # checked once (scale is 1 without resistance effects)
@@ -316,12 +325,15 @@ class NetworkBatch:
         big = self.repeat(n)
         tref_big = np.repeat(np.broadcast_to(tref, (self.size, 1)), n, axis=0) \
             if np.ndim(tref) else tref
-        top = max(float(np.nanmax(np.abs(theta), initial=0.0)), 1e-12)
+        # each member's tolerance, of its own rise (as a transient's)
+        with np.errstate(invalid="ignore"):
+            top = np.maximum(np.nanmax(np.abs(theta), axis=1, initial=0.0), 1e-12)[:, None]
         for _ in range(STEADY_ITER):
             s = self.scale(theta, tref)
             f = theta - _reverse_cumsum(p * self.r * s)
-            if np.all(np.isfinite(f)) and np.max(np.abs(f)) <= STEADY_TOL * top:
+            if np.all(np.isfinite(f)) and np.all(np.abs(f) <= STEADY_TOL * top):
                 return theta
+            charge(self.size, self.n)  # a Newton step: the members' Jacobians and solves
             delta = 1e-7 * (1.0 + np.abs(theta))
             pert = np.repeat(theta, n, axis=0) + (np.tile(eye, (self.size, 1))
                                                   * np.repeat(delta, n, axis=0))
@@ -338,7 +350,7 @@ class NetworkBatch:
         f = theta - _reverse_cumsum(p * self.r * s)
         # a member that does not converge (thermal runaway) is NaN, the others stand
         ok = np.all(np.isfinite(f), axis=1) & (np.max(np.abs(np.nan_to_num(f, nan=np.inf)),
-                                                      axis=1) <= 1e-8 * top)
+                                                      axis=1) <= 1e-8 * top[:, 0])
         return np.where(ok[:, None], theta, np.nan)
 
     # -- transients ------------------------------------------------------------------------
@@ -355,10 +367,14 @@ class NetworkBatch:
         p = np.broadcast_to(np.asarray(power, dtype=float), (self.size, 1))
         if self.linear:
             return self._frozen(self._modes(np.ones_like(self.r), self.c), theta0, t, p)
-        top = max(float(np.nanmax(np.abs(theta0), initial=0.0)),
-                  float(np.nanmax(p * np.sum(self.r, axis=1, keepdims=True), initial=0.0)),
-                  1e-12)
-        tol = max(self.tol_rel * top, TOL_ABS_K, self.tol_k)
+        # each member's tolerance, of its own largest rise: a member far from any physical
+        # ladder (a rise of 10²³ K) leaves the others' accuracy as it is
+        with np.errstate(invalid="ignore"):
+            top = np.fmax(np.nanmax(np.abs(theta0), axis=1, initial=0.0),
+                          np.nanmax(p * np.sum(self.r, axis=1, keepdims=True), axis=1,
+                                    initial=0.0))
+        tol = np.maximum(np.maximum(self.tol_rel * np.maximum(top, 1e-12), TOL_ABS_K),
+                         self.tol_k)
         out = np.empty((self.size, t.size, self.n))
         theta, a = np.array(theta0, dtype=float), 0.0
         k = int(np.searchsorted(t, 0.0, side="right"))
@@ -391,19 +407,23 @@ class NetworkBatch:
             at = np.concatenate((t[k:inside] - a, span))
             states = (self._held(modes, theta, at, q_a, self._tends(pred, tref, p), b - a)
                       if powered else self._frozen(modes, theta, at, p))
-            err = np.abs(states[:, -1] - pred).max(axis=1)
+            err = np.abs(states[:, -1] - pred).max(axis=1) / tol  # in each one's tolerance
             err_max = float(np.fmax.reduce(err, initial=0.0))  # NaN members aside; all NaN: 0
             steps += 1
             if steps > MAX_STEPS:  # what is left does not resolve: those members fail
                 out[:, k:] = np.nan
                 return out
-            if rejected >= MAX_REJECTED:
-                # a member that no step short of a rounding error resolves (a trial point far
-                # from any physical ladder) fails; the others go on
-                states[err > tol] = np.nan
+            over = err > 1.0
+            if rejected >= MAX_REJECTED or (
+                    steps > SHARED_STEPS and err_max > 1.0
+                    and 2 * int(np.count_nonzero(over)) < int(np.count_nonzero(err == err))):
+                # a member that no step short of a rounding error resolves, or a minority
+                # that holds the batch past SHARED_STEPS (trial points far from any physical
+                # ladder), fails; the others go on
+                states[over] = np.nan
                 err_max = 0.0
-            ratio = math.sqrt(tol / err_max) if err_max > 0 else GROWTH
-            if err_max <= tol:
+            ratio = math.sqrt(1.0 / err_max) if err_max > 0 else GROWTH
+            if err_max <= 1.0:
                 out[:, k:inside] = states[:, :-1]
                 h = (b - a) * min(GROWTH, 0.9 * ratio)
                 if powered:
