@@ -23,8 +23,9 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
            "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent", "last_model"]
 
-#: The document's format; version 7 adds the refused candidate's weighed fall, which decides
-#: it (docs/diagnosis-json.md), and keeps every other key of versions 1 to 6.
+#: The document's format; version 8 counts the steady states' Newton steps and a long ladder's
+#: members by their size in ``work.solves`` (docs/diagnosis-json.md), and keeps every other key
+#: of versions 1 to 7.
 DIAGNOSIS_FORMAT = "spicethermal-diagnosis/8"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"

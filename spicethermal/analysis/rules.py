@@ -76,18 +76,18 @@ SCREEN_ROUNDS = 15
 REFINE_ROUNDS = 30
 #: The simulator's cost (:func:`spicethermal.engines.meter.metered`: network solves and
 #: :data:`~spicethermal.engines.meter.STEP_SOLVES` for each batched step) one diagnosis may
-#: spend. A unit takes 3 to 4 µs of CPU on a quiet 2-core machine of the bench's kind and 4 to
-#: 7.5 µs with two diagnoses at once (measured over the 89 bundles of a development seed; the
-#: slowest units are local temperature coefficients, whose terms cost twice as much a member):
-#: 8,000,000 and the overrun below keep every bundle under a minute on a loaded machine; the
-#: median bundle takes a quarter of it. Once it is spent, a ladder stops growing (a longer
+#: spend. A unit takes 3 to 4 µs of CPU on a quiet 2-core machine of the bench's kind (the
+#: steady states' Newton steps and long ladders counted as they cost,
+#: :data:`~spicethermal.engines.meter.SOLVE_NODES`): 12,000,000 is about 40 s, which keeps every
+#: bundle, the overrun below and a loaded machine's slower units included, under a minute; the
+#: median bundle takes a small part of it. Once it is spent, a ladder stops growing (a longer
 #: ladder's fit stops where it is), the candidates and forms not yet fitted are not (a later
 #: step screens the measurement effects left on its model held, one simulation of the device
 #: each), and a step that did not fit every form of every candidate is taken only when its
 #: best is at the noise; any other bounded fit that has started finishes (a diagnosis may
 #: overrun the budget by one form's fits, one round of a longer ladder's, or one step's refit
 #: and settling).
-WORK_BUDGET = 8_000_000
+WORK_BUDGET = 12_000_000
 #: An effect whose relative cost (``Traits.cost``) is at most this is evaluated in closed form,
 #: a few thousandths of the budget a fit. Each step fits those first, then the simulated ones
 #: (after the first step, each group in the first step's ranking): a budget that the simulated

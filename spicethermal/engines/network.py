@@ -75,8 +75,8 @@ STEADY_ITER, STEADY_TOL = 40, 1e-12
 #: still exceed the tolerance fail and the others go on.
 MAX_STEPS, GROWTH, MAX_REJECTED = 20000, 4.0, 25
 #: Steps of one transient after which a minority of its members can no longer hold the
-#: batch's step: a step that fewer than half of the members still computed exceed the
-#: tolerance of fails those members and goes on with the others. A physical network's
+#: batch's step: when fewer than half of the members still computed exceed their tolerance in
+#: a step, those members fail and the others go on. A physical network's
 #: transient over the records of a bundle takes a few hundred steps; a batch held far longer
 #: by a few members is waiting on trial points far from any physical ladder (a fit's
 #: finite-difference member with a layer of 10²⁶ K/W), which would otherwise cost the batch
