@@ -41,3 +41,12 @@ def test_the_calibration_noise_is_about_the_law_it_supports_not_about_a_line():
     assert degree == 2 and scatter < 0.02
     degree, _ = calibration_degree(t, t + 0.01 * rng.standard_normal(t.size))
     assert degree == 1
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_a_law_without_scatter_gets_its_own_degree_whatever_the_rounding(degree):
+    # with no scatter the residuals are rounding: their F ratio is noise of the last bits
+    t = np.linspace(20, 100, 9)
+    law = t + sum(c * (t - 60) ** k for k, c in ((2, 1e-3), (3, 1e-4)) if k <= degree)
+    for shift in (0.0, 1e-13, 3e-13):  # the last bits of the readings, as BLAS may leave them
+        assert calibration_degree(t, law * (1 + shift))[0] == degree

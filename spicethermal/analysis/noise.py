@@ -149,7 +149,7 @@ def trimmed_scale(e: NDArray) -> float:
 
 def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
     """The degree of the calibration's law in T that the points support, and the scatter
-    (K) about it: the lowest degree that the next one does not improve at significance
+    (K) about it: the lowest degree that no higher one improves at significance
     :data:`~.rules.POLY_P` (F-test), at most :data:`~.rules.POLY_MAX_DEGREE`.
 
     Parameters
@@ -172,15 +172,19 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
     def rss(d: int) -> float:
         return float(np.sum((y - np.polyval(np.polyfit(x, y, d), x)) ** 2))
 
-    degree = 1
-    while degree < POLY_MAX_DEGREE and n - degree - 2 >= 1:
-        a, b = rss(degree), rss(degree + 1)
-        dof = n - degree - 2
-        if b <= 0:
-            degree += 1
-            break
-        if fdtrc(1, dof, (a - b) / (b / dof)) >= POLY_P:  # the F distribution's tail
-            break
+    exact = n * (1e-12 * float(np.max(np.abs(y), initial=1.0))) ** 2  # rounding, not scatter
+
+    def improves(d: int, up: int) -> bool:  # does degree ``up`` lower degree ``d``'s residual?
+        a, b, dof = rss(d), rss(up), n - up - 1
+        if a <= exact:  # degree d fits to the last bits: a higher one only moves rounding
+            return False
+        if b <= exact:
+            return True
+        return bool(fdtrc(up - d, dof, ((a - b) / (up - d)) / (b / dof)) < POLY_P)
+
+    degree = 1  # the lowest that no higher degree improves: an odd law has no even term
+    while degree < POLY_MAX_DEGREE and any(
+            improves(degree, up) for up in range(degree + 1, POLY_MAX_DEGREE + 1) if up < n - 1):
         degree += 1
     dof = n - degree - 1
     scatter = math.sqrt(rss(degree) / dof) if dof > 0 else 0.0

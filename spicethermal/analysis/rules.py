@@ -33,9 +33,9 @@ LOCAL_WINDOW = 7
 #: A curve's noise is the scatter of this fraction of those local residuals, the smallest:
 #: the largest tenth (a transient's or a kink's few readings) are no noise.
 NOISE_KEPT = 0.9
-#: The calibration's law is a polynomial whose degree is raised while the next degree lowers
+#: The calibration's law is a polynomial whose degree is raised while a higher degree lowers
 #: the residual at this significance (F-test; one chance in a hundred of taking noise for a
-#: bow) ...
+#: bow, each test) ...
 POLY_P = 0.01
 #: ... up to this degree (a TSP is smooth in T).
 POLY_MAX_DEGREE = 3
