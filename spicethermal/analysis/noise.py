@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from functools import cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -167,28 +168,22 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
     t = np.asarray(temp_c, dtype=float)
     y = np.asarray(read_c, dtype=float)
     x = (t - t.mean()) / max(float(np.ptp(t)), 1e-9)
-    n = t.size
+    n, top = t.size, min(POLY_MAX_DEGREE, t.size - 2)  # a degree tested leaves a dof at least
+    exact = n * (1e-12 * float(np.max(np.abs(y), initial=1.0))) ** 2  # the readings' rounding
 
-    def rss(d: int) -> float:
-        return float(np.sum((y - np.polyval(np.polyfit(x, y, d), x)) ** 2))
-
-    exact = n * (1e-12 * float(np.max(np.abs(y), initial=1.0))) ** 2  # rounding, not scatter
+    @cache
+    def rss(d: int) -> float:  # a residual within the rounding is none
+        return max(float(np.sum((y - np.polyval(np.polyfit(x, y, d), x)) ** 2)), exact)
 
     def improves(d: int, up: int) -> bool:  # does degree ``up`` lower degree ``d``'s residual?
-        a, b, dof = rss(d), rss(up), n - up - 1
-        if a <= exact:  # degree d fits to the last bits: a higher one only moves rounding
-            return False
-        if b <= exact:
-            return True
-        return bool(fdtrc(up - d, dof, ((a - b) / (up - d)) / (b / dof)) < POLY_P)
+        f = (rss(d) - rss(up)) / (up - d) / (rss(up) / (n - up - 1))
+        return rss(d) > exact and bool(fdtrc(up - d, n - up - 1, f) < POLY_P)
 
     degree = 1  # the lowest that no higher degree improves: an odd law has no even term
-    while degree < POLY_MAX_DEGREE and any(
-            improves(degree, up) for up in range(degree + 1, POLY_MAX_DEGREE + 1) if up < n - 1):
+    while degree < top and any(improves(degree, up) for up in range(degree + 1, top + 1)):
         degree += 1
     dof = n - degree - 1
-    scatter = math.sqrt(rss(degree) / dof) if dof > 0 else 0.0
-    return degree, scatter
+    return degree, math.sqrt(rss(degree) / dof) if dof > 0 else 0.0
 
 
 def _pwm_noise(data: BundleData, residual: NDArray, sensor: float) -> float:

@@ -10,23 +10,14 @@ from typing import TYPE_CHECKING
 
 from ..fit.joint import penalty
 from .compare import comparison_of
-from .diagnosis import (
-    AMBIGUOUS,
-    APPROXIMATE,
-    NAMED,
-    NONE,
-    RIVAL,
-    UNSHOWN,
-    Step,
-    Verdict,
-    last_model,
-)
+from .diagnosis import AMBIGUOUS, APPROXIMATE, NAMED, NONE, RIVAL, UNSHOWN, Verdict, last_model
 from .rules import MIN_APPROXIMATE, beyond_noise, correlated_gain, explained
 from .where import localise
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..fit.joint import ModelFit
     from ..fit.measurement import BundleData
+    from .diagnosis import Step
 
 __all__ = ["beyond", "short", "verdict", "weighed_fall"]
 
