@@ -22,7 +22,7 @@ from spicethermal.effects.base import MeasurementEffect
 from spicethermal.effects.registry import plugin
 from spicethermal.engines.meter import STEP_SOLVES, metered
 from spicethermal.engines.network import NetworkBatch
-from spicethermal.fit.joint import ModelFit
+from spicethermal.fit.joint import ModelFit, bic
 from spicethermal.fit.measurement import BundleData
 from spicethermal.fit.search import FormFit
 from spicethermal.io.bundle import Bundle, CoolingTable
@@ -75,7 +75,8 @@ def scripted(monkeypatch):
             bundle: Bundle = BUNDLE, cost: int = 0, budget: int = 10**9,
             after: dict | None = None, weighed: list | None = None,
             cut_after: int | None = None, asked: list | None = None,
-            held: ModelFit | None = None, held_asked: list | None = None):
+            held: ModelFit | None = None, held_asked: list | None = None,
+            refits: dict | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
         fitted = []
@@ -101,7 +102,9 @@ def scripted(monkeypatch):
             return [FormFit(_fit((FIRST,), 0.0), ())], True
 
         monkeypatch.setattr(procedure, "fit_effect", fit_effect)
-        monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: fit)
+        # a refit leaves a model as it is, or gives ``refits[id(model)]``
+        monkeypatch.setattr(procedure, "refit",
+                            lambda data, noise, fit, rounds: (refits or {}).get(id(fit), fit))
 
         def without(*a, **k):  # the model without an earlier effect: none, or ``lighter``
             if lighter is None:
@@ -318,6 +321,26 @@ def test_once_the_work_is_spent_a_later_step_screens_the_measurement_effects_hel
             assert d.steps[-1].model is at  # not refitted
             assert d.spent.stopped.endswith(f"could at most tie with {transient.name}, which "
                                             "brings every data set to its noise")
+
+
+@pytest.mark.parametrize("left", [0.0, 8.0])
+def test_the_best_screened_on_the_model_held_is_refitted_jointly_once(scripted, left):
+    """The screen on the model held leaves a trend (the ladder and the first effect took part
+    of its misfit): that candidate alone is refitted jointly, and the step is taken when the
+    refit brings every data set to its noise, as refitted; not when it leaves the trend."""
+    transient = Effect.create("electrical-transient")
+    at, joint = _fit((FIRST, transient), 8.0), _fit((FIRST, transient), left)
+    after = {(): [(_fit((FIRST,), 8.0), 5000.0)], (FIRST.name,): [(at, 300.0)]}
+    d = scripted(after=after, cost=1000, budget=1000, held=at, refits={id(at): joint})
+    if left:
+        assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+    else:
+        assert d.effects == [FIRST.name, transient.name] and d.verdict.cls == "named"
+        assert d.steps[-1].model is joint
+        # the criterion's fall is the refit's, not the screen's
+        n = d.n_points
+        assert d.steps[-1].chosen.delta_bic == pytest.approx(
+            bic(d.steps[0].model, n) - bic(joint, n))
 
 
 def test_once_the_work_is_spent_the_ladders_stop_growing(monkeypatch):

@@ -19,8 +19,8 @@ falls when it is added. The procedure is stated in full once, in docs/diagnosis.
 
 The work is counted against :data:`.rules.WORK_BUDGET`, never timed: the same bundle gives
 the same verdict on every machine and under any load. Once it is spent, a later step screens
-the measurement effects left on its model held; a step the budget cut short is taken only
-when its best brings every data set to its noise (those left could at most tie with it).
+the measurement effects left on its model held, and refits the best jointly; a step cut short
+is taken only when its best brings every data set to its noise (those left could at most tie).
 """
 
 from __future__ import annotations
@@ -342,6 +342,17 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             cands, spent = _weigh(data, noise, current, cmp, fitted, n_points, sizes,
                                   ctx.affords)
             path.work += spent
+            if cut and cands and cands[0].name in held and short(data, cands[0].fit):
+                # the model held took part of its misfit into the ladder and the effects
+                # before it: the best screened one is refitted jointly, once
+                lead, fits = cands[0], held[cands[0].name]
+                joint = refit(data, noise, lead.fit, REFINE_ROUNDS)
+                if joint is not lead.fit:
+                    path.work += joint.work
+                    cands[0] = _candidate(data, current, cmp, [joint if f.fit is lead.fit
+                                                               else f.fit for f in fits],
+                                          joint, n_points, sizes)
+                    cands.sort(key=lambda c: -c.delta_bic)
             if cut and not (cands and decisive(0.0, -cands[0].delta_bic, cands[0].explained)
                             and not short(data, cands[0].fit)):
                 # a step that did not weigh every candidate is taken only when its best
