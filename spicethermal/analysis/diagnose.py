@@ -385,7 +385,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                      and decisive(0.0, -c.delta_bic, c.explained)
                      and not _refuted(c, data, current))
         status = _status(chosen, tied, why)
-        if chosen.name in held:  # at the noise on the model held: its PWM readings exact
+        if chosen.name in held:  # screened or refitted once, at the noise: not settled again
             current, cmp = chosen.fit, comparison_of(data, chosen.fit.predictions)
             steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, (), why))
             continue

@@ -83,10 +83,10 @@ REFINE_ROUNDS = 30
 #: median bundle takes a small part of it. Once it is spent, a ladder stops growing (a longer
 #: ladder's fit stops where it is), the candidates and forms not yet fitted are not (a later
 #: step screens the measurement effects left on its model held, one simulation of the device
-#: each), and a step that did not fit every form of every candidate is taken only when its
-#: best is at the noise; any other bounded fit that has started finishes (a diagnosis may
-#: overrun the budget by one form's fits, one round of a longer ladder's, or one step's refit
-#: and settling).
+#: each, and refits the best jointly once), and a step that did not fit every form of every
+#: candidate is taken only when its best is at the noise; any other bounded fit that has started
+#: finishes (a diagnosis may overrun the budget by one form's fits, one round of a longer
+#: ladder's, one step's refit and settling, or that joint refit).
 WORK_BUDGET = 12_000_000
 #: An effect whose relative cost (``Traits.cost``) is at most this is evaluated in closed form,
 #: a few thousandths of the budget a fit. Each step fits those first, then the simulated ones
