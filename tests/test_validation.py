@@ -236,6 +236,31 @@ def test_detectability_separates_clean_from_a_strong_effect():
     assert detectability(strong.record()).max_gain > 10
 
 
+def test_an_error_of_the_calibration_line_alone_is_not_detectable():
+    """The bench's line is off by what its noisy points put into it, an offset and a slope
+    that every reading shares and the calibration's residuals show: a linear ladder read
+    through a line off by several times the noise is still a linear ladder."""
+    dev = DEVICES["actuator"]
+    variant = {"noise_k": 0.02, "per_decade": 10, "dense_pwm": True, "steady": True,
+               "volts": False, "n_curves": 2}
+    rec = Case("clean", "clean", (), dev.name, dev.network(), bench_for(dev, variant),
+               7).record()
+    cal = rec.bundle.calibration
+    centre = float(np.mean(cal.temp_c))
+    sign = np.sign(np.polyfit(cal.temp_c, cal.v_tsp_v, 1)[0])
+
+    def off(name, values):  # a reading's error through a line 0.1 K and 0.2 %/K off
+        at = cal.temp_c if name == "calibration" else values
+        err = 0.1 + 2e-3 * (np.asarray(at, float) - centre)
+        return values + (sign * err if name == "calibration" else err)
+
+    shifted = replace(rec, truth={k: off(k, v) for k, v in rec.truth.items()},
+                      measured={k: off(k, v) for k, v in rec.measured.items()})
+    assert not detectability(shifted).detectable
+    # the line's error is fitted, not ignored: a ladder without it is 0.1 K off everywhere
+    assert detectability(shifted).rms_linear["calibration"] < 0.03
+
+
 # -- device classes, artefacts and physics outside the catalogue ------------------------------
 def test_device_classes_span_their_scales():
     """Rth and time constants of each class (a MEMS micro-heater of thousands of K/W to an

@@ -5,8 +5,11 @@ absorb. :func:`detectability` fits the best linear Foster ladder (orders 2 to 5,
 starts, every ``r`` and ``τ`` free and positive) to every reading of a
 :class:`~.measure.Record` in kelvin at once — cooling curves ``T = Tref + P Σ r e^{−t/τ}``,
 steady readings ``Tref + P Σ r``, PWM readings in the periodic steady state read at the end of
-the *declared* sample window — while the calibration's linear model is the bench's own
-least-squares line. The truth is the noise-free reading. Per data set
+the *declared* sample window — read through the calibration line, whose error the fit takes
+with the ladder: the bench's least-squares line is off by what its noisy calibration points
+put into it, an offset and a slope that every reading shares and that the calibration's own
+points bound (as every diagnosis fits them; the truth is read through that same line). The
+truth is the noise-free reading. Per data set
 ``gain = RMS(linear) / RMS(truth)``; with ``σ`` the bench noise,
 ``Δχ² = (RSS_linear − RSS_truth)/σ²``.
 
@@ -75,9 +78,18 @@ def _groups(record: Record) -> dict[str, list[str]]:
 
 
 def _predict(x: np.ndarray, record: Record) -> dict[str, np.ndarray]:
-    """Linear-ladder readings (°C) of every data set but the calibration, ``x`` = log r, log τ."""
-    m = x.size // 2
-    r, tau = np.exp(x[:m]), np.exp(x[m:])
+    """Linear-ladder readings (°C) of every data set, ``x`` = log r, log τ, then the line's
+    error at the calibration's centre (K) and its slope (K/K): the calibration's are its
+    residuals about the bench's line."""
+    m = (x.size - 2) // 2
+    r, tau = np.exp(x[:m]), np.exp(x[m:2 * m])
+    cal = record.bundle.calibration
+    assert cal is not None
+    centre, sign = float(np.mean(cal.temp_c)), np.sign(np.polyfit(cal.temp_c, cal.v_tsp_v, 1)[0])
+
+    def error(temp_c: np.ndarray) -> np.ndarray:  # of a reading, through the line, at temp_c
+        return x[-2] + x[-1] * (temp_c - centre)
+
     inp = record.inputs
     tref, t = inp["tref_c"], inp["t_s"]
     out: dict[str, np.ndarray] = {}
@@ -89,22 +101,27 @@ def _predict(x: np.ndarray, record: Record) -> dict[str, np.ndarray]:
     period = 1.0 / f
     peak = r * -np.expm1(-d * period / tau) / -np.expm1(-period / tau)
     out["pwm"] = tref + inp["pwm_power_w"] * (peak * np.exp(-inp["window_s"] / tau)).sum(axis=1)
-    return {k: v for k, v in out.items() if k in record.measured}
+    out = {k: v + error(v) for k, v in out.items() if k in record.measured}
+    out["calibration"] = sign * error(np.asarray(cal.temp_c, float))
+    return out
 
 
 def linear_fit(record: Record) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Best linear Foster ladder of every reading of ``record`` (calibration aside).
+    """Best linear Foster ladder of every reading of ``record``, with the calibration line's
+    error (module docstring).
 
     Returns
     -------
     tuple
         ``(r, τ, predictions)``: the stages with the lowest sum of squares over orders
-        :data:`ORDERS` and log-spaced starts, and the readings they predict per data set.
+        :data:`ORDERS` and log-spaced starts, and the readings they predict per data set
+        (the calibration's: its residuals about the bench's line).
     """
-    keys = [k for k in record.measured if k != "calibration"]
+    keys = list(record.measured)
     y = np.concatenate([record.measured[k] for k in keys])
     inp = record.inputs
-    rise = max(float(np.max(record.measured[k]) - inp["tref_c"]) for k in keys)
+    rise = max(float(np.max(record.measured[k]) - inp["tref_c"]) for k in keys
+               if k != "calibration")
     rth0 = rise / max(max(inp["powers_w"]), inp["pwm_power_w"])
     t = inp["t_s"]
 
@@ -117,9 +134,11 @@ def linear_fit(record: Record) -> tuple[np.ndarray, np.ndarray, dict[str, np.nda
     for m in ORDERS:
         for shift in (0.0, 0.5):
             tau0 = np.linspace(lo + 1.0, hi - 0.5, m) + shift
-            x0 = np.concatenate([np.full(m, np.log(rth0 / m)), tau0])
-            low = np.concatenate([np.full(m, np.log(rth0) - 30.0), np.full(m, lo - 6.0)])
-            high = np.concatenate([np.full(m, np.log(rth0) + 5.0), np.full(m, hi + 6.0)])
+            x0 = np.concatenate([np.full(m, np.log(rth0 / m)), tau0, [0.0, 0.0]])
+            low = np.concatenate([np.full(m, np.log(rth0) - 30.0), np.full(m, lo - 6.0),
+                                  [-np.inf, -np.inf]])
+            high = np.concatenate([np.full(m, np.log(rth0) + 5.0), np.full(m, hi + 6.0),
+                                   [np.inf, np.inf]])
             sol = least_squares(resid, np.clip(x0, low + 1e-9, high - 1e-9), bounds=(low, high),
                                 method="trf", max_nfev=400 * m)
             cost = float(np.sum(sol.fun ** 2))
@@ -127,8 +146,8 @@ def linear_fit(record: Record) -> tuple[np.ndarray, np.ndarray, dict[str, np.nda
                 best = (cost, sol.x)
     assert best is not None
     x = best[1]
-    m = x.size // 2
-    return np.exp(x[:m]), np.exp(x[m:]), _predict(x, record)
+    m = (x.size - 2) // 2
+    return np.exp(x[:m]), np.exp(x[m:2 * m]), _predict(x, record)
 
 
 def _rms(x: np.ndarray) -> float:
@@ -157,8 +176,8 @@ def detectability(record: Record) -> Detectability:
         lin[name], tru[name] = _rms(res_l), _rms(res_t)
         rss_lin += float(res_l @ res_l)
         rss_tru += float(res_t @ res_t)
-    cal_l = record.measured["calibration"]
-    cal_t = cal_l - record.truth["calibration"]
+    cal_l = record.measured["calibration"] - pred["calibration"]
+    cal_t = record.measured["calibration"] - record.truth["calibration"]
     lin["calibration"], tru["calibration"] = _rms(cal_l), _rms(cal_t)
     rss_lin += float(cal_l @ cal_l)
     rss_tru += float(cal_t @ cal_t)
