@@ -247,6 +247,20 @@ def test_an_effect_its_own_data_do_not_show_is_not_tied(scripted, bundle, calibr
     assert d.verdict.cls == ("named" if len(named) == 1 else "ambiguous")
 
 
+@pytest.mark.parametrize(("first", "second", "named"), [
+    (0.0, 0.0, [FIRST.name, SECOND.name]), (0.0, 8.0, [FIRST.name]),
+    (8.0, 8.0, [FIRST.name, SECOND.name]), (8.0, 0.0, [SECOND.name])])
+def test_an_effect_beyond_the_noise_is_not_tied_with_one_at_it(scripted, first, second, named):
+    """Two effects within the margin of the criterion are tied when both bring every data
+    set to the noise, or neither does; not when the one chosen does and the other leaves a
+    structured residual: the noise test tells them apart. (One at the noise behind one
+    beyond it is named alone: the selection from the next best first effect ends at the
+    noise.)"""
+    after = {(): [(_fit((FIRST,), first), 5000.0), (_fit((SECOND,), second), 4995.0)]}
+    d = scripted(after=after)
+    assert list(d.verdict.effects) == named
+
+
 OUTSIDE = Effect.create("phase-change", t_c=80.0, width_k=2.0, latent_j=1e-3)
 
 

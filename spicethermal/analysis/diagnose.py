@@ -9,11 +9,11 @@ falls when it is added. The procedure is stated in full once, in docs/diagnosis.
    closed-form ones first (:data:`.rules.CLOSED_FORM_COST`). Rivals are weighed alike and
    never named.
 3. **Forward selection**: the lowest BIC is added when decisive (:func:`.rules.decisive`),
-   those within :data:`.rules.DECISIVE_BIC` of it are tied; the leaders grow their ladders
-   first (:func:`~spicethermal.fit.search.grow`); a backward check drops what is no longer
-   needed and the model is settled (:func:`~spicethermal.fit.search.settle`). A further
-   effect is added when it brings every data set to its noise or its fall is decisive under
-   the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`). Steps ending
+   those within :data:`.rules.DECISIVE_BIC` of it (and at the noise if it is) are tied; the
+   leaders grow their ladders first (:func:`~spicethermal.fit.search.grow`); a backward check
+   drops what is no longer needed; the model is settled (:func:`~spicethermal.fit.search.settle`).
+   A further effect is added when it brings every data set to its noise or its fall is decisive
+   under the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`). Steps ending
    beyond the noise are run again from the next best first effect.
 4. **Verdict** (:func:`.verdict.verdict`): *named*, *approximate*, *ambiguous* or *none*.
 
@@ -381,9 +381,10 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
+        loose = short(data, chosen.fit)  # one at the noise is not tied with one beyond it
         tied = tuple(c for c in cands[i + 1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained)
-                     and not _refuted(c, data, current))
+                     and not _refuted(c, data, current) and (loose or not short(data, c.fit)))
         status = _status(chosen, tied, why)
         if chosen.name in held:  # screened or refitted once, at the noise: not settled again
             current, cmp = chosen.fit, comparison_of(data, chosen.fit.predictions)
@@ -413,8 +414,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
 
 
 def _status(chosen: Candidate, tied: Sequence[Candidate], why: str) -> str:
-    """A step's status (see :class:`~.diagnosis.Step`): ``why`` says why the data do not
-    show the chosen effect (:func:`_unshown`)."""
+    """A step's status (:class:`~.diagnosis.Step`); ``why``: :func:`_unshown`'s."""
     if not chosen.catalogued:
         return RIVAL
     named_too = any(t.catalogued for t in tied)
