@@ -414,7 +414,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
 
 
 def _status(chosen: Candidate, tied: Sequence[Candidate], why: str) -> str:
-    """A step's status (:class:`~.diagnosis.Step`); ``why``: :func:`_unshown`'s."""
+    """A step's status (:class:`~.diagnosis.Step`); ``why``: :func:`_unshown`'s reason or ""."""
     if not chosen.catalogued:
         return RIVAL
     named_too = any(t.catalogued for t in tied)
