@@ -83,14 +83,12 @@ def _predict(x: np.ndarray, record: Record) -> dict[str, np.ndarray]:
     residuals about the bench's line."""
     m = (x.size - 2) // 2
     r, tau = np.exp(x[:m]), np.exp(x[m:2 * m])
-    cal = record.bundle.calibration
-    assert cal is not None
-    centre, sign = float(np.mean(cal.temp_c)), np.sign(np.polyfit(cal.temp_c, cal.v_tsp_v, 1)[0])
+    inp = record.inputs
+    cal_t = inp["cal_temps_c"]
 
     def error(temp_c: np.ndarray) -> np.ndarray:  # of a reading, through the line, at temp_c
-        return x[-2] + x[-1] * (temp_c - centre)
+        return x[-2] + x[-1] * (temp_c - cal_t.mean())
 
-    inp = record.inputs
     tref, t = inp["tref_c"], inp["t_s"]
     out: dict[str, np.ndarray] = {}
     decay = np.exp(-t[:, None] / tau[None, :]) @ r
@@ -102,7 +100,7 @@ def _predict(x: np.ndarray, record: Record) -> dict[str, np.ndarray]:
     peak = r * -np.expm1(-d * period / tau) / -np.expm1(-period / tau)
     out["pwm"] = tref + inp["pwm_power_w"] * (peak * np.exp(-inp["window_s"] / tau)).sum(axis=1)
     out = {k: v + error(v) for k, v in out.items() if k in record.measured}
-    out["calibration"] = sign * error(np.asarray(cal.temp_c, float))
+    out["calibration"] = inp["line_sign"] * error(cal_t)
     return out
 
 

@@ -247,5 +247,6 @@ def measure(net: Network, bench: Bench, seed: int, device: str = "validation dev
                     cooling=tuple(cooling), pwm=pwm_table, extra=dict(extra or {}))
     inputs = {"t_s": t, "powers_w": bench.cooling_powers_w, "freq_hz": f, "duty": d,
               "pwm_power_w": bench.pwm_power_w, "window_s": bench.declared_window_s,
-              "tref_c": tref, "noise_k": bench.noise_k}
+              "tref_c": tref, "noise_k": bench.noise_k,
+              "cal_temps_c": cal_t, "line_sign": float(np.sign(b))}
     return Record(bundle, truth, measured, inputs)
