@@ -15,6 +15,8 @@ from spicethermal.analysis.diagnose import diagnose, fit_with_effects
 from spicethermal.analysis.diagnosis import DIAGNOSIS_FORMAT
 from spicethermal.cli.main import main
 from spicethermal.io.bundle import Bundle
+from spicethermal.validation.cases import DEVICES, Case, bench_for, laws_on
+from spicethermal.validation.laws import ResistanceLaw
 from spicethermal.validation.linear import linear_fast
 
 CATALOGUED = [n for n, e in hidden().items() if e is not None]
@@ -114,3 +116,21 @@ def test_the_command_takes_a_work_budget_and_says_when_it_stopped_the_search(cap
     with pytest.raises(SystemExit) as err:
         main(["diagnose", sample, "--budget", "0"])
     assert err.value.code == 2 and "must be >= 1" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_coefficient_of_the_outer_layers_alone_is_named_on_those_layers():
+    """An independent simulator's device whose two outer layers (package, heatsink) change
+    0.8 %/K with their own temperatures: the coefficient is named on an outer subset of the
+    fitted ladder's layers, every data set at its noise."""
+    dev = DEVICES["mosfet"]
+    law = ResistanceLaw("linear", alpha_per_k=8e-3)
+    variant = {"noise_k": 0.01, "per_decade": 10, "dense_pwm": True, "steady": True,
+               "volts": False, "n_curves": 3}
+    case = Case("outer", "effect", ("temperature-coefficient",), dev.name,
+                dev.network(laws=laws_on(dev, law, range(2, 4))), bench_for(dev, variant), 11)
+    d = diagnose(case.record().bundle)
+    assert d.verdict.cls == "named" and d.effects == ["temperature-coefficient"], \
+        d.verdict.reason
+    e = d.model().effect("temperature-coefficient")
+    assert e.form != "junction" and e.params["first_layer"] >= 1, e.params

@@ -4,8 +4,8 @@
 effect's own parameters from every start that the plugin's ``guess()`` gives for each of its
 variants (a node, a subset of layers), the ladder and the model's other effects held (a
 *screen*, all side by side, on the model's ladder); the best screened point of each form (of
-its two best variants for the first form, which ranks the variants for the forms that share
-them) is then refitted jointly with the ladder and every other effect, every form alike.
+its two best variants for the first form that has them, which ranks the variants for the
+forms that share them) is then refitted jointly with the ladder and every other effect.
 :func:`screen_held` only screens the measurement effects, on the model held (a fit keeps its
 last simulation, so each costs one simulation of the device). :func:`grow` refits a form's
 fit on longer ladders; :func:`refit` refits a model's every parameter; :func:`without` drops
@@ -282,13 +282,14 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
                 pairs, got, work = pairs + more, got + got_ref, work + spent
         done = sorted((i for i, m in enumerate(got) if m is not None),
                       key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
-        if keys and keys not in ranked and done:
+        ranks = bool(keys) and keys not in ranked
+        if ranks and done:
             ranked[keys] = [dict(v) for v in dict.fromkeys(
                 tuple(sorted(pairs[i][0].items())) for i in done)]
-        # the best screened point of each of the best variants (of the first form; one for
-        # the others: their variants are ranked already), refitted jointly
+        # the best screened point of each of the best variants (of the form that ranks them;
+        # one for the others: their variants are ranked already), refitted jointly
         firsts = list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}.values())
-        kept = VARIANTS_KEPT if lead is None else 1
+        kept = VARIANTS_KEPT if ranks or lead is None else 1
         heads = [got[i] for i in sorted(firsts, key=lambda i: got[i].chi2_total)[:kept]]
         if lead is not None:
             # and the lead's own values, as far as this form shares them, on its ladder (a
@@ -300,7 +301,10 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             work += spent
             if there[0] is not None and (not heads or
                                          there[0].chi2_total < heads[0].chi2_total):
-                heads = [there[0]]
+                # it leads; the best of the other variants follow it
+                lead_at = _variant(there[0], plugin.name, keys)
+                heads = [there[0], *(m for m in heads
+                                     if _variant(m, plugin.name, keys) != lead_at)][:kept]
         if not heads:
             continue
         if not left():
@@ -345,6 +349,11 @@ def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             if forms:
                 out[p.name] = forms
     return out
+
+
+def _variant(fit: ModelFit, name: str, keys: frozenset[str]) -> tuple[float, ...]:
+    """The values of effect ``name`` in ``fit`` that make its variant (``keys``)."""
+    return tuple(fit.effect(name).params[k] for k in sorted(keys))
 
 
 def _form_fits(fits: Sequence[ModelFit], seeds: Sequence[Sequence[Mapping[str, float]]]
