@@ -42,8 +42,8 @@ from .joint import (
 )
 from .measurement import BundleData
 
-__all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect", "grow", "refit",
-           "screen_held", "settle", "without"]
+__all__ = ["RANK_ROUNDS", "SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect",
+           "grow", "refit", "screen_held", "settle", "without"]
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
@@ -51,6 +51,10 @@ SCREEN_TOL_REL = 3e-4
 #: The first form of an effect locates its discrete variants (a node, a subset of layers);
 #: the other forms that take the same variants are screened on this many of the best only.
 VARIANTS_KEPT = 2
+#: The variants are ranked by this many rounds of the joint fit from each one's best screened
+#: point: enough to let the ladder give back what it took of the effect (a fit's first rounds
+#: take most of its fall), few enough to cost a fraction of a refit.
+RANK_ROUNDS = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,20 +113,9 @@ def _values(model: ModelFit) -> tuple[dict[str, float], ...]:
 
 def refit(data: BundleData, noise: Mapping[str, float], model: ModelFit,
           rounds: int) -> ModelFit:
-    """``model`` with its ladder and every effect refitted jointly (kept as it was when the
-    refit does not lower χ²).
-
-    Parameters
-    ----------
-    data : BundleData
-    noise : mapping of data set name to noise (K)
-    model : ModelFit
-    rounds : int
-
-    Returns
-    -------
-    ModelFit
-    """
+    """``model`` (on ``data``, ``noise`` per data set in K) with its ladder and every effect
+    refitted jointly for ``rounds`` rounds at most (kept as it was when the refit does not
+    lower χ²)."""
     layout = Layout(_slots(model), model.ladder.order)
     got = fit_starts(data, noise, layout, [Start(model.ladder, _values(model))], rounds)[0]
     return got if got is not None and got.chi2_total <= model.chi2_total else model
@@ -173,20 +166,8 @@ def settle(data: BundleData, noise: Mapping[str, float], model: ModelFit,
 
 def without(data: BundleData, noise: Mapping[str, float], model: ModelFit, name: str,
             rounds: int) -> ModelFit:
-    """``model`` without effect ``name``, the rest refitted.
-
-    Parameters
-    ----------
-    data : BundleData
-    noise : mapping of data set name to noise (K)
-    model : ModelFit
-    name : str
-    rounds : int
-
-    Returns
-    -------
-    ModelFit
-    """
+    """``model`` (on ``data``, ``noise`` per data set in K) without effect ``name``, the rest
+    refitted for ``rounds`` rounds at most."""
     keep = tuple(e for e in model.effects if e.name != name)
     slots = tuple((e.plugin, e.form) for e in keep)
     got = fit_starts(data, noise, Layout(slots, model.ladder.order),
@@ -280,15 +261,18 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             if more:
                 got_ref, spent = screen(at_ref, form, more)
                 pairs, got, work = pairs + more, got + got_ref, work + spent
-        done = sorted((i for i, m in enumerate(got) if m is not None),
-                      key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
+        done = _order(got)
         ranks = bool(keys) and keys not in ranked
+        if ranks and joint and len(variants) > 1:
+            got, spent = _rank_free(data, noise, Layout((*slots, (plugin, form)),
+                                                        model.ladder.order), got, pairs, done)
+            work, done = work + spent, _order(got)
         if ranks and done:
             ranked[keys] = [dict(v) for v in dict.fromkeys(
                 tuple(sorted(pairs[i][0].items())) for i in done)]
         # the best screened point of each of the best variants (of the form that ranks them;
         # one for the others: their variants are ranked already), refitted jointly
-        firsts = list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}.values())
+        firsts = _firsts(pairs, done)
         kept = VARIANTS_KEPT if ranks or lead is None else 1
         heads = [got[i] for i in sorted(firsts, key=lambda i: got[i].chi2_total)[:kept]]
         if lead is not None:
@@ -349,6 +333,35 @@ def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             if forms:
                 out[p.name] = forms
     return out
+
+
+def _order(got: Sequence[ModelFit | None]) -> list[int]:
+    """The indices of the fits in ``got``, lowest χ² first."""
+    return sorted((i for i, m in enumerate(got) if m is not None),
+                  key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
+
+
+def _firsts(pairs: Sequence[tuple[Mapping[str, float], object]], done: Sequence[int]
+            ) -> list[int]:
+    """The first index in ``done`` of each variant of ``pairs``."""
+    return list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}.values())
+
+
+def _rank_free(data: BundleData, noise: Mapping[str, float], layout: Layout,
+               got: list[ModelFit | None], pairs: Sequence[tuple[Mapping[str, float], object]],
+               done: Sequence[int]) -> tuple[list[ModelFit | None], int]:
+    """``got`` with each variant's best screened point (the first of ``done``, ranked by
+    χ²) replaced by :data:`RANK_ROUNDS` rounds of the joint fit from it, side by side, and
+    their work. The screen held the ladder, which took some of the effect into its values
+    differently for each variant; a few free rounds rank them as the joint refit will."""
+    firsts = _firsts(pairs, done)
+    free = fit_starts(data, noise, layout, [Start(got[i].ladder, _values(got[i]))  # type: ignore
+                                            for i in firsts], RANK_ROUNDS)
+    out = list(got)
+    for i, f in zip(firsts, free, strict=True):
+        if f is not None and f.chi2_total < got[i].chi2_total:  # type: ignore[union-attr]
+            out[i] = f
+    return out, sum(f.work for f in free if f is not None)
 
 
 def _variant(fit: ModelFit, name: str, keys: frozenset[str]) -> tuple[float, ...]:
