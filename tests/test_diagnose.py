@@ -134,3 +134,24 @@ def test_a_coefficient_of_the_outer_layers_alone_is_named_on_those_layers():
         d.verdict.reason
     e = d.model().effect("temperature-coefficient")
     assert e.form != "junction" and e.params["first_layer"] >= 1, e.params
+
+
+@pytest.mark.slow
+def test_a_strong_power_law_on_every_layer_is_named_on_every_layer():
+    """An independent simulator's device whose every layer follows R ∝ T^2.5 (T in kelvin)
+    with heat capacities rising 0.25 %/K: the screens, on a ladder that took the law into its
+    values, rank a subset of layers first; the variants ranked by a few rounds of the joint
+    fit find every layer, at the noise."""
+    dev = DEVICES["diode"]
+    law = ResistanceLaw("power", exponent=2.5)
+    variant = {"noise_k": 0.01, "per_decade": 5, "dense_pwm": True, "steady": False,
+               "volts": False, "n_curves": 3}
+    network = dev.network(laws=laws_on(dev, law), c_slope_per_k=(2.5e-3,) * 4)
+    case = Case("every", "effect", ("temperature-coefficient",), dev.name, network,
+                bench_for(dev, variant), 13)
+    d = diagnose(case.record().bundle)
+    assert d.verdict.cls == "named" and d.effects == ["temperature-coefficient"], \
+        d.verdict.reason
+    e = d.model().effect("temperature-coefficient")
+    assert e.form != "junction" and e.params["first_layer"] == 0, e.params
+    assert e.params["last_layer"] >= 3, e.params
