@@ -564,33 +564,3 @@ def test_a_candidate_cut_between_its_forms_stops_the_step(scripted, monkeypatch)
     assert not d.steps and d.verdict.cls == "none"
     assert d.spent.stopped.startswith(f"the work budget (a cost of {d.spent.budget:,}) was "
                                       "spent in step 1 before ")
-
-
-def test_the_form_that_ranks_the_variants_refits_its_best_two_even_after_another_form():
-    """The variants (subsets of layers) are ranked by the first form that has them, which
-    refits its best two jointly, also when a form without variants came first (a coefficient
-    on the junction); the forms after it refit only the best."""
-    t = np.geomspace(1e-4, 10.0, 40)
-    bundle = Bundle(ambient_c=25.0, cooling=(CoolingTable(
-        t, 0.5, tj_c=25.0 + 5.0 * np.exp(-t / 0.01) + 5.0 * np.exp(-t), tj_steady_c=35.0,
-        tref_steady_c=25.0),))
-    data = BundleData.from_bundle(bundle)
-    base, noise = procedure._baseline(data, None)
-    assert base.ladder.order >= 2  # the coefficient's local forms have subsets to rank
-    refitted = []
-
-    def refine(data, noise, fit, rounds, work):
-        e = fit.effect(FIRST.name)
-        refitted.append((e.form, e.params["first_layer"], e.params["last_layer"]))
-        return fit
-
-    original = search._refine
-    try:
-        search._refine = refine
-        fits, done = search.fit_effect(data, noise, base, FIRST.plugin, 3, 3)
-    finally:
-        search._refine = original
-    assert done and [f.fit.effect(FIRST.name).form for f in fits] == list(FIRST.plugin.forms)
-    per_form = {form: [r for r in refitted if r[0] == form] for form in FIRST.plugin.forms}
-    assert len(per_form["junction"]) == 1 and len(set(per_form["local"])) == 2
-    assert all(len(per_form[form]) == 1 for form in ("power-law", "quadratic"))

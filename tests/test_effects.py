@@ -169,22 +169,3 @@ def test_a_band_is_shown_only_where_the_temperatures_reached_cross_its_centre():
         why = band.plugin.unshown(band, ev)
         assert (why == "") is shown, why
         assert shown or "outside the 25–45 °C that node 1 reaches" in why
-
-
-def test_a_coefficient_starts_centred_where_the_data_ran():
-    """The model so far was fitted without the coefficient, its resistances those at the
-    temperatures the data ran at: each start's law is centred there, at the mean before the
-    cut of the junction (junction form) or of the variant's layers (local forms)."""
-    tc = Effect.create("temperature-coefficient").plugin
-    t = np.array([0.0, 1.0])
-    curves = tuple(CurveEvidence(t, t, t, p, 25.0, np.array(nodes))
-                   for p, nodes in ((2.0, [80.0, 60.0, 40.0, 30.0]),
-                                    (1.0, [50.0, 40.0, 32.0, 28.0])))
-    ev = Evidence(cooling=curves, n_nodes=4, reference_c=25.0)
-    assert [s["t0_c"] for s in tc.guess("junction", {}, ev)] == pytest.approx([65.0] * 2)
-    outer = {"first_layer": 2.0, "last_layer": 1000.0}  # layers (40+30)/2, (30+25)/2, ...
-    for form in ("local", "power-law", "quadratic"):
-        assert [s["t0_c"] for s in tc.guess(form, outer, ev)] == \
-            pytest.approx([(35 + 27.5 + 30 + 26.5) / 4] * 2)
-    assert [s["t0_c"] for s in tc.guess("local", outer, Evidence(reference_c=40.0))] == \
-        pytest.approx([40.0] * 2)

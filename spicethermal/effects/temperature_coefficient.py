@@ -181,7 +181,7 @@ class TemperatureCoefficient(DeviceEffect):
     def guess(self, form: str, fixed: Mapping[str, float],
               evidence: Evidence) -> Sequence[Mapping[str, float]]:
         alpha = _apparent_alpha(evidence)
-        t0 = _centre(form, fixed, evidence)
+        t0 = evidence.reference_c
         starts = []
         for a in (alpha, -alpha):
             if form == "power-law":
@@ -234,26 +234,6 @@ class TemperatureCoefficient(DeviceEffect):
         slope = (f", heat capacity {100 * p['c_slope_per_k']:+.3g} %/K"
                  if effect.form != "junction" and p["c_slope_per_k"] else "")
         return f"{law_text} from {p['t0_c']:.4g} °C, {where}{slope}"
-
-
-def _centre(form: str, fixed: Mapping[str, float], evidence: Evidence) -> float:
-    """Where the law starts centred (its ``t0_c``): the mean temperature, over the cooling
-    curves just before their cut, of what controls it (the junction, or the layers of the
-    variant ``fixed``, each the mean of its two nodes). The model so far was fitted without
-    the coefficient: its resistances are those at the temperatures the data ran at, so a law
-    centred there leaves them right while a fit that holds the ladder moves only the slope.
-    The bundle's reference without a cooling curve."""
-    temps = []
-    for c in evidence.cooling:
-        nodes = np.append(np.asarray(c.nodes_c, dtype=float), c.tref_c)
-        if form == "junction":
-            temps.append(nodes[0])
-            continue
-        layers = 0.5 * (nodes[:-1] + nodes[1:])
-        first = int(fixed.get("first_layer", 0.0))
-        last = min(int(fixed.get("last_layer", LAST)), len(layers) - 1)
-        temps.extend(layers[first:last + 1])
-    return float(np.mean(temps)) if temps else evidence.reference_c
 
 
 def _apparent_alpha(evidence: Evidence) -> float:

@@ -4,8 +4,8 @@
 effect's own parameters from every start that the plugin's ``guess()`` gives for each of its
 variants (a node, a subset of layers), the ladder and the model's other effects held (a
 *screen*, all side by side, on the model's ladder); the best screened point of each form (of
-its two best variants for the first form that has them, which ranks the variants for the
-forms that share them) is then refitted jointly with the ladder and every other effect.
+its two best variants for the first form, which ranks the variants for the forms that share
+them) is then refitted jointly with the ladder and every other effect, every form alike.
 :func:`screen_held` only screens the measurement effects, on the model held (a fit keeps its
 last simulation, so each costs one simulation of the device). :func:`grow` refits a form's
 fit on longer ladders; :func:`refit` refits a model's every parameter; :func:`without` drops
@@ -42,8 +42,8 @@ from .joint import (
 )
 from .measurement import BundleData
 
-__all__ = ["RANK_ROUNDS", "SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect",
-           "grow", "refit", "screen_held", "settle", "without"]
+__all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect", "grow", "refit",
+           "screen_held", "settle", "without"]
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
@@ -51,10 +51,6 @@ SCREEN_TOL_REL = 3e-4
 #: The first form of an effect locates its discrete variants (a node, a subset of layers);
 #: the other forms that take the same variants are screened on this many of the best only.
 VARIANTS_KEPT = 2
-#: The variants are ranked by this many rounds of the joint fit from each one's best screened
-#: point: enough to let the ladder give back what it took of the effect (a fit's first rounds
-#: take most of its fall), few enough to cost a fraction of a refit.
-RANK_ROUNDS = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,9 +109,20 @@ def _values(model: ModelFit) -> tuple[dict[str, float], ...]:
 
 def refit(data: BundleData, noise: Mapping[str, float], model: ModelFit,
           rounds: int) -> ModelFit:
-    """``model`` (on ``data``, ``noise`` per data set in K) with its ladder and every effect
-    refitted jointly for ``rounds`` rounds at most (kept as it was when the refit does not
-    lower χ²)."""
+    """``model`` with its ladder and every effect refitted jointly (kept as it was when the
+    refit does not lower χ²).
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to noise (K)
+    model : ModelFit
+    rounds : int
+
+    Returns
+    -------
+    ModelFit
+    """
     layout = Layout(_slots(model), model.ladder.order)
     got = fit_starts(data, noise, layout, [Start(model.ladder, _values(model))], rounds)[0]
     return got if got is not None and got.chi2_total <= model.chi2_total else model
@@ -166,8 +173,20 @@ def settle(data: BundleData, noise: Mapping[str, float], model: ModelFit,
 
 def without(data: BundleData, noise: Mapping[str, float], model: ModelFit, name: str,
             rounds: int) -> ModelFit:
-    """``model`` (on ``data``, ``noise`` per data set in K) without effect ``name``, the rest
-    refitted for ``rounds`` rounds at most."""
+    """``model`` without effect ``name``, the rest refitted.
+
+    Parameters
+    ----------
+    data : BundleData
+    noise : mapping of data set name to noise (K)
+    model : ModelFit
+    name : str
+    rounds : int
+
+    Returns
+    -------
+    ModelFit
+    """
     keep = tuple(e for e in model.effects if e.name != name)
     slots = tuple((e.plugin, e.form) for e in keep)
     got = fit_starts(data, noise, Layout(slots, model.ladder.order),
@@ -261,19 +280,15 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             if more:
                 got_ref, spent = screen(at_ref, form, more)
                 pairs, got, work = pairs + more, got + got_ref, work + spent
-        done = _order(got)
-        ranks = bool(keys) and keys not in ranked
-        if ranks and joint and len(variants) > 1:
-            got, spent = _rank_free(data, noise, Layout((*slots, (plugin, form)),
-                                                        model.ladder.order), got, pairs, done)
-            work, done = work + spent, _order(got)
-        if ranks and done:
+        done = sorted((i for i, m in enumerate(got) if m is not None),
+                      key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
+        if keys and keys not in ranked and done:
             ranked[keys] = [dict(v) for v in dict.fromkeys(
                 tuple(sorted(pairs[i][0].items())) for i in done)]
-        # the best screened point of each of the best variants (of the form that ranks them;
-        # one for the others: their variants are ranked already), refitted jointly
-        firsts = _firsts(pairs, done)
-        kept = VARIANTS_KEPT if ranks or lead is None else 1
+        # the best screened point of each of the best variants (of the first form; one for
+        # the others: their variants are ranked already), refitted jointly
+        firsts = list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}.values())
+        kept = VARIANTS_KEPT if lead is None else 1
         heads = [got[i] for i in sorted(firsts, key=lambda i: got[i].chi2_total)[:kept]]
         if lead is not None:
             # and the lead's own values, as far as this form shares them, on its ladder (a
@@ -285,10 +300,7 @@ def fit_effect(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             work += spent
             if there[0] is not None and (not heads or
                                          there[0].chi2_total < heads[0].chi2_total):
-                # it leads; the best of the other variants follow it
-                lead_at = _variant(there[0], plugin.name, keys)
-                heads = [there[0], *(m for m in heads
-                                     if _variant(m, plugin.name, keys) != lead_at)][:kept]
+                heads = [there[0]]
         if not heads:
             continue
         if not left():
@@ -333,40 +345,6 @@ def screen_held(data: BundleData, noise: Mapping[str, float], model: ModelFit,
             if forms:
                 out[p.name] = forms
     return out
-
-
-def _order(got: Sequence[ModelFit | None]) -> list[int]:
-    """The indices of the fits in ``got``, lowest χ² first."""
-    return sorted((i for i, m in enumerate(got) if m is not None),
-                  key=lambda i: got[i].chi2_total)  # type: ignore[union-attr]
-
-
-def _firsts(pairs: Sequence[tuple[Mapping[str, float], object]], done: Sequence[int]
-            ) -> list[int]:
-    """The first index in ``done`` of each variant of ``pairs``."""
-    return list({tuple(sorted(pairs[i][0].items())): i for i in reversed(done)}.values())
-
-
-def _rank_free(data: BundleData, noise: Mapping[str, float], layout: Layout,
-               got: list[ModelFit | None], pairs: Sequence[tuple[Mapping[str, float], object]],
-               done: Sequence[int]) -> tuple[list[ModelFit | None], int]:
-    """``got`` with each variant's best screened point (the first of ``done``, ranked by
-    χ²) replaced by :data:`RANK_ROUNDS` rounds of the joint fit from it, side by side, and
-    their work. The screen held the ladder, which took some of the effect into its values
-    differently for each variant; a few free rounds rank them as the joint refit will."""
-    firsts = _firsts(pairs, done)
-    free = fit_starts(data, noise, layout, [Start(got[i].ladder, _values(got[i]))  # type: ignore
-                                            for i in firsts], RANK_ROUNDS)
-    out = list(got)
-    for i, f in zip(firsts, free, strict=True):
-        if f is not None and f.chi2_total < got[i].chi2_total:  # type: ignore[union-attr]
-            out[i] = f
-    return out, sum(f.work for f in free if f is not None)
-
-
-def _variant(fit: ModelFit, name: str, keys: frozenset[str]) -> tuple[float, ...]:
-    """The values of effect ``name`` in ``fit`` that make its variant (``keys``)."""
-    return tuple(fit.effect(name).params[k] for k in sorted(keys))
 
 
 def _form_fits(fits: Sequence[ModelFit], seeds: Sequence[Sequence[Mapping[str, float]]]
