@@ -369,8 +369,8 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         if not cands or not decisive(0.0, -cands[i].delta_bic, cands[i].explained):
             break
         chosen = cands[i]
-        if chosen.catalogued and any(s.status != RIVAL for s in steps) \
-                and short(data, chosen.fit):
+        loose = short(data, chosen.fit)  # at the noise, it ties only with one at the noise
+        if chosen.catalogued and any(s.status != RIVAL for s in steps) and loose:
             # a further effect that leaves a structured residual too: any flexible effect
             # explains part of what an approximate form leaves, no evidence of its physics
             # unless its fall stands out of the correlated misfit it leaves
@@ -381,7 +381,6 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
-        loose = short(data, chosen.fit)  # one at the noise is not tied with one beyond it
         tied = tuple(c for c in cands[i + 1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained)
                      and not _refuted(c, data, current) and (loose or not short(data, c.fit)))
