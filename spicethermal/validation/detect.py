@@ -85,9 +85,10 @@ def _predict(x: np.ndarray, record: Record) -> dict[str, np.ndarray]:
     r, tau = np.exp(x[:m]), np.exp(x[m:2 * m])
     inp = record.inputs
     cal_t = inp["cal_temps_c"]
+    centre = float(np.mean(cal_t))
 
     def error(temp_c: np.ndarray) -> np.ndarray:  # of a reading, through the line, at temp_c
-        return x[-2] + x[-1] * (temp_c - cal_t.mean())
+        return x[-2] + x[-1] * (temp_c - centre)
 
     tref, t = inp["tref_c"], inp["t_s"]
     out: dict[str, np.ndarray] = {}
