@@ -168,8 +168,8 @@ def test_what_a_model_leaves_is_built_only_for_a_plugin_that_judges_it(scripted,
     # the default ``unshown`` needs no evidence (a network simulation of the model); a
     # plugin that overrides it gets the evidence of the model with its effect
     built = []
-    real = procedure.evidence
-    monkeypatch.setattr(procedure, "evidence",
+    real = search.evidence
+    monkeypatch.setattr(search, "evidence",
                         lambda data, fit, noise: built.append(fit) or real(data, fit, noise))
     d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0))
     assert d.effects == [FIRST.name, SECOND.name]
@@ -261,6 +261,25 @@ def test_an_effect_beyond_the_noise_is_not_tied_with_one_at_it(scripted, first, 
     assert list(d.verdict.effects) == named
 
 
+#: Transients of the reading on the scripted model (one stage of 0.2 s): one over in a tenth
+#: of a millisecond, and one masking the first second, over which the junction gives up
+#: 99 % of its rise (electrical_transient.MAX_MASKED_SHARE).
+BRIEF = Effect.create("electrical-transient", "fixed", amplitude_k=0.3, masked_s=1e-4)
+LONG = Effect.create("electrical-transient", "fixed", amplitude_k=0.3, masked_s=1.0)
+
+
+def test_the_selection_from_the_next_best_first_effect_keeps_its_tie_with_the_best(scripted):
+    """Two first effects within the margin, both beyond the noise: after the best no further
+    effect reaches the noise, after the next best a third does. The selection from the next
+    best is kept, and its first step is still tied with the best (the margin holds either
+    way): both are named, then the third."""
+    after = {(): [(_fit((FIRST,), 8.0), 5000.0), (_fit((SECOND,), 8.0), 4995.0)],
+             (SECOND.name,): [(_fit((SECOND, BRIEF), 0.0), 200.0)]}
+    d = scripted(after=after)
+    assert list(d.verdict.effects) == [SECOND.name, FIRST.name, BRIEF.name]
+    assert d.verdict.cls == "ambiguous" and d.steps[0].chosen.name == SECOND.name
+
+
 OUTSIDE = Effect.create("phase-change", t_c=80.0, width_k=2.0, latent_j=1e-3)
 
 
@@ -276,6 +295,23 @@ def test_a_first_effect_the_data_do_not_show_is_not_named(scripted):
     assert d.verdict.cls == "none" and not d.effects
     assert "outside the 25–35 °C that the junction reaches" in d.verdict.reason
     assert "outside the 25–35 °C" in d.to_dict()["steps"][0]["why"]  # the document says why
+
+
+def test_a_transient_masking_most_of_the_cooling_is_not_named(scripted):
+    d = scripted((_fit((LONG,), 0.0), 5000.0))
+    assert [s.status for s in d.steps] == ["unshown"] and not d.effects
+    assert "over which the junction gives up 99 % of its rise" in d.verdict.reason
+    assert d.verdict.separate_by == ("electrical-transient: a cut from a small heating power "
+                                     "(the switching transient with little cooling)")
+
+
+@pytest.mark.parametrize(("effect", "named"), [(BRIEF, [FIRST.name, BRIEF.name]),
+                                                (LONG, [FIRST.name])])
+def test_a_tie_its_plugin_says_the_data_cannot_show_is_no_alternative(scripted, effect, named):
+    after = {(): [(_fit((FIRST,), 0.0), 5000.0), (_fit((effect,), 0.0), 4995.0)]}
+    d = scripted(after=after)
+    assert list(d.verdict.effects) == named
+    assert d.verdict.cls == ("ambiguous" if len(named) == 2 else "named")
 
 
 def test_a_step_starts_only_while_work_is_left(scripted):

@@ -160,6 +160,45 @@ def test_a_ringing_is_started_at_its_frequency_from_sparse_first_readings():
     assert 0.5 < start["masked_s"] / masked < 2 and start["amplitude_k"] < 0
 
 
+def test_a_transient_is_shown_only_while_the_junction_has_cooled_little():
+    """A junction cooling as exp(−t/1 ms) from 10 K above the reference has given up
+    1 − exp(−m/1 ms) of its rise when a masked span m ends: a transient is shown up to a
+    quarter (0.1 ms: 9.5 %), not beyond (1 ms: 63 %); before the first reading (0.1 ms) the
+    share of that reading scales as √t (25 µs: half of 9.5 %)."""
+    t = np.geomspace(1e-4, 1e-1, 31)
+    path = 25.0 + 10.0 * np.exp(-t / 1e-3)
+    ev = Evidence(cooling=(CurveEvidence(t, path, path, 0.1, 25.0, np.array([35.0]),
+                                         path[:, None]),))
+    plugin = CATALOGUE["electrical-transient"]
+    why = {m: plugin.unshown(Effect.create("electrical-transient", "fixed", amplitude_k=1.0,
+                                           masked_s=m), ev) for m in (2.5e-5, 1e-4, 1e-3, 1e-2)}
+    assert why[2.5e-5] == why[1e-4] == ""
+    assert "first 1e+03 µs after the cut, over which the junction gives up 63 % of its rise" \
+        in why[1e-3]
+    assert "gives up 100 % of its rise" in why[1e-2]
+    # a curve without the model's path shows nothing against it
+    bare = Evidence(cooling=(CurveEvidence(t, path, path, 0.1, 25.0, np.array([35.0])),))
+    assert plugin.unshown(Effect.create("electrical-transient", masked_s=1e-2), bare) == ""
+
+
+@pytest.mark.parametrize("form", ["fixed", "power", "ringing"])
+def test_a_transient_is_started_only_over_spans_the_data_can_show(form):
+    """The first readings sit 0.3 K above a model whose junction cools as exp(−t/1 ms), and
+    the error dies over 10 ms: by then the junction has given up nearly all of its rise. No
+    start masks more than the 0.29 ms over which it gives up a quarter (the first reading
+    past them, 0.32 ms, at most); without the model's paths the scan reaches the long span."""
+    t = np.geomspace(1e-6, 1e-1, 51)
+    path = 25.0 + 10.0 * np.exp(-t / 1e-3)
+    reading = path + 0.3 * np.exp(-5 * t / 1e-2)
+    plugin = CATALOGUE["electrical-transient"]
+    with_paths = Evidence(cooling=(CurveEvidence(t, reading, path, 0.1, 25.0, np.array([35.0]),
+                                                 path[:, None]),))
+    starts = plugin.guess(form, {}, with_paths)
+    assert starts and max(s["masked_s"] for s in starts) <= 3.2e-4
+    bare = Evidence(cooling=(CurveEvidence(t, reading, path, 0.1, 25.0, np.array([35.0])),))
+    assert max(s["masked_s"] for s in plugin.guess(form, {}, bare)) > 3.2e-4
+
+
 def test_a_band_is_shown_only_where_the_temperatures_reached_cross_its_centre():
     """The evidence's node 1 reaches 31 and 45 °C before the cuts from 25 °C: a band centred
     there is shown; one centred below the reference or above the hottest is only a tail."""

@@ -32,13 +32,13 @@ from functools import partial
 from typing import TYPE_CHECKING
 
 from ..core.errors import DataFormatError, FitError
-from ..effects.base import CALIBRATION, EffectPlugin, overrides
+from ..effects.base import CALIBRATION, EffectPlugin
 from ..effects.registry import CATALOGUE, plugin
 from ..engines.cauer import as_cauer
 from ..engines.meter import Meter, metered
 from ..fit.joint import Layout, ModelFit, Start, bic, chi2_by_set, fit_baseline, fit_starts
 from ..fit.measurement import BundleData, kind_of
-from ..fit.search import FormFit, evidence, fit_effect, grow, refit, screen_held, settle, without
+from ..fit.search import FormFit, fit_effect, grow, refit, screen_held, settle, unshown, without
 from ..model import ThermalModel
 from .compare import Comparison, comparison_of
 from .diagnosis import (
@@ -246,10 +246,8 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
     names = list(effects) if effects is not None else list(CATALOGUE)
     plugins = [plugin(n) for n in names]
     skipped = {p.name: "already in the model" for p in plugins if base.effect(p.name)}
-    for p in plugins:
-        if p.name not in skipped and not p.traits.shown_by & data.kinds:
-            shown = " or ".join(sorted(p.traits.shown_by))
-            skipped[p.name] = f"no data set that can show it ({shown})"
+    skipped |= {p.name: f"no data set that can show it ({' or '.join(sorted(p.traits.shown_by))})"
+                for p in plugins if p.name not in skipped and not p.traits.shown_by & data.kinds}
     ctx = _Context(data, noise, plugins, skipped, say, meter, budget)
     path = _forward(ctx, base, base_cmp)
     work, revised, stopped, unweighed = base.work + path.work, "", path.stopped, path.unweighed
@@ -295,8 +293,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
              first: tuple[Candidate, ...] = (), pick: int = 0) -> _Path:
     """Forward selection from ``base`` (the module docstring's point 3); given the first
     step's candidates, weighed already, the first step adds the one of rank ``pick``."""
-    data, noise = ctx.data, ctx.noise
-    sizes = data.sizes()
+    data, noise, sizes = ctx.data, ctx.noise, ctx.data.sizes()
     n_points = sum(sizes.values())
     path = _Path(data, first=first)
     steps = path.steps
@@ -381,9 +378,12 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
-        tied = tuple(c for c in cands[i + 1:] if chosen.delta_bic - c.delta_bic < DECISIVE_BIC
+        # within the margin either side (from the next best first effect, the best is above)
+        tied = tuple(c for c in cands if c is not chosen
+                     and abs(chosen.delta_bic - c.delta_bic) < DECISIVE_BIC
                      and decisive(0.0, -c.delta_bic, c.explained)
-                     and not _refuted(c, data, current) and (loose or not short(data, c.fit)))
+                     and not _refuted(c, data, current) and (loose or not short(data, c.fit))
+                     and not unshown(data, c.fit, c.name, noise))
         status = _status(chosen, tied, why)
         if chosen.name in held:  # screened or refitted once, at the noise: not settled again
             current, cmp = chosen.fit, comparison_of(data, chosen.fit.predictions)
@@ -432,10 +432,7 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
     if _refuted(chosen, data, before):
         return (f"the {what} data do not show it themselves: the bundle cannot tell it from "
                 f"a device effect")
-    judge = chosen.effect.plugin
-    if not overrides(judge, EffectPlugin.unshown):  # the default: shown (no evidence built)
-        return ""
-    return judge.unshown(chosen.effect, evidence(data, chosen.fit, noise))
+    return unshown(data, chosen.fit, chosen.name, noise)
 
 
 def _refuted(cand: Candidate, data: BundleData, before: ModelFit) -> bool:

@@ -157,8 +157,8 @@ def _separate(steps: Sequence[Step]) -> str:
             out.append(f"{a.name} or {b.name}: "
                        + (how or "a data set that shows one and not the other"))
         if s.status == UNSHOWN:
-            needs = " and ".join(sorted(s.chosen.effect.plugin.traits.needs))
+            traits = s.chosen.effect.plugin.traits
+            needs = " and ".join(sorted(traits.needs))
             out.append(f"{s.chosen.name}: " + (f"a {needs} over the temperatures reached"
-                                               if needs else "readings over the "
-                                               "temperatures where it would act"))
+                                               if needs else traits.shown_alone_by))
     return "; ".join(out)

@@ -115,6 +115,9 @@ class Traits:
     catalogued : bool
         False for a *rival*: an explanation outside the catalogue that the diagnosis weighs
         but never names (a heating power other than the recorded one).
+    shown_alone_by : str
+        The measurement that would show the effect where the plugin's ``unshown()`` says the
+        data cannot (said with that verdict).
     """
 
     shown_by: frozenset[str]
@@ -122,6 +125,7 @@ class Traits:
     cost: float = 1.0
     confusable_with: Mapping[str, str] = field(default_factory=dict)
     catalogued: bool = True
+    shown_alone_by: str = "data over the range where it would act"
 
 
 @dataclass(frozen=True, eq=False)

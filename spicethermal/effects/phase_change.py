@@ -176,7 +176,8 @@ class PhaseChange(DeviceEffect):
     }
     traits = Traits(frozenset({COOLING, STEADY, PWM}), cost=6.0,
                     confusable_with={"temperature-coefficient": "cooling curves at more "
-                                     "powers, some below and some above the band"})
+                                     "powers, some below and some above the band"},
+                    shown_alone_by="readings over the temperatures where it would act")
 
     def stored_heat(self, form: str, p: Mapping[str, NDArray], t_node_c: NDArray,
                     c_node: NDArray) -> tuple[NDArray, NDArray] | None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core.errors import SimulationError
 from ..core.ladder import Cauer
-from ..effects.base import CurveEvidence, EffectPlugin, Evidence, MeasurementEffect
+from ..effects.base import CurveEvidence, EffectPlugin, Evidence, MeasurementEffect, overrides
 from ..engines.meter import metered
 from ..engines.network import NetworkBatch
 from .forward import predict_model, pwm_correction
@@ -43,7 +43,7 @@ from .joint import (
 from .measurement import BundleData
 
 __all__ = ["SCREEN_TOL_REL", "VARIANTS_KEPT", "FormFit", "evidence", "fit_effect", "grow", "refit",
-           "screen_held", "settle", "without"]
+           "screen_held", "settle", "unshown", "without"]
 
 #: A screen only ranks starts: its transients may be coarser than the network's own tolerance
 #: (a few mK on tens of K); every model it returns is evaluated at the network's tolerance.
@@ -97,6 +97,17 @@ def evidence(data: BundleData, model: ModelFit, noise: Mapping[str, float]) -> E
                     layer_r_k_per_w=tuple(model.ladder.r), tau_s=tuple(sorted(foster.tau)),
                     reference_c=data.reference_c, noise_k=dict(noise),
                     in_volts=data.in_volts)
+
+
+def unshown(data: BundleData, model: ModelFit, name: str, noise: Mapping[str, float]) -> str:
+    """Why the plugin of ``model``'s effect ``name`` says the data cannot show it as fitted
+    (:meth:`~spicethermal.effects.base.EffectPlugin.unshown`), or "". A plugin that keeps the
+    default (shown) gets no evidence: none is built, a simulation of the model saved."""
+    effect = model.effect(name)
+    assert effect is not None
+    if not overrides(effect.plugin, EffectPlugin.unshown):
+        return ""
+    return effect.plugin.unshown(effect, evidence(data, model, noise))
 
 
 def _slots(model: ModelFit) -> tuple[tuple[EffectPlugin, str], ...]:
