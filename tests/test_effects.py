@@ -199,6 +199,18 @@ def test_a_transient_is_started_only_over_spans_the_data_can_show(form):
     assert max(s["masked_s"] for s in plugin.guess(form, {}, bare)) > 3.2e-4
 
 
+def test_a_ringing_too_slow_to_ring_is_described_as_such():
+    """A ringing form whose frequency went to its bound of 0 Hz is the fixed form: no
+    frequency of 1e-300 Hz is printed."""
+    def text(ring_hz):
+        return Effect.create("electrical-transient", "ringing", amplitude_k=0.2, masked_s=1e-4,
+                             ring_hz=ring_hz).describe()
+    assert text(1e5) == ("cooling readings off by +0.2 K at the cut, ringing at 1e+05 Hz, "
+                         "gone after 100 µs")
+    assert text(0.0) == ("cooling readings off by +0.2 K at the cut, too slow to ring before it "
+                         "dies (under a quarter cycle), gone after 100 µs")
+
+
 def test_a_band_is_shown_only_where_the_temperatures_reached_cross_its_centre():
     """The evidence's node 1 reaches 31 and 45 °C before the cuts from 25 °C: a band centred
     there is shown; one centred below the reference or above the hottest is only a tail."""

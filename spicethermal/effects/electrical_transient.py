@@ -139,7 +139,9 @@ class ElectricalTransient(MeasurementEffect):
         p = effect.params
         size = (f"{p['k_per_w']:.3g} K per watt cut off" if effect.form == "power" else
                 f"{p['amplitude_k']:+.3g} K at the cut")
-        ring = f", ringing at {p['ring_hz']:.3g} Hz" if effect.form == "ringing" else ""
+        ring = "" if effect.form != "ringing" else (
+            f", ringing at {p['ring_hz']:.3g} Hz" if p["ring_hz"] * p["masked_s"]
+            >= SCAN_CYCLES[0] else ", too slow to ring before it dies (under a quarter cycle)")
         return (f"cooling readings off by {size}{ring}, gone after "
                 f"{p['masked_s'] * 1e6:.3g} µs")
 
