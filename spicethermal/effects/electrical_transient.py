@@ -146,38 +146,33 @@ class ElectricalTransient(MeasurementEffect):
                 f"{p['masked_s'] * 1e6:.3g} µs")
 
 
-def _share_cooled(curve: CurveEvidence, t_s: float) -> float:
-    """The share of its rise above the reference that the model's junction has given up
-    ``t_s`` after the cut on ``curve`` (0 without its path; before the first reading, that
-    reading's share scaled as √t, the die's early cooling)."""
-    if curve.node_paths_c is None or curve.t_s.size == 0:
-        return 0.0
+def _shares(curve: CurveEvidence) -> NDArray | None:
+    """The share of its rise above the reference that the model's junction has given up at
+    each reading of ``curve`` (None without the model's path)."""
     rise = float(curve.nodes_c[0]) - curve.tref_c
-    if not rise > 0:
+    if curve.node_paths_c is None or curve.t_s.size == 0 or not rise > 0:
+        return None
+    return np.maximum(float(curve.nodes_c[0]) - curve.node_paths_c[:, 0], 0.0) / rise
+
+
+def _share_cooled(curve: CurveEvidence, t_s: float) -> float:
+    """:func:`_shares` ``t_s`` after the cut (0 without the path; before the first reading,
+    that reading's share scaled as √t, the die's early cooling)."""
+    shares = _shares(curve)
+    if shares is None:
         return 0.0
-    path = curve.node_paths_c[:, 0]
     if t_s <= curve.t_s[0]:
-        lost = (float(curve.nodes_c[0]) - float(path[0])) * math.sqrt(t_s / curve.t_s[0])
-    else:
-        lost = float(curve.nodes_c[0]) - float(np.interp(math.log(t_s), np.log(curve.t_s),
-                                                            path))
-    return max(lost, 0.0) / rise
+        return float(shares[0]) * math.sqrt(t_s / curve.t_s[0])
+    return float(np.interp(math.log(t_s), np.log(curve.t_s), shares))
 
 
 def _longest_shown(curves: Sequence[CurveEvidence]) -> float:
     """The first reading after which some curve's junction has given up more than
     :data:`MAX_MASKED_SHARE` of its rise: the longest span a transient is shown over
     (infinite without the model's paths)."""
-    out = math.inf
-    for c in curves:
-        rise = float(c.nodes_c[0]) - c.tref_c
-        if c.node_paths_c is None or not rise > 0:
-            continue
-        over = np.flatnonzero(float(c.nodes_c[0]) - c.node_paths_c[:, 0]
-                              > MAX_MASKED_SHARE * rise)
-        if over.size:
-            out = min(out, float(c.t_s[over[0]]))
-    return out
+    ends = [float(c.t_s[np.argmax(s > MAX_MASKED_SHARE)]) for c in curves
+            if (s := _shares(c)) is not None and np.any(s > MAX_MASKED_SHARE)]
+    return min(ends, default=math.inf)
 
 
 def _scan(curves: Sequence, weights: Sequence[float], lo: float, hi: float,
