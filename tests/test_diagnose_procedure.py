@@ -545,10 +545,16 @@ def test_the_next_best_first_effect_replaces_steps_that_end_beyond_the_noise(scr
     assert not d.steps[0].tied
     assert (f"{SECOND.name} is added first although {FIRST.name} alone lowers the criterion "
             f"more (by 1000.0)") in d.verdict.reason
-    # when the next best's steps end beyond the noise too, the best's stand
+    # when the next best's steps end beyond the noise too, the lower criterion at the end
+    # decides: the best's stand when the next best's end no lower ...
     after[(SECOND.name,)] = [(_fit((SECOND, window), 8.0), 900.0)]
     d = scripted(after=after)
     assert d.effects == [FIRST.name] and d.verdict.cls == "approximate"
+    # ... and the next best's replace them when it is lower by 10 or more
+    after[(SECOND.name,)] = [(_fit((SECOND, window), 2.0), 900.0)]
+    d = scripted(after=after)
+    assert d.effects == [SECOND.name, window.name] and d.verdict.cls == "approximate"
+    assert f"{SECOND.name} is added first although {FIRST.name}" in d.verdict.reason
 
 
 def test_a_screen_on_the_model_held_fits_the_measurement_effects_only(monkeypatch):

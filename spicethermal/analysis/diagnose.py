@@ -258,7 +258,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
             and short(data, final) and alt is not None and ctx.affords():
         # the best effect alone may be the one that leaves no second effect a way to the
         # noise (its form, or the ladder, took part of the other's misfit): the next best
-        # effect first, when its steps bring every data set to the noise
+        # effect first, when its steps end with a lower criterion
         other = _forward(ctx, base, base_cmp, path.first, alt)
         work += other.work
         end = last_model(other.steps, base)
@@ -266,7 +266,7 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         lead, name = path.first[0], path.first[alt].name
         if other.stopped:
             stopped = f"{other.stopped} (with {name} added first instead of {lead.name})"
-        elif not short(data, end) and gain >= DECISIVE_BIC:
+        elif gain >= DECISIVE_BIC:
             revised = (f"{name} is added first although {lead.name} alone lowers the "
                        f"criterion more (by {lead.delta_bic - path.first[alt].delta_bic:.1f}): "
                        f"after {lead.name} no further effect brings every data set to its "
