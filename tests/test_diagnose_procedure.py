@@ -76,9 +76,14 @@ def scripted(monkeypatch):
             after: dict | None = None, weighed: list | None = None,
             cut_after: int | None = None, asked: list | None = None,
             held: ModelFit | None = None, held_asked: list | None = None,
-            refits: dict | None = None):
+            refits: dict | None = None, noise_after: dict | None = None,
+            noises: list | None = None, refitted: list | None = None):
         base = _fit((), 40.0, BundleData.from_bundle(bundle))
         monkeypatch.setattr(procedure, "_baseline", lambda data, model: (base, NOISE))
+        # the noise estimated again from each step's model: ``noise_after``, else the
+        # baseline's
+        monkeypatch.setattr(procedure, "noise_estimates",
+                            lambda data, pred: dict(noise_after or NOISE))
         fitted = []
 
         def screen_held(data, noise, model, plugins, rounds):  # ``held``, each
@@ -102,9 +107,11 @@ def scripted(monkeypatch):
             return [FormFit(_fit((FIRST,), 0.0), ())], True
 
         monkeypatch.setattr(procedure, "fit_effect", fit_effect)
-        # a refit leaves a model as it is, or gives ``refits[id(model)]``
-        monkeypatch.setattr(procedure, "refit",
-                            lambda data, noise, fit, rounds: (refits or {}).get(id(fit), fit))
+        # a refit leaves a model as it is, or gives ``refits[id(model)]`` (``refitted``: the
+        # noise of each refit)
+        monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: (
+            refitted is not None and refitted.append(dict(noise))) or (refits or {}).get(
+            id(fit), fit))
 
         def without(*a, **k):  # the model without an earlier effect: none, or ``lighter``
             if lighter is None:
@@ -118,6 +125,8 @@ def scripted(monkeypatch):
             _spend(cost)
             if weighed is not None:  # the data each step's candidates were weighed on
                 weighed.append(data.source)
+            if noises is not None:  # and the noise
+                noises.append(dict(noise))
             if after is not None:  # the candidates after the model's effects, best first
                 got = after.get(tuple(e.name for e in model.effects), ())
                 return [_candidate(data, model, fit, gain) for fit, gain in got], 0
@@ -190,6 +199,48 @@ def test_each_chosen_model_is_settled_and_the_next_step_weighed_from_there(scrip
     assert d.effects == [FIRST.name, SECOND.name]
     assert settled == [[FIRST.name], [FIRST.name, SECOND.name]]
     assert weighed == [DATA.source, f"settled at {FIRST.name}"]
+
+
+def test_the_noise_is_estimated_again_after_each_step_and_the_next_step_weighed_under_it(
+        scripted):
+    """The first step's model gives lower estimates than the baseline's (whose residual
+    inflated them): each data set keeps the lower, the model is refitted under it, the next
+    step is weighed under it, and the document's χ² are under the last estimate."""
+    lower = {n: v / 2 for n, v in NOISE.items()}
+    after = {**lower, "cooling_1": 2 * NOISE["cooling_1"]}  # this one rose: kept as it was
+    kept = {**lower, "cooling_1": NOISE["cooling_1"]}
+    noises, refitted = [], []
+    d = scripted((_fit((FIRST,), 8.0), 5000.0), (_fit((FIRST, SECOND), 0.0), 200.0),
+                 noise_after=after, noises=noises, refitted=refitted)
+    assert d.effects == [FIRST.name, SECOND.name]
+    assert noises == [NOISE, kept] and kept in refitted
+    doc = d.to_dict()
+    assert doc["noise_k"] == kept and doc["baseline"]["noise_k"] == NOISE
+    assert [s["noise_k"] for s in doc["steps"]] == [kept, kept]
+    residual = DATA.measured("steady") - d.baseline_fit.predictions["steady"]
+    assert doc["baseline"]["chi2"]["steady"] == pytest.approx(
+        float(np.sum((residual / kept["steady"]) ** 2)))
+
+
+def test_a_misfit_no_local_quadratic_follows_inflates_the_noise_until_a_model_explains_it(
+        monkeypatch):
+    """A misfit that swings over less than a decade (a band crossed on a sparse curve) is no
+    quadratic over 7 readings: the curve's estimate is several times its noise; estimated
+    again from a model that follows it, it falls to the noise, and the model is refitted."""
+    rng = np.random.default_rng(1)
+    swing = 0.3 * np.sin(2 * np.pi * np.log10(T) / 0.8)
+    truth = 25.0 + 10.0 * np.exp(-T) + swing
+    data = BundleData.from_bundle(Bundle(ambient_c=25.0, cooling=(CoolingTable(
+        T, 0.5, tj_c=truth + rng.normal(0, 0.01, T.size), tref_steady_c=25.0),)))
+    inflated = procedure.noise_estimates(data, {"cooling_1": truth - swing})
+    assert inflated["cooling_1"] > 5 * 0.01
+    refitted = []
+    monkeypatch.setattr(procedure, "refit",
+                        lambda data, noise, fit, rounds: refitted.append(noise) or fit)
+    fit = ModelFit(Cauer([20.0], [1e-2]), (SECOND,), {"cooling_1": truth}, {}, 4, 0, True)
+    noise, _ = procedure._renoise(data, inflated, fit)
+    assert 0.005 < noise["cooling_1"] < 0.015 and refitted == [noise]
+    assert procedure._renoise(data, noise, fit)[0] is noise  # no lower estimate: as it was
 
 
 def test_a_first_effect_is_added_even_when_it_leaves_a_residual(scripted):

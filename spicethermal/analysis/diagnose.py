@@ -1,26 +1,10 @@
 """Diagnosis: where a model fails, which physical effect is missing, and by how much the error
-falls when it is added. The procedure is stated in full once, in docs/diagnosis.md:
-
-1. **Baseline**: the linear ladder fitted to every data set, its order chosen by the criterion
-   (or the user's model, as it is), and the **noise** of each data set from its own scatter
-   (:mod:`.noise`), estimated in turn with it.
-2. **Candidates**: every registered effect the model lacks whose data sets are present, each
-   form from its plugin's ``guess()`` (:func:`~spicethermal.fit.search.fit_effect`); the
-   closed-form ones first (:data:`.rules.CLOSED_FORM_COST`). Rivals are weighed alike and
-   never named.
-3. **Forward selection**: the lowest BIC is added when decisive (:func:`.rules.decisive`),
-   those within :data:`.rules.DECISIVE_BIC` of it (and at the noise if it is) are tied; the
-   leaders grow their ladders first (:func:`~spicethermal.fit.search.grow`); a backward check
-   drops what is no longer needed; the model is settled (:func:`~spicethermal.fit.search.settle`).
-   A further effect is added when it brings every data set to its noise or its fall is decisive
-   under the correlation of the misfit it leaves (:func:`.verdict.weighed_fall`). Steps ending
-   beyond the noise are run again from the next best first effect.
-4. **Verdict** (:func:`.verdict.verdict`): *named*, *approximate*, *ambiguous* or *none*.
-
-The work is counted against :data:`.rules.WORK_BUDGET`, never timed: the same bundle gives
-the same verdict on every machine and under any load. Once it is spent, a later step screens
-the measurement effects left on its model held, and refits the best jointly; a step cut short
-is taken only when its best brings every data set to its noise (those left could at most tie).
+falls when it is added. The procedure is stated in full once, in docs/diagnosis.md: the
+baseline and the noise (:mod:`.noise`); every candidate effect fitted from its plugin's
+``guess()`` (:func:`~spicethermal.fit.search.fit_effect`); forward selection by one criterion
+and naming rule (:mod:`.rules`), the noise estimated again after each step; the verdict
+(:func:`.verdict.verdict`). The work is counted against :data:`.rules.WORK_BUDGET`, never
+timed: the same bundle gives the same verdict on every machine and under any load.
 """
 
 from __future__ import annotations
@@ -94,7 +78,22 @@ def _baseline(data: BundleData, model: ThermalModel | None) -> tuple[ModelFit, d
                 raise FitError(f"{data.source}: the model does not simulate these data")
         noise = noise_estimates(data, fit.predictions)
     assert fit is not None  # the criterion's χ² under the final noise
-    return replace(fit, chi2=chi2_by_set(data, fit.predictions, noise)), noise
+    return _under(data, fit, noise), noise
+
+
+def _under(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
+    """``fit`` with its χ² under ``noise``."""
+    return replace(fit, chi2=chi2_by_set(data, fit.predictions, noise))
+
+
+def _renoise(data: BundleData, noise: dict, fit: ModelFit) -> tuple[dict, ModelFit]:
+    """The noise estimated again from a step's model ``fit``, each data set's the lower, and
+    ``fit`` refitted under it (docs/diagnosis.md §6); as they are when no estimate fell."""
+    fresh = noise_estimates(data, fit.predictions)
+    new = {n: min(v, fresh.get(n, v)) for n, v in noise.items()}
+    if new == noise:
+        return noise, fit
+    return new, refit(data, new, _under(data, fit, new), REFINE_ROUNDS)
 
 
 def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Sequence[ModelFit],
@@ -143,7 +142,7 @@ def diagnose(bundle: Bundle, model: ThermalModel | None = None,
              progress: Callable[[str], None] | None = None, quiet: bool = True,
              budget: int = WORK_BUDGET) -> Diagnosis:
     """Compare, localise, fit every candidate effect, add the decisive one, and again
-    (the module docstring states the procedure).
+    (docs/diagnosis.md states the procedure).
 
     Parameters
     ----------
@@ -223,6 +222,7 @@ class _Path:
     none) and its :func:`~.verdict.weighed_fall`, and what a step it took left unweighed."""
 
     data: BundleData
+    noise: dict
     steps: list[Step] = field(default_factory=list)
     first: tuple[Candidate, ...] = ()
     work: int = 0
@@ -235,7 +235,7 @@ class _Path:
 def _search(data: BundleData, model: ThermalModel | None, reference: str,
             effects: Sequence[str] | None, say: Callable[[str], None], budget: int,
             meter: Meter, t_start: float) -> Diagnosis:
-    """The procedure of the module docstring, the simulator's work counted by ``meter``."""
+    """The procedure of docs/diagnosis.md, the simulator's work counted by ``meter``."""
     say("baseline ladder and noise")
     base, noise = _baseline(data, model)
     if model is None:
@@ -262,7 +262,9 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
         other = _forward(ctx, base, base_cmp, path.first, alt)
         work += other.work
         end = last_model(other.steps, base)
-        gain = bic(final, n_points) - bic(end, n_points)
+        common = {n: min(v, other.noise[n]) for n, v in path.noise.items()}
+        gain = bic(_under(data, final, common), n_points) \
+            - bic(_under(data, end, common), n_points)
         lead, name = path.first[0], path.first[alt].name
         if other.stopped:
             stopped = f"{other.stopped} (with {name} added first instead of {lead.name})"
@@ -280,22 +282,26 @@ def _search(data: BundleData, model: ThermalModel | None, reference: str,
                f"what the approximate form of {path.steps[-1].chosen.name} leaves"
                ) if further else ""
     note = "; ".join(t for t in (refused, revised, stopped, unweighed) if t)
+    noise = path.noise  # the last estimate: the verdict and every model's χ² are under it
+    if noise != ctx.noise:
+        base = _under(data, base, noise)
+        path.steps[:] = [replace(s, model=_under(data, s.model, noise)) for s in path.steps]
     result = verdict(path.data, base, path.steps, noise, note, bool(stopped))
     where = tuple(localise(base_cmp, noise, beyond(data, base)))
     return Diagnosis(data.source, noise, base_cmp, base, model, tuple(path.steps), result,
                      path.first, skipped, n_points, work, time.perf_counter() - t_start,
                      where, WorkSpent(meter.solves, budget, stopped or unweighed, meter.steps,
                                meter.cost),
-                     further, path.weighed)
+                     further, path.weighed, ctx.noise)
 
 
 def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
              first: tuple[Candidate, ...] = (), pick: int = 0) -> _Path:
-    """Forward selection from ``base`` (the module docstring's point 3); given the first
+    """Forward selection from ``base`` (docs/diagnosis.md §6); given the first
     step's candidates, weighed already, the first step adds the one of rank ``pick``."""
     data, noise, sizes = ctx.data, ctx.noise, ctx.data.sizes()
     n_points = sum(sizes.values())
-    path = _Path(data, first=first)
+    path = _Path(data, dict(noise), first=first)
     steps = path.steps
     current, cmp = base, base_cmp
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS and short(data, current):
@@ -387,7 +393,7 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         status = _status(chosen, tied, why)
         if chosen.name in held:  # screened or refitted once, at the noise: not settled again
             current, cmp = chosen.fit, comparison_of(data, chosen.fit.predictions)
-            steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, (), why))
+            steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, (), why, noise))
             continue
         # the model the next step starts from is converged: what a further refit would still
         # gain is then no candidate's
@@ -406,9 +412,12 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         data, settled = settle(data, noise, current, REFINE_ROUNDS)
         path.work += settled.work if settled is not current else 0
         current, path.data = settled, data
+        noise, renoised = _renoise(data, noise, current)
+        path.work += renoised.work if renoised is not current else 0
+        current, path.noise = renoised, noise
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
-                          why))
+                          why, noise))
     return path
 
 
@@ -480,6 +489,7 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
         best = min(fits, key=lambda f: bic(f.fit, n_points))
         current = grow(data, noise, best, REFINE_ROUNDS, partial(short, data))[0]
         data, current = settle(data, noise, current, REFINE_ROUNDS)
+        noise, current = _renoise(data, noise, current)
     return ThermalModel(current.foster, current.effects, bundle.reference,
                         {**(provenance or {}), "fit": {
                             "effects": list(dict.fromkeys(names)),

@@ -1,5 +1,5 @@
 """The result of a diagnosis: the baseline, the candidates weighed, the steps taken, the
-verdict; its text report and its ``spicethermal-diagnosis/8`` document
+verdict; its text report and its ``spicethermal-diagnosis/9`` document
 (docs/diagnosis-json.md). Prose is generated from the numbers, never the other way round.
 """
 
@@ -23,10 +23,9 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["DIAGNOSIS_FORMAT", "NAMED", "APPROXIMATE", "AMBIGUOUS", "NONE", "RIVAL", "UNSHOWN",
            "Candidate", "Diagnosis", "Step", "Verdict", "WorkSpent", "last_model"]
 
-#: The document's format; version 8 counts the steady states' Newton steps and a long ladder's
-#: members by their size in ``work.solves`` (docs/diagnosis-json.md), and keeps every other key
-#: of versions 1 to 7.
-DIAGNOSIS_FORMAT = "spicethermal-diagnosis/8"
+#: The document's format; version 9 gives the noise of the baseline and of each step
+#: (docs/diagnosis-json.md), and keeps every other key of versions 1 to 8.
+DIAGNOSIS_FORMAT = "spicethermal-diagnosis/9"
 #: Verdict classes (and the statuses of a step, :class:`Step`, with the two below).
 NAMED, APPROXIMATE, AMBIGUOUS, NONE = "named", "approximate", "ambiguous", "none"
 RIVAL, UNSHOWN = "rival", "unshown"
@@ -81,7 +80,8 @@ class Step:
     weighed, best first, its ``status`` (``named``, ``ambiguous``: ``tied`` explain the data
     as well; ``rival``: an explanation outside the catalogue, weighed and never named;
     ``unshown``: an effect the data cannot show alone, ``why`` not), the effects the backward
-    check dropped after it, and the model after it."""
+    check dropped after it, the model after it, and the noise estimated again from it (the
+    next step's candidates are weighed under it)."""
 
     chosen: Candidate
     candidates: tuple[Candidate, ...]
@@ -91,6 +91,7 @@ class Step:
     tied: tuple[Candidate, ...] = ()
     dropped: tuple[str, ...] = ()
     why: str = ""
+    noise_k: Mapping[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         c = self.chosen
@@ -98,7 +99,7 @@ class Step:
                 "status": self.status, "rms_k": _finite(self.comparison.rms_k),
                 "improvement": _finite(c.improvement), "delta_bic": _finite(c.delta_bic),
                 "explained": _finite(c.explained), "tied": [t.name for t in self.tied],
-                "dropped": list(self.dropped), "why": self.why}
+                "dropped": list(self.dropped), "why": self.why, "noise_k": dict(self.noise_k)}
 
 
 def last_model(steps: Sequence[Step], base: ModelFit) -> ModelFit:
@@ -146,8 +147,8 @@ class WorkSpent:
 @dataclass(frozen=True, eq=False)
 class Diagnosis(JsonDocument):
     """What :func:`~spicethermal.analysis.diagnose.diagnose` found. ``str()`` is the text
-    report, :meth:`to_dict` the ``spicethermal-diagnosis/8`` document, :meth:`plot` the
-    figures."""
+    report, :meth:`to_dict` the ``spicethermal-diagnosis/9`` document, :meth:`plot` the
+    figures. ``noise_k`` is the last estimate, ``baseline_noise_k`` the baseline's."""
 
     source: str
     noise_k: Mapping[str, float]
@@ -169,6 +170,7 @@ class Diagnosis(JsonDocument):
     #: ... and how much it lowers the criterion weighed under the correlation of that
     #: residual (:func:`.rules.correlated_gain`).
     refused_weighed: float = 0.0
+    baseline_noise_k: Mapping[str, float] = field(default_factory=dict)
 
     # -- views -------------------------------------------------------------------------------
     @property
@@ -219,13 +221,14 @@ class Diagnosis(JsonDocument):
 
     # -- document -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The ``spicethermal-diagnosis/8`` document."""
+        """The ``spicethermal-diagnosis/9`` document."""
         worst = [{"dataset": p.dataset, "at": dict(p.at), "residual_k": p.residual_k}
                  for p in self.baseline.worst(WORST_POINTS)]
         fit = self.final_fit
         return {"format": DIAGNOSIS_FORMAT, "source": self.source,
                 "noise_k": dict(self.noise_k), "points": self.n_points,
                 "baseline": {"order": self.baseline_fit.ladder.order,
+                             "noise_k": dict(self.baseline_noise_k or self.noise_k),
                              "rms_k": _finite(self.baseline.rms_k),
                              "max_abs_k": _finite(self.baseline.max_abs_k),
                              "chi2": {k: _finite(v) for k, v in self.baseline_fit.chi2.items()},
@@ -251,7 +254,7 @@ class Diagnosis(JsonDocument):
         sets = ", ".join(f"{n} ({len(self.baseline.dataset(n).points)})"
                          for n in self.baseline.datasets)
         lines = [f"diagnosis of {self.source}: {self.n_points} points in {sets}",
-                 "noise (from each data set's own scatter): "
+                 "noise (from each data set's own scatter, the last estimate): "
                  + ", ".join(f"{n} {v:.3g} K" for n, v in self.noise_k.items()),
                  f"baseline (linear {b.ladder.order}-stage ladder fitted to every data set"
                  + (f" + {', '.join(e.name for e in b.effects)}" if b.effects else "")

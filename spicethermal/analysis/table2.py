@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -110,13 +110,18 @@ def _peak_readings(ladder: Foster, power_w: float, f: NDArray, d: NDArray,
                      for fi, di in zip(f, d, strict=True)])
 
 
+def _best_of(fun: Callable[[NDArray], NDArray], starts: list, bounds: tuple) -> Any:
+    """The least-squares solution of ``fun`` with the lowest cost from any of ``starts``."""
+    from scipy.optimize import least_squares
+
+    return min((least_squares(fun, x0, bounds=bounds) for x0 in starts), key=lambda r: r.cost)
+
+
 def _ladder_for_column(model_k: NDArray, f: NDArray, d: NDArray, rth: float,
                        power_w: float) -> tuple[Foster, float, float]:
     """Foster ladder (ΣR = rth, τ within :data:`TABLE_TAU_BOUNDS_S`) and power (starting at
     ``power_w``) whose periodic-steady-state peak readings best match ``model_k``; returns
     the ladder, the power and the RMS misfit."""
-    from scipy.optimize import least_squares
-
     m = TABLE_LADDER_ORDER
     lo_t, hi_t = (math.log(x) for x in TABLE_TAU_BOUNDS_S)
 
@@ -128,15 +133,11 @@ def _ladder_for_column(model_k: NDArray, f: NDArray, d: NDArray, rth: float,
         lad, p = build(x)
         return _peak_readings(lad, p, f, d) - model_k
 
-    best = None
-    for centre in np.linspace(lo_t + 1.0, hi_t - 3.0, 4):
-        taus = np.clip(centre + np.linspace(-1, 1, m) * 2.0 * (m - 1), lo_t + 1e-6, hi_t - 1e-6)
-        x0 = np.concatenate([np.zeros(m), taus, [math.log(power_w)]])
-        r = least_squares(fun, x0, bounds=(
-            np.r_[np.full(m, -30.0), np.full(m, lo_t), math.log(power_w) - 2],
-            np.r_[np.full(m, 30.0), np.full(m, hi_t), math.log(power_w) + 2]))
-        if best is None or r.cost < best.cost:
-            best = r
+    taus = [np.clip(c + np.linspace(-1, 1, m) * 2.0 * (m - 1), lo_t + 1e-6, hi_t - 1e-6)
+            for c in np.linspace(lo_t + 1.0, hi_t - 3.0, 4)]
+    best = _best_of(fun, [np.concatenate([np.zeros(m), t, [math.log(power_w)]]) for t in taus],
+                    (np.r_[np.full(m, -30.0), np.full(m, lo_t), math.log(power_w) - 2],
+                     np.r_[np.full(m, 30.0), np.full(m, hi_t), math.log(power_w) + 2]))
     lad, p = build(best.x)
     return lad, p, rms(fun(best.x))
 
@@ -160,8 +161,6 @@ def _best_window(delta: NDArray, f: NDArray, d: NDArray, rth: float, power_w: fl
                  window_s: float) -> tuple[Foster, NDArray]:
     """The ladder (ΣR = rth, any shape) that makes the window's prediction
     ``P Σ rᵢ gᵢ (e^{−w/τᵢ} − 1)`` fit ``delta`` best, and that prediction."""
-    from scipy.optimize import least_squares
-
     m = TABLE_LADDER_ORDER
     lo_t, hi_t = (math.log(x) for x in TABLE_TAU_BOUNDS_S)
 
@@ -173,14 +172,11 @@ def _best_window(delta: NDArray, f: NDArray, d: NDArray, rth: float, power_w: fl
         r, tau = unpack(x)
         return power_w * (_stage_peaks(tau, f, d) * r * np.expm1(-window_s / tau)).sum(axis=1)
 
-    best = None
-    lo = np.r_[np.full(m, -30.0), np.full(m, lo_t)]
-    hi = np.r_[np.full(m, 30.0), np.full(m, hi_t)]
-    for centre in np.linspace(lo_t + 0.5, hi_t - 4.0, 4):
-        taus = np.clip(centre + np.linspace(0.0, 6.0, m), lo_t + 1e-6, hi_t - 1e-6)
-        r = least_squares(lambda x: pred(x) - delta, np.r_[np.zeros(m), taus], bounds=(lo, hi))
-        if best is None or r.cost < best.cost:
-            best = r
+    taus = [np.clip(c + np.linspace(0.0, 6.0, m), lo_t + 1e-6, hi_t - 1e-6)
+            for c in np.linspace(lo_t + 0.5, hi_t - 4.0, 4)]
+    best = _best_of(lambda x: pred(x) - delta, [np.r_[np.zeros(m), t] for t in taus],
+                    (np.r_[np.full(m, -30.0), np.full(m, lo_t)], np.r_[np.full(m, 30.0),
+                                                                       np.full(m, hi_t)]))
     r, tau = unpack(best.x)
     return Foster.from_tau(r, tau), pred(best.x)
 
@@ -189,19 +185,14 @@ def _best_early(delta: NDArray, f: NDArray, d: NDArray, rth: float, power_w: flo
                 span_s: float) -> tuple[float, float, NDArray]:
     """The change below ``span_s`` that fits ``delta`` best: resistance ``dr`` moved into a
     stage of time constant ``tau ≤ span_s`` from a slow one, ``Δ = P dr (g(τ) − D)``."""
-    from scipy.optimize import least_squares
-
     lo_t = math.log(TABLE_TAU_BOUNDS_S[0] / 100)
 
     def pred(x: NDArray) -> NDArray:
         return power_w * x[0] * (_stage_peaks(np.array([math.exp(x[1])]), f, d)[:, 0] - d)
 
-    best = None
-    for t0 in np.linspace(lo_t + 0.1, math.log(span_s) - 0.1, 4):
-        r = least_squares(lambda x: pred(x) - delta, [0.0, t0],
-                          bounds=([-rth, lo_t], [rth, math.log(span_s)]))
-        if best is None or r.cost < best.cost:
-            best = r
+    best = _best_of(lambda x: pred(x) - delta,
+                    [[0.0, t0] for t0 in np.linspace(lo_t + 0.1, math.log(span_s) - 0.1, 4)],
+                    ([-rth, lo_t], [rth, math.log(span_s)]))
     return float(best.x[0]), float(math.exp(best.x[1])), pred(best.x)
 
 
@@ -337,7 +328,7 @@ class Explanation:
 class TableDiagnosis(JsonDocument):
     """What :func:`diagnose_table` found: the analysis, the explanations weighed (best
     first) and the verdict. ``str()`` is the report, :meth:`to_dict` the
-    ``spicethermal-diagnosis/8`` document (no steps: a table has one baseline and no second
+    ``spicethermal-diagnosis/9`` document (no steps: a table has one baseline and no second
     step)."""
 
     source: str

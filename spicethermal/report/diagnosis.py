@@ -18,7 +18,7 @@ __all__ = ["write_report"]
 def write_report(result: Diagnosis | TableDiagnosis, out_dir: str | Path) -> Path:
     """Write the HTML report of a diagnosis (``index.html``, self-contained but for its PNG
     figures beside it, from ``templates/report/diagnosis.html.j2``) into ``out_dir``: its
-    numbers are those of the ``spicethermal-diagnosis/8`` document, its text the CLI's."""
+    numbers are those of the ``spicethermal-diagnosis/9`` document, its text the CLI's."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figs = result.plot(out)

@@ -3,7 +3,7 @@
 Compares the model (default: the linear ladder fitted from the bundle's cooling curves) with
 every data set of the bundle, shows where it fails, fits every catalogued effect and names the
 one that is missing (or says that none is and where the misfit is). ``--json`` prints the
-``spicethermal-diagnosis/8`` document; ``--report DIR`` writes an HTML page with the before /
+``spicethermal-diagnosis/9`` document; ``--report DIR`` writes an HTML page with the before /
 after residual figures. ``--budget`` sets the simulator's work the search may spend (counted,
 never timed: the verdict is the same on every machine); a diagnosis the budget stopped says so,
 and a larger budget lets it go on.
@@ -47,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="baseline model (default: the linear ladder fitted from the "
                              "bundle's cooling curves)")
     parser.add_argument("--json", action="store_true",
-                        help="print the spicethermal-diagnosis/8 document")
+                        help="print the spicethermal-diagnosis/9 document")
     parser.add_argument("--report", metavar="DIR",
                         help="write an HTML report with the before/after figures into DIR")
     parser.add_argument("--effect", action="append", metavar="NAME",
