@@ -220,3 +220,22 @@ def test_a_band_is_shown_only_where_the_temperatures_reached_cross_its_centre():
         why = band.plugin.unshown(band, ev)
         assert (why == "") is shown, why
         assert shown or "outside the 25–45 °C that node 1 reaches" in why
+
+
+@pytest.mark.parametrize("t_first", [1e-5, 5e-3])
+def test_a_transient_is_started_no_longer_than_the_span_its_plugin_says_the_data_show(t_first):
+    """The longest span the transient's starts may mask is where the share of the rise its
+    ``unshown`` reads from the model's path crosses the limit (between two readings; before the
+    first, where that reading's share scaled as √t reaches it), the shortest over the curves."""
+    from spicethermal.effects import electrical_transient as et
+
+    t = np.geomspace(t_first, 1.0, 30)
+
+    def curve(tau: float) -> CurveEvidence:
+        path = 25.0 + 10.0 * np.exp(-t / tau)
+        return CurveEvidence(t, path, path, 1.0, 25.0, np.array([35.0]), path[:, None])
+
+    slow, fast = curve(0.01), curve(0.005)
+    longest = et._longest_shown([slow])
+    assert et._share_cooled(slow, longest) == pytest.approx(et.MAX_MASKED_SHARE)
+    assert et._longest_shown([slow, fast]) == et._longest_shown([fast]) < longest

@@ -167,11 +167,21 @@ def _share_cooled(curve: CurveEvidence, t_s: float) -> float:
 
 
 def _longest_shown(curves: Sequence[CurveEvidence]) -> float:
-    """The first reading after which some curve's junction has given up more than
-    :data:`MAX_MASKED_SHARE` of its rise: the longest span a transient is shown over
+    """The longest span a transient is shown over (:meth:`ElectricalTransient.unshown`): the
+    first time after which some curve's junction has given up more than
+    :data:`MAX_MASKED_SHARE` of its rise, read from its path as :func:`_share_cooled` reads it
     (infinite without the model's paths)."""
-    ends = [float(c.t_s[np.argmax(s > MAX_MASKED_SHARE)]) for c in curves
-            if (s := _shares(c)) is not None and np.any(s > MAX_MASKED_SHARE)]
+    ends = []
+    for c in curves:
+        s = _shares(c)
+        if s is None or not np.any(s > MAX_MASKED_SHARE):
+            continue
+        i = int(np.argmax(s > MAX_MASKED_SHARE))
+        if i == 0:  # before the first reading, its share scaled as √t
+            ends.append(float(c.t_s[0]) * (MAX_MASKED_SHARE / float(s[0])) ** 2)
+            continue
+        lo, hi = np.log(c.t_s[i - 1:i + 1])
+        ends.append(math.exp(lo + (MAX_MASKED_SHARE - s[i - 1]) / (s[i] - s[i - 1]) * (hi - lo)))
     return min(ends, default=math.inf)
 
 
