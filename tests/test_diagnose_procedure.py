@@ -107,11 +107,12 @@ def scripted(monkeypatch):
             return [FormFit(_fit((FIRST,), 0.0), ())], True
 
         monkeypatch.setattr(procedure, "fit_effect", fit_effect)
-        # a refit leaves a model as it is, or gives ``refits[id(model)]`` (``refitted``: the
-        # noise of each refit)
-        monkeypatch.setattr(procedure, "refit", lambda data, noise, fit, rounds: (
-            refitted is not None and refitted.append(dict(noise))) or (refits or {}).get(
-            id(fit), fit))
+        def refit(data, noise, fit, rounds):  # the model as it is, or ``refits[id(model)]``
+            if refitted is not None:  # the noise of each refit
+                refitted.append(dict(noise))
+            return (refits or {}).get(id(fit), fit)
+
+        monkeypatch.setattr(procedure, "refit", refit)
 
         def without(*a, **k):  # the model without an earlier effect: none, or ``lighter``
             if lighter is None:
@@ -238,8 +239,9 @@ def test_a_misfit_no_local_quadratic_follows_inflates_the_noise_until_a_model_ex
     monkeypatch.setattr(procedure, "refit",
                         lambda data, noise, fit, rounds: refitted.append(noise) or fit)
     fit = ModelFit(Cauer([20.0], [1e-2]), (SECOND,), {"cooling_1": truth}, {}, 4, 0, True)
-    noise, _ = procedure._renoise(data, inflated, fit)
+    noise, _, spent = procedure._renoise(data, inflated, fit)
     assert 0.005 < noise["cooling_1"] < 0.015 and refitted == [noise]
+    assert spent == 0  # the refit kept the model: no work of its own
     assert procedure._renoise(data, noise, fit)[0] is noise  # no lower estimate: as it was
 
 

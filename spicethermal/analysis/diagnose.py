@@ -86,14 +86,16 @@ def _under(data: BundleData, fit: ModelFit, noise: dict) -> ModelFit:
     return replace(fit, chi2=chi2_by_set(data, fit.predictions, noise))
 
 
-def _renoise(data: BundleData, noise: dict, fit: ModelFit) -> tuple[dict, ModelFit]:
-    """The noise estimated again from a step's model ``fit``, each data set's the lower, and
-    ``fit`` refitted under it (docs/diagnosis.md §6); as they are when no estimate fell."""
+def _renoise(data: BundleData, noise: dict, fit: ModelFit) -> tuple[dict, ModelFit, int]:
+    """The noise estimated again from a step's model ``fit`` (each data set's the lower), ``fit``
+    refitted under it, and that refit's work (docs/diagnosis.md §6); as they are when none fell."""
     fresh = noise_estimates(data, fit.predictions)
     new = {n: min(v, fresh.get(n, v)) for n, v in noise.items()}
     if new == noise:
-        return noise, fit
-    return new, refit(data, new, _under(data, fit, new), REFINE_ROUNDS)
+        return noise, fit, 0
+    under = _under(data, fit, new)
+    got = refit(data, new, under, REFINE_ROUNDS)
+    return new, got, got.work if got is not under else 0
 
 
 def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Sequence[ModelFit],
@@ -412,9 +414,8 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
         data, settled = settle(data, noise, current, REFINE_ROUNDS)
         path.work += settled.work if settled is not current else 0
         current, path.data = settled, data
-        noise, renoised = _renoise(data, noise, current)
-        path.work += renoised.work if renoised is not current else 0
-        current, path.noise = renoised, noise
+        noise, current, spent = _renoise(data, noise, current)
+        path.work, path.noise = path.work + spent, noise
         cmp = comparison_of(data, current.predictions)
         steps.append(Step(chosen, tuple(cands), status, current, cmp, tied, tuple(dropped),
                           why, noise))
@@ -489,7 +490,7 @@ def fit_with_effects(bundle: Bundle, names: Sequence[str],
         best = min(fits, key=lambda f: bic(f.fit, n_points))
         current = grow(data, noise, best, REFINE_ROUNDS, partial(short, data))[0]
         data, current = settle(data, noise, current, REFINE_ROUNDS)
-        noise, current = _renoise(data, noise, current)
+        noise, current, _ = _renoise(data, noise, current)
     return ThermalModel(current.foster, current.effects, bundle.reference,
                         {**(provenance or {}), "fit": {
                             "effects": list(dict.fromkeys(names)),

@@ -80,8 +80,7 @@ class Step:
     weighed, best first, its ``status`` (``named``, ``ambiguous``: ``tied`` explain the data
     as well; ``rival``: an explanation outside the catalogue, weighed and never named;
     ``unshown``: an effect the data cannot show alone, ``why`` not), the effects the backward
-    check dropped after it, the model after it, and the noise estimated again from it (the
-    next step's candidates are weighed under it)."""
+    check dropped after it, the model after it, and the noise estimated from it (the next's)."""
 
     chosen: Candidate
     candidates: tuple[Candidate, ...]
