@@ -426,6 +426,38 @@ def test_once_the_work_is_spent_a_later_step_screens_the_measurement_effects_hel
                                             "brings every data set to its noise")
 
 
+@pytest.mark.parametrize("calibration", [0.0, 8.0])
+def test_an_effect_its_own_data_show_is_added_where_the_best_is_refused(scripted, calibration):
+    """After an approximate first effect, the best second one only bends its misfit (refused,
+    weighed under the correlation of what it leaves); a TSP that leaves a trend elsewhere too
+    but takes the calibration's misfit, data that no other effect changes, is added in its
+    place, not tied with it; when the calibration keeps its misfit, nothing is added."""
+    sensor = _fit((FIRST, SENSOR), 8.0, WITH_CAL, calibration=calibration)
+    after = {(): [(_fit((FIRST,), 8.0, WITH_CAL), 5000.0)],
+             (FIRST.name,): [(_fit((FIRST, SECOND), 6.0, WITH_CAL), 200.0), (sensor, 150.0)]}
+    d = scripted(after=after, bundle=CALIBRATED)
+    refused = d.to_dict()["refused"]
+    assert (refused is None) if not calibration else (refused["effect"] == SECOND.name)
+    assert d.effects == ([FIRST.name, SENSOR.name] if not calibration else [FIRST.name])
+    assert d.verdict.cls == "approximate" and not d.steps[-1].tied
+
+
+@pytest.mark.parametrize("calibration", [0.0, 8.0])
+def test_a_step_cut_by_the_budget_takes_an_effect_its_own_data_show(scripted, calibration):
+    """The budget is spent by the first step and the best screened on the model held leaves a
+    trend: a TSP that takes the calibration's misfit (data no candidate left unweighed could
+    change) is taken, and the verdict says where the budget stopped the search; not when the
+    calibration keeps its misfit."""
+    at = _fit((FIRST, SENSOR), 8.0, WITH_CAL, calibration=calibration)
+    after = {(): [(_fit((FIRST,), 8.0, WITH_CAL), 5000.0)], (FIRST.name,): [(at, 300.0)]}
+    d = scripted(after=after, cost=1000, budget=1000, held=at, bundle=CALIBRATED)
+    assert d.effects == ([FIRST.name, SENSOR.name] if not calibration else [FIRST.name])
+    if not calibration:
+        assert d.steps[-1].model is at and d.verdict.cls == "approximate"
+        assert "was spent after step 2" in d.spent.stopped
+        assert d.verdict.reason.endswith(d.spent.stopped)
+
+
 @pytest.mark.parametrize("left", [0.0, 8.0])
 def test_the_best_screened_on_the_model_held_is_refitted_jointly_once(scripted, left):
     """The screen on the model held leaves a trend (the ladder and the first effect took part

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from ..core.errors import DataFormatError, FitError
 from ..effects.base import CALIBRATION, EffectPlugin
-from ..effects.registry import CATALOGUE, plugin
+from ..effects.registry import CATALOGUE, own_kinds, plugin
 from ..engines.cauer import as_cauer
 from ..engines.meter import Meter, metered
 from ..fit.joint import Layout, ModelFit, Start, bic, chi2_by_set, fit_baseline, fit_starts
@@ -41,6 +41,7 @@ from .rules import (
     CLOSED_FORM_COST,
     DECISIVE_BIC,
     MAX_EFFECTS,
+    MIN_EXPLAINED,
     NOISE_FLOOR_K,
     REFINE_ROUNDS,
     SCREEN_ROUNDS,
@@ -113,12 +114,9 @@ def _candidate(data: BundleData, current: ModelFit, cmp: Comparison, fits: Seque
 def _weigh(data: BundleData, noise: dict, current: ModelFit, cmp: Comparison,
            fitted: dict[str, list[FormFit]], n_points: int, sizes: dict,
            affords: Callable[[int], bool]) -> tuple[list[Candidate], int]:
-    """Every effect's candidate, best first. The effects are ranked on the model's ladder;
-    the best, and every one within :data:`.rules.DECISIVE_BIC` of it, then grow their
-    ladders while they leave a data set beyond the noise (the model's order was chosen
-    without the effect, whose misfit may have taken or hidden stages) and the work left
-    affords it (``affords(cost)``: a longer ladder as costly as the last one grown, of any
-    candidate, :func:`~spicethermal.fit.search.grow`), and are weighed grown."""
+    """Every effect's candidate, best first: ranked on the model's ladder, the best and every
+    one within :data:`.rules.DECISIVE_BIC` of it weighed on ladders grown while the work left
+    ``affords(cost)`` one as costly as the last (:func:`~spicethermal.fit.search.grow`, §5)."""
     work = last = 0
     leads = {n: min(forms, key=lambda f: bic(f.fit, n_points)) for n, forms in fitted.items()}
     cands = {n: _candidate(data, current, cmp, [f.fit for f in forms], leads[n].fit,
@@ -210,10 +208,6 @@ class _Context:
     def affords(self, cost: int = 0) -> bool:
         """Whether the budget left exceeds ``cost``."""
         return self.meter.cost + cost < self.budget
-
-    @property
-    def budget_text(self) -> str:
-        return f"the work budget (a cost of {self.budget:,})"
 
 
 @dataclass
@@ -309,10 +303,11 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
     while sum(s.status != RIVAL for s in steps) < MAX_EFFECTS and short(data, current):
         k = len(steps) + 1
         spent_before, held = bool(steps) and not ctx.affords(), dict[str, list[FormFit]]()
+        cut, i, unfitted = "", pick, list[str]()
         if not steps and path.first:
-            cands, i = list(path.first), pick
+            cands = list(path.first)
         else:
-            fitted, unfitted = {}, []
+            fitted = {}
             # closed-form effects first, then the simulated ones, after the first step each in
             # its ranking (each effect's gain alone): a spent budget leaves the least favoured
             rank = {c.name: j for j, c in enumerate(path.first)}
@@ -331,10 +326,9 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                     unfitted.append(p.name)
                 elif forms:
                     fitted[p.name] = forms
-            cut = "" if not unfitted else (
-                f"{ctx.budget_text} was spent after step {k - 1}" if spent_before else
-                f"{ctx.budget_text} was spent in step {k} before {', '.join(unfitted)} "
-                f"{'was' if len(unfitted) == 1 else 'were'} fitted")
+            cut = "" if not unfitted else f"the work budget (a cost of {ctx.budget:,}) was " + (
+                f"spent after step {k - 1}" if spent_before else f"spent in step {k} before "
+                f"{', '.join(unfitted)} {'was' if len(unfitted) == 1 else 'were'} fitted")
             if steps and unfitted:  # what the step can still weigh: screens, held
                 held = screen_held(data, noise, current, map(plugin, unfitted), SCREEN_ROUNDS)
                 path.work += sum(f.fit.work for forms in held.values() for f in forms)
@@ -358,31 +352,31 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
                                                                else f.fit for f in fits],
                                           joint, n_points, sizes)
                     cands.sort(key=lambda c: -c.delta_bic)
-            if cut and not (cands and decisive(0.0, -cands[0].delta_bic, cands[0].explained)
-                            and not short(data, cands[0].fit)):
-                # a step that did not weigh every candidate is taken only when its best
-                # brings every data set to the noise: the others could at most tie with it
-                path.stopped = cut
-                break
-            if cut:
-                path.unweighed = (f"{cut}: {'it' if len(unfitted) == 1 else 'they'} could at "
-                                  f"most tie with {cands[0].name}, which brings every data "
-                                  "set to its noise")
             i = 0
             if not steps:
                 path.first = tuple(cands)
-        if not cands or not decisive(0.0, -cands[i].delta_bic, cands[i].explained):
-            break
-        chosen = cands[i]
-        loose = short(data, chosen.fit)  # at the noise, it ties only with one at the noise
-        if chosen.catalogued and any(s.status != RIVAL for s in steps) and loose:
-            # a further effect that leaves a structured residual too: any flexible effect
-            # explains part of what an approximate form leaves, no evidence of its physics
-            # unless its fall stands out of the correlated misfit it leaves
+        # the best, when decisive: after a cut only at the noise (the candidates not weighed
+        # could at most tie with it), after a catalogued effect only when its fall stands out
+        # of the correlated misfit it leaves; else the best that data only it changes show
+        own = next((c for c in cands if _own(c, data, current)), None)
+        chosen, weighed = (cands[i] if cands else own), None
+        if chosen is not own and (not decisive(0.0, -chosen.delta_bic, chosen.explained)
+                                  or cut and short(data, chosen.fit)):
+            chosen = own
+        elif chosen is not own and chosen.catalogued and short(data, chosen.fit) \
+                and any(s.status != RIVAL for s in steps):
             weighed = weighed_fall(data, current, chosen.fit, noise)
-            if weighed < DECISIVE_BIC:
-                path.refused, path.weighed = chosen, weighed
-                break
+            chosen = chosen if weighed >= DECISIVE_BIC else own
+        if chosen is None:
+            if weighed is not None:
+                path.refused, path.weighed = cands[i], weighed
+            path.stopped = cut
+            break
+        if cut and chosen is not own:
+            path.unweighed = (f"{cut}: {'it' if len(unfitted) == 1 else 'they'} could at "
+                              f"most tie with {chosen.name}, which brings every data set to "
+                              "its noise")
+        loose = short(data, chosen.fit)  # at the noise, it ties only with one at the noise
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
@@ -431,10 +425,8 @@ def _status(chosen: Candidate, tied: Sequence[Candidate], why: str) -> str:
 
 
 def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict) -> str:
-    """Why the data do not show the chosen effect, or "": the data sets it needs
-    (``traits.needs``) are missing or do not show it themselves (:func:`.rules.shows`), or its
-    plugin says the data cannot show it as fitted (``unshown``: a band outside the
-    temperatures reached)."""
+    """Why the data do not show the chosen effect (docs/diagnosis.md §7), or "": the data sets
+    it needs are missing or do not show it themselves, or its plugin's ``unshown`` says so."""
     needs = chosen.effect.plugin.traits.needs
     what = " and ".join(sorted(needs))
     if not needs <= data.kinds:
@@ -447,12 +439,19 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
 
 def _refuted(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
     """Whether the data sets ``cand``'s effect needs (``traits.needs``) are in the bundle and
-    do not show it themselves (:func:`.rules.shows`): what the rest of the bundle attributes
-    to it, those data, over the same temperatures, attribute to something else (a curvature
-    the transients show and the calibration does not is the device's, not the sensor's)."""
+    do not show it themselves (:func:`.rules.shows`; docs/diagnosis.md §7)."""
     needs = cand.effect.plugin.traits.needs
     return bool(needs) and needs <= data.kinds and not shows(
         before.chi2, cand.fit.chi2, [n for n in data.datasets if kind_of(n) in needs])
+
+
+def _own(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
+    """Whether data only ``cand``'s effect changes (``registry.own_kinds``) show it, as
+    decisively as §4 asks of the whole bundle: evidence no misfit left elsewhere can take."""
+    sets = [n for n in data.datasets if kind_of(n) in own_kinds(cand.name)]
+    mine = [{n: chi2[n] for n in sets} for chi2 in (before.chi2, cand.fit.chi2)]
+    return bool(sets) and cand.delta_bic >= DECISIVE_BIC and shows(*mine, sets) \
+        and explained(*mine, data.sizes()) >= MIN_EXPLAINED
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str],

@@ -19,8 +19,8 @@ import numpy as np
 from ..core.errors import DataFormatError
 from .base import DEVICE, EffectPlugin, scalar_params
 
-__all__ = ["CATALOGUE", "ENTRY_POINT_GROUP", "Effect", "known_names", "plugin", "register",
-           "rival_names"]
+__all__ = ["CATALOGUE", "ENTRY_POINT_GROUP", "Effect", "known_names", "own_kinds", "plugin",
+           "register", "rival_names"]
 
 #: Entry-point group through which every effect is registered.
 ENTRY_POINT_GROUP = "spicethermal.effects"
@@ -107,6 +107,18 @@ def rival_names() -> list[str]:
     list of str
     """
     return sorted(n for n, p in CATALOGUE.items() if not p.traits.catalogued)
+
+
+def own_kinds(name: str) -> frozenset[str]:
+    """The kinds of data set that effect ``name`` needs (``traits.needs``) and no other
+    registered plugin can show (``traits.shown_by``): data only it changes, whatever else a
+    model holds, so what it explains there no other effect can explain.
+
+    >>> sorted(own_kinds("tsp-nonlinearity")), sorted(own_kinds("phase-change"))
+    (['calibration'], [])
+    """
+    others = [p.traits.shown_by for n, p in CATALOGUE.items() if n != name]
+    return frozenset(k for k in plugin(name).traits.needs if not any(k in o for o in others))
 
 
 def plugin(name: str) -> EffectPlugin:
