@@ -454,8 +454,9 @@ def test_a_step_cut_by_the_budget_takes_an_effect_its_own_data_show(scripted, ca
     assert d.effects == ([FIRST.name, SENSOR.name] if not calibration else [FIRST.name])
     if not calibration:
         assert d.steps[-1].model is at and d.verdict.cls == "approximate"
-        assert "was spent after step 2" in d.spent.stopped
-        assert d.verdict.reason.endswith(d.spent.stopped)
+        assert "was spent after step 2" in d.spent.stopped and d.spent.stopped in d.verdict.reason
+        assert d.verdict.reason.endswith(f"{SENSOR.name} screened on the model held): "
+                                         f"{SENSOR.name} is shown by data none of them changes")
 
 
 @pytest.mark.parametrize("left", [0.0, 8.0])
