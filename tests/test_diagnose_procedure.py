@@ -14,6 +14,7 @@ import spicethermal.fit.search as search
 from spicethermal.analysis.compare import comparison_of
 from spicethermal.analysis.diagnose import diagnose
 from spicethermal.analysis.diagnosis import Candidate
+from spicethermal.analysis.noise import calibration_degree
 from spicethermal.analysis.rules import CLOSED_FORM_COST
 from spicethermal.core.errors import FitError
 from spicethermal.core.ladder import Cauer
@@ -426,33 +427,53 @@ def test_once_the_work_is_spent_a_later_step_screens_the_measurement_effects_hel
                                             "brings every data set to its noise")
 
 
-@pytest.mark.parametrize("calibration", [0.0, 8.0])
-def test_an_effect_its_own_data_show_is_added_where_the_best_is_refused(scripted, calibration):
+CAL_T = np.arange(20.0, 80.1, 5.0)
+#: A calibration whose own points show a bow: 3 mK/K² off the line, 0.1 mK of scatter.
+BOWED = replace(BUNDLE, calibration=CalibrationTable(
+    CAL_T, 0.65 - 2e-3 * (CAL_T - 25.0) + 6e-6 * (CAL_T - 50.0) ** 2
+    + 2e-7 * (-1.0) ** np.arange(CAL_T.size)))
+OWN = [(BOWED, 0.0, True), (BOWED, 8.0, False), (CALIBRATED, 0.0, False)]
+
+
+def test_the_bowed_calibration_shows_its_bow_on_its_own():
+    cal = BundleData.from_bundle(BOWED).calibration
+    assert calibration_degree(cal.temp_c, cal.read_c)[0] == 2
+    cal = WITH_CAL.calibration
+    assert calibration_degree(cal.temp_c, cal.read_c)[0] == 1
+
+
+@pytest.mark.parametrize(("bundle", "calibration", "added"), OWN)
+def test_an_effect_its_own_data_show_is_added_where_the_best_is_refused(scripted, bundle,
+                                                                        calibration, added):
     """After an approximate first effect, the best second one only bends its misfit (refused,
     weighed under the correlation of what it leaves); a TSP that leaves a trend elsewhere too
-    but takes the calibration's misfit, data that no other effect changes, is added in its
-    place, not tied with it; when the calibration keeps its misfit, nothing is added."""
-    sensor = _fit((FIRST, SENSOR), 8.0, WITH_CAL, calibration=calibration)
-    after = {(): [(_fit((FIRST,), 8.0, WITH_CAL), 5000.0)],
-             (FIRST.name,): [(_fit((FIRST, SECOND), 6.0, WITH_CAL), 200.0), (sensor, 150.0)]}
-    d = scripted(after=after, bundle=CALIBRATED)
+    but takes the calibration's misfit, data no other effect changes that show a bow on their
+    own, is added in its place; not when the calibration keeps its misfit in the model, nor
+    when its own points show no bow (what the model took there was the shared line's)."""
+    data = BundleData.from_bundle(bundle)
+    sensor = _fit((FIRST, SENSOR), 8.0, data, calibration=calibration)
+    after = {(): [(_fit((FIRST,), 8.0, data), 5000.0)],
+             (FIRST.name,): [(_fit((FIRST, SECOND), 6.0, data), 200.0), (sensor, 150.0)]}
+    d = scripted(after=after, bundle=bundle)
     refused = d.to_dict()["refused"]
-    assert (refused is None) if not calibration else (refused["effect"] == SECOND.name)
-    assert d.effects == ([FIRST.name, SENSOR.name] if not calibration else [FIRST.name])
+    assert (refused is None) if added else (refused["effect"] == SECOND.name)
+    assert d.effects == ([FIRST.name, SENSOR.name] if added else [FIRST.name])
     assert d.verdict.cls == "approximate" and not d.steps[-1].tied
 
 
-@pytest.mark.parametrize("calibration", [0.0, 8.0])
-def test_a_step_cut_by_the_budget_takes_an_effect_its_own_data_show(scripted, calibration):
+@pytest.mark.parametrize(("bundle", "calibration", "added"), OWN)
+def test_a_step_cut_by_the_budget_takes_an_effect_its_own_data_show(scripted, bundle,
+                                                                    calibration, added):
     """The budget is spent by the first step and the best screened on the model held leaves a
-    trend: a TSP that takes the calibration's misfit (data no candidate left unweighed could
+    trend: a TSP that takes the calibration's bow (data no candidate left unweighed could
     change) is taken, and the verdict says where the budget stopped the search; not when the
-    calibration keeps its misfit."""
-    at = _fit((FIRST, SENSOR), 8.0, WITH_CAL, calibration=calibration)
-    after = {(): [(_fit((FIRST,), 8.0, WITH_CAL), 5000.0)], (FIRST.name,): [(at, 300.0)]}
-    d = scripted(after=after, cost=1000, budget=1000, held=at, bundle=CALIBRATED)
-    assert d.effects == ([FIRST.name, SENSOR.name] if not calibration else [FIRST.name])
-    if not calibration:
+    calibration keeps its misfit, nor when its own points show no bow."""
+    data = BundleData.from_bundle(bundle)
+    at = _fit((FIRST, SENSOR), 8.0, data, calibration=calibration)
+    after = {(): [(_fit((FIRST,), 8.0, data), 5000.0)], (FIRST.name,): [(at, 300.0)]}
+    d = scripted(after=after, cost=1000, budget=1000, held=at, bundle=bundle)
+    assert d.effects == ([FIRST.name, SENSOR.name] if added else [FIRST.name])
+    if added:
         assert d.steps[-1].model is at and d.verdict.cls == "approximate"
         assert "was spent after step 2" in d.spent.stopped and d.spent.stopped in d.verdict.reason
         assert d.verdict.reason.endswith(f"{SENSOR.name} screened on the model held): "

@@ -447,12 +447,14 @@ def _refuted(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
 
 
 def _own(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
-    """Whether data only ``cand``'s effect changes (``registry.own_kinds``) show it, as
-    decisively as §4 asks of the whole bundle: evidence no misfit left elsewhere can take."""
-    sets = [n for n in data.datasets if kind_of(n) in own_kinds(cand.name)]
+    """Whether data only ``cand``'s effect changes (``registry.own_kinds``) show it on their
+    own (a calibration's degree above 1) and in the model as §4 asks (docs/diagnosis.md §6)."""
+    sets, cal = [n for n in data.datasets if kind_of(n) in own_kinds(cand.name)], data.calibration
     mine = [{n: chi2[n] for n in sets} for chi2 in (before.chi2, cand.fit.chi2)]
     return bool(sets) and cand.delta_bic >= DECISIVE_BIC and shows(*mine, sets) \
-        and explained(*mine, data.sizes()) >= MIN_EXPLAINED
+        and explained(*mine, data.sizes()) >= MIN_EXPLAINED and all(
+            n == CALIBRATION and cal is not None
+            and calibration_degree(cal.temp_c, cal.read_c)[0] > 1 for n in sets)
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str],

@@ -218,16 +218,11 @@ def analyse_table(freq_hz: NDArray, duty: NDArray, tj_exp_c: NDArray, tj_model_c
 
     wlad, paper_pred = _best_window(delta, f, d, rth_k_per_w, power_w, window_s)
     dr, tau_e, early_pred = _best_early(delta, f, d, rth_k_per_w, power_w, window_s)
-    slopes = {}
-    for col, y in (("measured", e), ("simulated", mo), ("delta", delta)):
-        for di in sorted(set(d.tolist())):
-            sel = d == di
-            if np.unique(f[sel]).size >= 3:
-                slopes[(col, di)] = _slope(np.log10(f[sel]), y[sel])
-    mean_model = {}
-    for col, y in (("measured", e), ("simulated", mo)):
-        k = float(d @ y / (d @ d))
-        mean_model[col] = (k, rms(y - k * d))
+    slopes = {(col, di): _slope(np.log10(f[d == di]), y[d == di])
+              for col, y in (("measured", e), ("simulated", mo), ("delta", delta))
+              for di in sorted(set(d.tolist())) if np.unique(f[d == di]).size >= 3}
+    mean_model = {col: (k := float(d @ y / (d @ d)), rms(y - k * d))
+                  for col, y in (("measured", e), ("simulated", mo))}
     departure = mo - mean_model["simulated"][0] * d
     corr = float(np.corrcoef(delta, departure)[0, 1]) if np.std(departure) > 0 else 0.0
     rest = e - mean_model["measured"][0] * d
