@@ -374,10 +374,10 @@ def _forward(ctx: _Context, base: ModelFit, base_cmp: Comparison,
             break
         loose = short(data, chosen.fit)  # at the noise, it ties only with one at the noise
         if cut:
-            path.unweighed = f"{cut}: " + (f"{chosen.name} is shown by data none of them changes"
-                                           if loose else f"{'it' if len(unfitted) == 1 else 'they'}"
-                                           f" could at most tie with {chosen.name}, which "
-                                           "brings every data set to its noise")
+            path.unweighed = f"{cut}: " + (
+                f"{chosen.name} is shown by data none of them changes" if loose else
+                f"{'it' if len(unfitted) == 1 else 'they'} could at most tie with "
+                f"{chosen.name}, which brings every data set to its noise")
         why = _unshown(chosen, data, current, noise) if chosen.catalogued else ""
         if why and any(s.status != RIVAL for s in steps):
             break  # a further effect the data do not show is no evidence of its physics
