@@ -37,6 +37,11 @@ CALIBRATED = replace(BUNDLE, calibration=CalibrationTable(
     np.arange(20.0, 80.1, 10.0), 0.65 - 2e-3 * (np.arange(20.0, 80.1, 10.0) - 25.0)))
 WITH_CAL = BundleData.from_bundle(CALIBRATED)
 NOISE = {n: 0.01 for n in WITH_CAL.datasets}
+CAL_T = np.arange(20.0, 80.1, 5.0)
+#: A calibration whose own points show a bow: 3 mK/K² off the line, 0.1 mK of scatter.
+BOWED = replace(BUNDLE, calibration=CalibrationTable(
+    CAL_T, 0.65 - 2e-3 * (CAL_T - 25.0) + 6e-6 * (CAL_T - 50.0) ** 2
+    + 2e-7 * (-1.0) ** np.arange(CAL_T.size)))
 FIRST = Effect.create("temperature-coefficient", alpha_per_k=-3e-3)
 SECOND = Effect.create("phase-change", t_c=30.0, width_k=2.0, latent_j=1e-3)
 
@@ -270,14 +275,16 @@ def test_a_rival_the_backward_check_drops_leaves_the_effects_named(scripted):
 SENSOR = Effect.create("tsp-nonlinearity", quad_k_per_k2=4e-4)
 
 
-@pytest.mark.parametrize(("calibration", "status"), [(40.0, "unshown"), (0.0, "named")])
-def test_an_effect_is_named_alone_only_when_the_data_it_needs_show_it(scripted, calibration,
-                                                                      status):
+@pytest.mark.parametrize(("bundle", "calibration", "status"), [
+    (BOWED, 40.0, "unshown"), (BOWED, 0.0, "named"), (CALIBRATED, 0.0, "unshown")])
+def test_an_effect_is_named_alone_only_when_the_data_it_needs_show_it(scripted, bundle,
+                                                                      calibration, status):
     """A TSP that brings the cooling curves to their noise while its calibration keeps its
     misfit (the calibration does not show it) is unshown: the verdict names nothing and
-    says why; with the calibration's misfit gone too, it is named."""
-    d = scripted((_fit((SENSOR,), 0.0, WITH_CAL, calibration=calibration), 5000.0),
-                 bundle=CALIBRATED)
+    says why; with the calibration's misfit gone too, it is named, when the calibration's
+    own points show a bow (without one, what the model took there was its shared line's)."""
+    data = BundleData.from_bundle(bundle)
+    d = scripted((_fit((SENSOR,), 0.0, data, calibration=calibration), 5000.0), bundle=bundle)
     assert [s.status for s in d.steps] == [status]
     if status == "unshown":
         assert d.verdict.cls == "none" and not d.effects
@@ -287,12 +294,13 @@ def test_an_effect_is_named_alone_only_when_the_data_it_needs_show_it(scripted, 
 
 
 @pytest.mark.parametrize(("bundle", "calibration", "named"), [
-    (CALIBRATED, 40.0, [FIRST.name]), (CALIBRATED, 0.0, [FIRST.name, SENSOR.name]),
-    (BUNDLE, 0.0, [FIRST.name, SENSOR.name])])
+    (BOWED, 40.0, [FIRST.name]), (BOWED, 0.0, [FIRST.name, SENSOR.name]),
+    (CALIBRATED, 0.0, [FIRST.name]), (BUNDLE, 0.0, [FIRST.name, SENSOR.name])])
 def test_an_effect_its_own_data_do_not_show_is_not_tied(scripted, bundle, calibration, named):
     """A TSP within the margin of a temperature coefficient: tied when its calibration shows
     it, or when the bundle holds no calibration (nothing can tell them apart); not named at
-    all when the calibration is there and keeps its misfit (the curvature is the device's)."""
+    all when the calibration is there and keeps its misfit, or shows no bow on its own (the
+    curvature is the device's)."""
     data = BundleData.from_bundle(bundle)
     after = {(): [(_fit((FIRST,), 0.0, data), 5000.0),
                   (_fit((SENSOR,), 0.0, data, calibration=calibration), 4995.0)]}
@@ -427,11 +435,6 @@ def test_once_the_work_is_spent_a_later_step_screens_the_measurement_effects_hel
                                             "brings every data set to its noise")
 
 
-CAL_T = np.arange(20.0, 80.1, 5.0)
-#: A calibration whose own points show a bow: 3 mK/K² off the line, 0.1 mK of scatter.
-BOWED = replace(BUNDLE, calibration=CalibrationTable(
-    CAL_T, 0.65 - 2e-3 * (CAL_T - 25.0) + 6e-6 * (CAL_T - 50.0) ** 2
-    + 2e-7 * (-1.0) ** np.arange(CAL_T.size)))
 OWN = [(BOWED, 0.0, True), (BOWED, 8.0, False), (CALIBRATED, 0.0, False)]
 
 

@@ -439,9 +439,7 @@ def _info(data: BundleData) -> dict[str, list[dict[str, float]]]:
 
 def comparison_of(data: BundleData, predictions: dict) -> Comparison:
     """Measured vs predicted at every point of every data set."""
-    points = []
-    for name in data.datasets:
-        for at, meas, mod in zip(data.coordinates(name), data.measured(name),
-                                 predictions[name], strict=True):
-            points.append(ComparisonPoint(name, at, float(meas), float(mod)))
-    return Comparison(tuple(points))
+    return Comparison(tuple(ComparisonPoint(name, at, float(meas), float(mod))
+                            for name in data.datasets for at, meas, mod in zip(
+                                data.coordinates(name), data.measured(name), predictions[name],
+                                strict=True)))

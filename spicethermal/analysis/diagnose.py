@@ -212,10 +212,9 @@ class _Context:
 
 @dataclass
 class _Path:
-    """The steps of one forward selection, the data its last model was settled on
-    (:func:`~spicethermal.fit.search.settle`), the first step's candidates, the work (model
-    evaluations), why the budget stopped it, the best further candidate it refused (None:
-    none) and its :func:`~.verdict.weighed_fall`, and what a step it took left unweighed."""
+    """One forward selection: its steps, the data its last model was settled on, the first
+    step's candidates, the work (model evaluations), why the budget stopped it, the further
+    candidate it refused (None: none) with its ``weighed_fall``, what a step left unweighed."""
 
     data: BundleData
     noise: dict
@@ -439,22 +438,23 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
 
 
 def _refuted(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
-    """Whether the data sets ``cand``'s effect needs (``traits.needs``) are in the bundle and
-    do not show it themselves (:func:`.rules.shows`; docs/diagnosis.md §7)."""
-    needs = cand.effect.plugin.traits.needs
-    return bool(needs) and needs <= data.kinds and not shows(
-        before.chi2, cand.fit.chi2, [n for n in data.datasets if kind_of(n) in needs])
+    """Whether the data ``cand``'s effect needs (``traits.needs``) are in the bundle and do not
+    show it, on their own (a calibration's degree above 1) and in the model (§7, ``shows``)."""
+    needs, cal = cand.effect.plugin.traits.needs, data.calibration
+    sets = [n for n in data.datasets if kind_of(n) in needs]
+    bow = CALIBRATION not in sets or calibration_degree(cal.temp_c, cal.read_c)[0] > 1
+    return bool(needs) and needs <= data.kinds and not (bow and shows(before.chi2,
+                                                                      cand.fit.chi2, sets))
 
 
 def _own(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
-    """Whether data only ``cand``'s effect changes (``registry.own_kinds``) show it on their
-    own (a calibration's degree above 1) and in the model as §4 asks (docs/diagnosis.md §6)."""
-    sets, cal = [n for n in data.datasets if kind_of(n) in own_kinds(cand.name)], data.calibration
-    mine = [{n: chi2[n] for n in sets} for chi2 in (before.chi2, cand.fit.chi2)]
-    return bool(sets) and cand.delta_bic >= DECISIVE_BIC and shows(*mine, sets) \
-        and explained(*mine, data.sizes()) >= MIN_EXPLAINED and all(
-            n == CALIBRATION and cal is not None
-            and calibration_degree(cal.temp_c, cal.read_c)[0] > 1 for n in sets)
+    """Whether the data ``cand``'s effect needs are data only it changes (``own_kinds``) and
+    show it (not :func:`_refuted`) as decisively as §4 asks (docs/diagnosis.md §6)."""
+    needs = cand.effect.plugin.traits.needs
+    mine = [{n: chi2[n] for n in data.datasets if kind_of(n) in needs}
+            for chi2 in (before.chi2, cand.fit.chi2)]
+    return bool(mine[0]) and own_kinds(cand.name) == needs and cand.delta_bic >= DECISIVE_BIC \
+        and not _refuted(cand, data, before) and explained(*mine, data.sizes()) >= MIN_EXPLAINED
 
 
 def fit_with_effects(bundle: Bundle, names: Sequence[str],

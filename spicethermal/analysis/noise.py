@@ -215,9 +215,7 @@ def noise_estimates(data: BundleData, predictions: Mapping[str, NDArray]) -> dic
     -------
     dict of str to float
     """
-    out: dict[str, float] = {}
-    for c in data.cooling:
-        out[c.name] = curve_noise(c.t_s, c.tj_c - predictions[c.name], c.tj_c)
+    out = {c.name: curve_noise(c.t_s, c.tj_c - predictions[c.name], c.tj_c) for c in data.cooling}
     curves = [out[c.name] for c in data.cooling]
     sensor = float(np.median(curves)) if curves else NOISE_FLOOR_K
     if data.steady_curves:
