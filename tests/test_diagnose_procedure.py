@@ -440,9 +440,10 @@ OWN = [(BOWED, 0.0, True), (BOWED, 8.0, False), (CALIBRATED, 0.0, False)]
 
 def test_the_bowed_calibration_shows_its_bow_on_its_own():
     cal = BundleData.from_bundle(BOWED).calibration
-    assert calibration_degree(cal.temp_c, cal.read_c)[0] == 2
+    degree, _, bow = calibration_degree(cal.temp_c, cal.read_c)
+    assert degree == 2 and bow > 10
     cal = WITH_CAL.calibration
-    assert calibration_degree(cal.temp_c, cal.read_c)[0] == 1
+    assert calibration_degree(cal.temp_c, cal.read_c)[::2] == (1, 0.0)
 
 
 @pytest.mark.parametrize(("bundle", "calibration", "added"), OWN)

@@ -37,10 +37,23 @@ def test_the_calibration_noise_is_about_the_law_it_supports_not_about_a_line():
     rng = np.random.default_rng(5)
     t = np.linspace(20.0, 100.0, 9)
     bow = 1e-3 * (t - 60.0) ** 2
-    degree, scatter = calibration_degree(t, t + bow + 0.01 * rng.standard_normal(t.size))
-    assert degree == 2 and scatter < 0.02
-    degree, _ = calibration_degree(t, t + 0.01 * rng.standard_normal(t.size))
-    assert degree == 1
+    degree, scatter, fall = calibration_degree(t, t + bow + 0.01 * rng.standard_normal(t.size))
+    assert degree == 2 and scatter < 0.02 and fall > 100
+    degree, _, fall = calibration_degree(t, t + 0.01 * rng.standard_normal(t.size))
+    assert degree == 1 and fall == 0.0
+
+
+def test_a_bow_the_noise_estimate_keeps_may_be_short_of_the_criterions_margin():
+    """The F-test at p = 0.01 keeps the quadratic of 30 points whose bow lowers their χ² by
+    less than the criterion's 10 beyond its ln n: a degree for the noise, no evidence that
+    names an effect. The bow is the χ² fall from the line in the scatter, less ln n."""
+    t = np.linspace(20.0, 100.0, 30)
+    read = t + 2e-5 * (t - 60.0) ** 2 + 0.01 * np.random.default_rng(8).standard_normal(t.size)
+    degree, scatter, fall = calibration_degree(t, read)
+    assert degree == 2 and 0.0 < fall < 10.0
+    x = (t - t.mean()) / np.ptp(t)
+    rss = [np.sum((read - np.polyval(np.polyfit(x, read, d), x)) ** 2) for d in (1, 2)]
+    assert fall == pytest.approx((rss[0] - rss[1]) / scatter ** 2 - np.log(t.size))
 
 
 @pytest.mark.parametrize("degree", [1, 2, 3])

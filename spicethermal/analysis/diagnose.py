@@ -439,10 +439,10 @@ def _unshown(chosen: Candidate, data: BundleData, before: ModelFit, noise: dict)
 
 def _refuted(cand: Candidate, data: BundleData, before: ModelFit) -> bool:
     """Whether the data ``cand``'s effect needs (``traits.needs``) are in the bundle and do not
-    show it, on their own (a calibration's degree above 1) and in the model (§7, ``shows``)."""
+    show it, on their own (a calibration's decisive bow) and in the model (§7, ``shows``)."""
     needs, cal = cand.effect.plugin.traits.needs, data.calibration
     sets = [n for n in data.datasets if kind_of(n) in needs]
-    bow = CALIBRATION not in sets or calibration_degree(cal.temp_c, cal.read_c)[0] > 1
+    bow = CALIBRATION not in sets or calibration_degree(cal.temp_c, cal.read_c)[2] >= DECISIVE_BIC
     return bool(needs) and needs <= data.kinds and not (bow and shows(before.chi2,
                                                                       cand.fit.chi2, sets))
 

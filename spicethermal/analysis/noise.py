@@ -148,10 +148,14 @@ def trimmed_scale(e: NDArray) -> float:
     return math.sqrt(float(np.mean(a[:keep] ** 2)) / c)
 
 
-def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
-    """The degree of the calibration's law in T that the points support, and the scatter
-    (K) about it: the lowest degree that no higher one improves at significance
-    :data:`~.rules.POLY_P` (F-test), at most :data:`~.rules.POLY_MAX_DEGREE`.
+def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float, float]:
+    """The degree of the calibration's law in T that the points support, the scatter (K)
+    about it, and the bow: how much that degree lowers the criterion against a line, on the
+    points alone (χ² in that scatter, at least :data:`~.rules.NOISE_FLOOR_K`, less ``ln n``
+    a coefficient; 0 for a line). The degree is the lowest that no higher one improves at
+    significance :data:`~.rules.POLY_P` (F-test), at most :data:`~.rules.POLY_MAX_DEGREE`:
+    a bow the noise estimate must not take for scatter, which is weaker evidence than the
+    criterion's margin a bow that names an effect needs.
 
     Parameters
     ----------
@@ -159,7 +163,7 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
 
     Returns
     -------
-    tuple of int and float
+    tuple of int, float and float
 
     >>> t = np.linspace(20, 100, 9)
     >>> calibration_degree(t, t + 1e-3 * (t - 60) ** 2)[0]
@@ -183,7 +187,9 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float]:
     while degree < top and any(improves(degree, up) for up in range(degree + 1, top + 1)):
         degree += 1
     dof = n - degree - 1
-    return degree, math.sqrt(rss(degree) / dof) if dof > 0 else 0.0
+    scatter = math.sqrt(rss(degree) / dof) if dof > 0 else 0.0
+    bow = (rss(1) - rss(degree)) / max(scatter, NOISE_FLOOR_K) ** 2 - (degree - 1) * math.log(n)
+    return degree, scatter, bow if degree > 1 else 0.0
 
 
 def _pwm_noise(data: BundleData, residual: NDArray, sensor: float) -> float:
