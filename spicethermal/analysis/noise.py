@@ -153,9 +153,9 @@ def calibration_degree(temp_c: NDArray, read_c: NDArray) -> tuple[int, float, fl
     about it, and the bow: how much that degree lowers the criterion against a line, on the
     points alone (χ² in that scatter, at least :data:`~.rules.NOISE_FLOOR_K`, less ``ln n``
     a coefficient; 0 for a line). The degree is the lowest that no higher one improves at
-    significance :data:`~.rules.POLY_P` (F-test), at most :data:`~.rules.POLY_MAX_DEGREE`:
-    a bow the noise estimate must not take for scatter, which is weaker evidence than the
-    criterion's margin a bow that names an effect needs.
+    significance :data:`~.rules.POLY_P` (F-test), at most :data:`~.rules.POLY_MAX_DEGREE`,
+    which keeps a bow out of the scatter; an effect named on the bow needs the bow itself to
+    pass the criterion's margin, stronger evidence (docs/diagnosis.md §7).
 
     Parameters
     ----------
